@@ -1,0 +1,71 @@
+#pragma once
+
+#include "delta/core/mat3.h"
+#include "delta/core/vec3.h"
+
+namespace delta {
+
+/// A unit quaternion w + xi + yj + zk representing a rotation. Rotations compose as quaternions
+/// and are renormalised after every product, so a long chain of them (a DEM particle turned every
+/// time step) stays a rotation: its matrix is orthonormal to 1e-14.
+///
+/// Threading: a value type; no shared state.
+struct Quaternion {
+  double w = 1.0;
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+
+  static constexpr Quaternion identity() noexcept { return {}; }
+
+  /// The rotation by `radians` about `axis` (right-handed). Throws delta::Error when the axis is
+  /// zero or either argument is not finite.
+  static Quaternion fromAxisAngle(const Vec3& axis, double radians);
+
+  /// The rotation of an orthonormal matrix with determinant +1. Throws delta::Error when `m` is
+  /// further than 1e-6 from a rotation (not orthonormal, a reflection, not finite); a matrix
+  /// within that distance is projected onto the nearest rotation.
+  static Quaternion fromMatrix(const Mat3& m);
+
+  /// Throws delta::Error when (w, x, y, z) is zero or not finite; otherwise the unit quaternion
+  /// in its direction (so a "unit" quaternion read from a file with 8 digits is accepted).
+  static Quaternion fromComponents(double w, double x, double y, double z);
+
+  /// The rotation matrix; orthonormal to round-off for a unit quaternion.
+  Mat3 matrix() const noexcept;
+
+  /// Rotates a vector (same as `matrix() * v`).
+  Vec3 rotate(const Vec3& v) const noexcept;
+
+  Quaternion conjugate() const noexcept { return {w, -x, -y, -z}; }
+};
+
+/// The rotation `a` after `b` (first `b`, then `a`), renormalised.
+Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept;
+
+/// A rigid motion p ↦ R p + t, with the rotation kept as a unit quaternion. Compose with `*`
+/// (`a * b` applies b first); the inverse undoes it.
+///
+/// Threading: a value type; no shared state.
+struct RigidTransform {
+  Quaternion rotation;
+  Vec3 translation;
+
+  static RigidTransform translationBy(const Vec3& t) noexcept { return {Quaternion{}, t}; }
+  /// Rotation about the line through `pivot` (not through the origin).
+  static RigidTransform rotationAbout(const Quaternion& q, const Vec3& pivot) noexcept {
+    return {q, pivot - q.rotate(pivot)};
+  }
+
+  Vec3 apply(const Vec3& p) const noexcept { return rotation.rotate(p) + translation; }
+  RigidTransform inverse() const noexcept {
+    const Quaternion back = rotation.conjugate();
+    return {back, -back.rotate(translation)};
+  }
+};
+
+inline RigidTransform operator*(const RigidTransform& a, const RigidTransform& b) noexcept {
+  return {a.rotation * b.rotation, a.rotation.rotate(b.translation) + a.translation};
+}
+
+}  // namespace delta

@@ -1,0 +1,12 @@
+#pragma once
+
+namespace delta {
+
+/// The library version, "MAJOR.MINOR.PATCH".
+const char* version() noexcept;
+
+/// The git commit the library was built from (short hash, "-dirty" when the tree had changes),
+/// or "unknown" outside a git checkout.
+const char* gitCommit() noexcept;
+
+}  // namespace delta

@@ -1,0 +1,27 @@
+#pragma once
+
+#include "delta/core/mat3.h"
+#include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
+
+namespace delta {
+
+/// Mass properties of the solid a closed, outward-oriented mesh bounds, with density ρ.
+struct MassProperties {
+  double volume = 0.0;
+  double mass = 0.0;  ///< ρ · volume
+  Vec3 centroid;      ///< centre of mass
+  Mat3 inertia;       ///< inertia tensor about the centroid, in the mesh's axes
+};
+
+/// Volume, centroid and inertia tensor by the divergence theorem (exact for the polyhedron,
+/// summed over the triangles with the origin shifted to the bounding-box centre for accuracy
+/// far from the origin). Throws delta::Error when the mesh is not closed, when it is inside-out
+/// (negative volume) or has zero volume, or when `density` is not finite and positive.
+MassProperties massProperties(const Mesh& mesh, double density = 1.0);
+
+/// The signed volume enclosed (positive for an outward-oriented closed mesh). Meaningful only for
+/// closed meshes; does not check.
+double signedVolume(const Mesh& mesh) noexcept;
+
+}  // namespace delta

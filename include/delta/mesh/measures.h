@@ -1,0 +1,32 @@
+#pragma once
+
+#include <cstddef>
+
+#include "delta/core/triangle.h"
+#include "delta/mesh/mesh.h"
+
+namespace delta {
+
+/// Edge-length statistics over the mesh's distinct edges: the mesh size h that a user passes to
+/// filter(h), and the scale of the mesh's finest detail.
+struct EdgeLengths {
+  double min = 0.0;
+  double mean = 0.0;
+  double max = 0.0;
+};
+
+/// True when the triangle's area is zero relative to its size: |(b−a)×(c−a)| ≤ 1e-12 · L², with
+/// L its longest edge (so a triangle whose three vertices coincide is degenerate too). The test
+/// is scale-invariant: it gives the same answer for a triangle scaled by 1e-9 or 1e9.
+bool isDegenerate(const Triangle& triangle) noexcept;
+
+/// The number of degenerate triangles (see isDegenerate).
+std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
+
+/// The sum of the triangles' areas.
+double surfaceArea(const Mesh& mesh) noexcept;
+
+/// Lengths of the distinct edges (an edge shared by two triangles counts once).
+EdgeLengths edgeLengths(const Mesh& mesh);
+
+}  // namespace delta

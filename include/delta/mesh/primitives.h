@@ -1,0 +1,32 @@
+#pragma once
+
+#include <cstdint>
+
+#include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
+
+/// Built-in meshes. Every one except `quad` is closed and outward-oriented, with vertices joined.
+/// Invalid parameters (non-positive sizes, too few segments, non-finite values) throw
+/// delta::Error.
+namespace delta::primitives {
+
+/// A sphere: the icosahedron (20 triangles) subdivided `subdivisions` times (0–8; 20·4ⁿ
+/// triangles), vertices projected onto the sphere.
+Mesh icosphere(int subdivisions = 2, double radius = 1.0, const Vec3& center = {});
+
+/// An axis-aligned box with the given edge lengths: 12 triangles.
+Mesh box(const Vec3& size = {1.0, 1.0, 1.0}, const Vec3& center = {});
+
+/// A cylinder along z with `segments` (≥ 3) around: 4·segments triangles, capped.
+Mesh cylinder(double radius = 1.0, double height = 1.0, int segments = 32, const Vec3& center = {});
+
+/// A flat rectangle in the plane z = center.z, normal +z, two triangles. Open (a floor or wall).
+Mesh quad(double sizeX = 1.0, double sizeY = 1.0, const Vec3& center = {});
+
+/// A random convex granulate (a DEM particle): the convex hull (qhull) of `points` (≥ 4) random
+/// points on the ellipsoid with the given semi-axes, centred at the origin. The same seed gives
+/// the same mesh on every machine. With all points on the hull it has 2·points − 4 triangles
+/// (the default 42 points: 80 triangles).
+Mesh granulate(std::uint64_t seed, const Vec3& semiAxes = {1.0, 1.0, 1.0}, int points = 42);
+
+}  // namespace delta::primitives

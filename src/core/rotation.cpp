@@ -1,0 +1,106 @@
+#include "delta/core/rotation.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "delta/core/error.h"
+
+namespace delta {
+namespace {
+
+Quaternion normalizedOrIdentity(double w, double x, double y, double z) noexcept {
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!(n > 0.0)) return Quaternion{};
+  return {w / n, x / n, y / n, z / n};
+}
+
+}  // namespace
+
+Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
+  const double n = length(axis);
+  if (!isFinite(axis) || !std::isfinite(radians) || !(n > 0.0)) {
+    std::ostringstream message;
+    message.precision(17);
+    message << "rotation: axis (" << axis.x << ", " << axis.y << ", " << axis.z << ") and angle "
+            << radians << " do not define a rotation (the axis must be finite and non-zero)";
+    throw Error(message.str());
+  }
+  const double s = std::sin(0.5 * radians) / n;
+  return normalizedOrIdentity(std::cos(0.5 * radians), axis.x * s, axis.y * s, axis.z * s);
+}
+
+Quaternion Quaternion::fromComponents(double w, double x, double y, double z) {
+  const double n2 = w * w + x * x + y * y + z * z;
+  if (!std::isfinite(n2) || !(n2 > 0.0)) {
+    std::ostringstream message;
+    message.precision(17);
+    message << "rotation: quaternion (" << w << ", " << x << ", " << y << ", " << z
+            << ") is zero or not finite";
+    throw Error(message.str());
+  }
+  return normalizedOrIdentity(w, x, y, z);
+}
+
+Quaternion Quaternion::fromMatrix(const Mat3& m) {
+  bool finite = true;
+  for (double e : m.entries)
+    finite = finite && std::isfinite(e);
+  const double error = finite ? orthonormalityError(m) : INFINITY;
+  if (!(error <= 1e-6) || !(m.determinant() > 0.0)) {
+    std::ostringstream message;
+    message.precision(17);
+    message << "rotation: matrix [";
+    for (int i = 0; i < 9; ++i)
+      message << (i ? (i % 3 ? ", " : "; ") : "") << m.entries[i];
+    message << "] is not a rotation (|MᵀM − I| = " << error << ", det = " << m.determinant() << ")";
+    throw Error(message.str());
+  }
+  // Shepperd's method: pivot on the largest of w², x², y², z² for accuracy.
+  const double trace = m(0, 0) + m(1, 1) + m(2, 2);
+  if (trace >= m(0, 0) && trace >= m(1, 1) && trace >= m(2, 2)) {
+    const double r = std::sqrt(1.0 + trace);
+    const double s = 0.5 / r;
+    return normalizedOrIdentity(0.5 * r, (m(2, 1) - m(1, 2)) * s, (m(0, 2) - m(2, 0)) * s,
+                                (m(1, 0) - m(0, 1)) * s);
+  }
+  if (m(0, 0) >= m(1, 1) && m(0, 0) >= m(2, 2)) {
+    const double r = std::sqrt(1.0 + m(0, 0) - m(1, 1) - m(2, 2));
+    const double s = 0.5 / r;
+    return normalizedOrIdentity((m(2, 1) - m(1, 2)) * s, 0.5 * r, (m(0, 1) + m(1, 0)) * s,
+                                (m(0, 2) + m(2, 0)) * s);
+  }
+  if (m(1, 1) >= m(2, 2)) {
+    const double r = std::sqrt(1.0 - m(0, 0) + m(1, 1) - m(2, 2));
+    const double s = 0.5 / r;
+    return normalizedOrIdentity((m(0, 2) - m(2, 0)) * s, (m(0, 1) + m(1, 0)) * s, 0.5 * r,
+                                (m(1, 2) + m(2, 1)) * s);
+  }
+  const double r = std::sqrt(1.0 - m(0, 0) - m(1, 1) + m(2, 2));
+  const double s = 0.5 / r;
+  return normalizedOrIdentity((m(1, 0) - m(0, 1)) * s, (m(0, 2) + m(2, 0)) * s,
+                              (m(1, 2) + m(2, 1)) * s, 0.5 * r);
+}
+
+Mat3 Quaternion::matrix() const noexcept {
+  const double xx = x * x, yy = y * y, zz = z * z;
+  const double xy = x * y, xz = x * z, yz = y * z;
+  const double wx = w * x, wy = w * y, wz = w * z;
+  return {{1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy),  //
+           2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx),  //
+           2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}};
+}
+
+Vec3 Quaternion::rotate(const Vec3& v) const noexcept {
+  // v' = v + 2 u × (u × v + w v), u = (x, y, z): 15 multiplications, no matrix.
+  const Vec3 u{x, y, z};
+  const Vec3 t = cross(u, v) * 2.0;
+  return v + t * w + cross(u, t);
+}
+
+Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept {
+  return normalizedOrIdentity(
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w);
+}
+
+}  // namespace delta

@@ -1,0 +1,83 @@
+#include "delta/core/rotation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "delta/core/error.h"
+
+namespace delta {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+void expectNear(const Vec3& actual, const Vec3& expected, double tolerance) {
+  EXPECT_NEAR(actual.x, expected.x, tolerance);
+  EXPECT_NEAR(actual.y, expected.y, tolerance);
+  EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+TEST(Rotation, AxisAngleTurnsRightHanded) {
+  const Quaternion q = Quaternion::fromAxisAngle({0, 0, 2}, kPi / 2);
+  expectNear(q.rotate({1, 0, 0}), {0, 1, 0}, 1e-15);
+  expectNear(q.matrix() * Vec3{0, 1, 0}, {-1, 0, 0}, 1e-15);
+}
+
+TEST(Rotation, MatrixRoundTripsThroughQuaternion) {
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3 axis{uniform(random), uniform(random), uniform(random) + 1e-3};
+    const double angle = 4 * kPi * uniform(random);  // every branch of Shepperd's method
+    const Quaternion q = Quaternion::fromAxisAngle(axis, angle);
+    const Quaternion back = Quaternion::fromMatrix(q.matrix());
+    const Vec3 p{uniform(random), uniform(random), uniform(random)};
+    expectNear(back.rotate(p), q.rotate(p), 1e-14);
+  }
+}
+
+TEST(Rotation, LongChainsStayOrthonormal) {
+  // A DEM particle turned by a small rotation every step, a million times.
+  const Quaternion step = Quaternion::fromAxisAngle({0.3, -1.0, 0.7}, 1e-3);
+  Quaternion q;
+  for (int i = 0; i < 1'000'000; ++i)
+    q = step * q;
+  EXPECT_LE(orthonormalityError(q.matrix()), 1e-14);
+  EXPECT_NEAR(q.matrix().determinant(), 1.0, 1e-14);
+  // and it is the rotation by 1000 radians about that axis
+  const Quaternion direct = Quaternion::fromAxisAngle({0.3, -1.0, 0.7}, 1000.0);
+  expectNear(q.rotate({1, 2, 3}), direct.rotate({1, 2, 3}), 1e-9);
+}
+
+TEST(Rotation, RejectsWhatIsNotARotation) {
+  EXPECT_THROW(Quaternion::fromAxisAngle({0, 0, 0}, 1.0), Error);
+  EXPECT_THROW(Quaternion::fromAxisAngle({1, 0, 0}, NAN), Error);
+  EXPECT_THROW(Quaternion::fromAxisAngle({INFINITY, 0, 0}, 1.0), Error);
+  EXPECT_THROW(Quaternion::fromComponents(0, 0, 0, 0), Error);
+  EXPECT_THROW(Quaternion::fromMatrix(Mat3::diagonal({1, 1, -1})), Error);  // a reflection
+  EXPECT_THROW(Quaternion::fromMatrix(Mat3::diagonal({1, 2, 1})), Error);   // a stretch
+  Mat3 nan = Mat3::identity();
+  nan(1, 2) = NAN;
+  EXPECT_THROW(Quaternion::fromMatrix(nan), Error);
+}
+
+TEST(Rotation, NearlyOrthonormalMatrixIsProjected) {
+  Mat3 m = Quaternion::fromAxisAngle({1, 1, 0}, 0.4).matrix();
+  m(0, 1) += 1e-8;  // as read from a file with 8 digits
+  EXPECT_LE(orthonormalityError(Quaternion::fromMatrix(m).matrix()), 1e-14);
+}
+
+TEST(RigidTransform, ComposesAndInverts) {
+  const RigidTransform a{Quaternion::fromAxisAngle({0, 1, 0}, 0.7), {1, 2, 3}};
+  const RigidTransform b =
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, 0, 0}, -1.1), {5, -1, 2});
+  const Vec3 p{0.25, -4, 9};
+  expectNear((a * b).apply(p), a.apply(b.apply(p)), 1e-13);
+  expectNear((a * b).inverse().apply((a * b).apply(p)), p, 1e-13);
+  expectNear(b.apply({5, -1, 2}), {5, -1, 2}, 1e-15);  // the pivot stays put
+}
+
+}  // namespace
+}  // namespace delta
