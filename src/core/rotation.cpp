@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 
 namespace delta {
 namespace {
@@ -19,11 +20,8 @@ Quaternion normalizedOrIdentity(double w, double x, double y, double z) noexcept
 Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
   const double n = length(axis);
   if (!isFinite(axis) || !std::isfinite(radians) || !(n > 0.0)) {
-    std::ostringstream message;
-    message.precision(17);
-    message << "rotation: axis (" << axis.x << ", " << axis.y << ", " << axis.z << ") and angle "
-            << radians << " do not define a rotation (the axis must be finite and non-zero)";
-    throw Error(message.str());
+    throw Error("rotation: axis " + toString(axis) + " and angle " + toString(radians) +
+                " do not define a rotation (the axis must be finite and non-zero)");
   }
   const double s = std::sin(0.5 * radians) / n;
   return normalizedOrIdentity(std::cos(0.5 * radians), axis.x * s, axis.y * s, axis.z * s);
@@ -32,11 +30,8 @@ Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
 Quaternion Quaternion::fromComponents(double w, double x, double y, double z) {
   const double n2 = w * w + x * x + y * y + z * z;
   if (!std::isfinite(n2) || !(n2 > 0.0)) {
-    std::ostringstream message;
-    message.precision(17);
-    message << "rotation: quaternion (" << w << ", " << x << ", " << y << ", " << z
-            << ") is zero or not finite";
-    throw Error(message.str());
+    throw Error("rotation: quaternion (" + toString(w) + ", " + toString(x) + ", " + toString(y) +
+                ", " + toString(z) + ") is zero or not finite");
   }
   return normalizedOrIdentity(w, x, y, z);
 }

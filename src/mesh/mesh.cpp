@@ -3,20 +3,13 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <sstream>
 #include <utility>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 
 namespace delta {
 namespace {
-
-std::string describe(const Vec3& v) {
-  std::ostringstream text;
-  text.precision(17);
-  text << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return text.str();
-}
 
 [[noreturn]] void fail(const std::string& what) {
   throw Error("mesh: " + what);
@@ -32,7 +25,7 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles)
   for (std::size_t i = 0; i < vertices_.size(); ++i)
     if (!isFinite(vertices_[i]))
       fail("vertex " + std::to_string(i) +
-           " has a coordinate that is not finite: " + describe(vertices_[i]));
+           " has a coordinate that is not finite: " + toString(vertices_[i]));
   const std::size_t count = vertices_.size();
   for (std::size_t t = 0; t < triangles_.size(); ++t)
     for (std::uint32_t index : triangles_[t])
@@ -59,7 +52,7 @@ Mesh& Mesh::mapVertices(const Map& map, const char* operation) {
     moved[i] = map(vertices_[i]);
     if (!isFinite(moved[i]))
       fail(std::string(operation) + " takes vertex " + std::to_string(i) + " " +
-           describe(vertices_[i]) + " to " + describe(moved[i]) +
+           toString(vertices_[i]) + " to " + toString(moved[i]) +
            ", which is not finite; the mesh is unchanged");
   }
   vertices_ = std::move(moved);
@@ -67,7 +60,7 @@ Mesh& Mesh::mapVertices(const Map& map, const char* operation) {
 }
 
 Mesh& Mesh::translate(const Vec3& offset) {
-  if (!isFinite(offset)) fail("translate: offset " + describe(offset) + " is not finite");
+  if (!isFinite(offset)) fail("translate: offset " + toString(offset) + " is not finite");
   return mapVertices([&](const Vec3& p) { return p + offset; }, "translate");
 }
 
@@ -77,8 +70,8 @@ Mesh& Mesh::scale(double factor, const Vec3& pivot) {
 
 Mesh& Mesh::stretch(const Vec3& factors, const Vec3& pivot) {
   if (!isFinite(factors) || !(factors.x > 0.0 && factors.y > 0.0 && factors.z > 0.0))
-    fail("scale factors " + describe(factors) + " must be finite and positive");
-  if (!isFinite(pivot)) fail("scale: pivot " + describe(pivot) + " is not finite");
+    fail("scale factors " + toString(factors) + " must be finite and positive");
+  if (!isFinite(pivot)) fail("scale: pivot " + toString(pivot) + " is not finite");
   return mapVertices(
       [&](const Vec3& p) {
         return Vec3{pivot.x + (p.x - pivot.x) * factors.x, pivot.y + (p.y - pivot.y) * factors.y,
@@ -88,7 +81,7 @@ Mesh& Mesh::stretch(const Vec3& factors, const Vec3& pivot) {
 }
 
 Mesh& Mesh::rotate(const Quaternion& rotation, const Vec3& pivot) {
-  if (!isFinite(pivot)) fail("rotate: pivot " + describe(pivot) + " is not finite");
+  if (!isFinite(pivot)) fail("rotate: pivot " + toString(pivot) + " is not finite");
   return transform(RigidTransform::rotationAbout(
       Quaternion::fromComponents(rotation.w, rotation.x, rotation.y, rotation.z), pivot));
 }
@@ -105,7 +98,7 @@ Mesh& Mesh::transform(const RigidTransform& motion) {
   const Quaternion& q = motion.rotation;
   const Mat3 r = Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix();
   const Vec3 t = motion.translation;
-  if (!isFinite(t)) fail("transform: translation " + describe(t) + " is not finite");
+  if (!isFinite(t)) fail("transform: translation " + toString(t) + " is not finite");
   return mapVertices([&](const Vec3& p) { return r * p + t; }, "transform");
 }
 

@@ -9,8 +9,13 @@
 namespace delta {
 
 /// A tight bounding sphere of a point set: it contains every point (guaranteed, rounding
-/// included) and its radius is within a few percent of the minimal enclosing sphere's. Expected
-/// O(n). Throws delta::Error for an empty or non-finite point set.
+/// included: `Sphere::contains` is true for each) and its radius is within a few percent of the
+/// minimal enclosing sphere's (in practice equal to it to about 1e-9). Expected O(n): Welzl's
+/// minimal ball of the extreme points along 13 directions, grown by the farthest point a few
+/// times. Any point set works: one point (radius 0), duplicates, collinear or coplanar points,
+/// points far from the origin. Throws delta::Error for an empty or non-finite point set.
+///
+/// Threading: reads its input only; safe to call concurrently.
 Sphere boundingSphere(std::span<const Vec3> points);
 
 /// The bounding sphere of the mesh's vertices.

@@ -14,14 +14,21 @@ struct MassProperties {
   Mat3 inertia;       ///< inertia tensor about the centroid, in the mesh's axes
 };
 
-/// Volume, centroid and inertia tensor by the divergence theorem (exact for the polyhedron,
-/// summed over the triangles with the origin shifted to the bounding-box centre for accuracy
-/// far from the origin). Throws delta::Error when the mesh is not closed, when it is inside-out
-/// (negative volume) or has zero volume, or when `density` is not finite and positive.
+/// Volume, centroid and inertia tensor by the divergence theorem (Eberly, "Polyhedral Mass
+/// Properties (Revisited)": exact for the polyhedron, summed over the triangles with the origin
+/// shifted to the bounding-box centre for accuracy far from the origin). The inertia tensor is
+/// ∫ρ(|r|²I − r rᵀ) about the centroid: moments on the diagonal, products of inertia negated off
+/// it; it turns as R I Rᵀ when the mesh is rotated by R.
+///
+/// Throws delta::Error when the mesh is not closed or not consistently oriented
+/// (analyzeTopology), when it is inside-out (negative volume) or has zero volume (|V| ≤ 1e-12·d³,
+/// d the bounding-box diagonal), or when `density` is not finite and positive.
 MassProperties massProperties(const Mesh& mesh, double density = 1.0);
 
 /// The signed volume enclosed (positive for an outward-oriented closed mesh). Meaningful only for
 /// closed meshes; does not check.
+///
+/// Threading (both functions): read the mesh only; safe to call concurrently.
 double signedVolume(const Mesh& mesh) noexcept;
 
 }  // namespace delta

@@ -17,8 +17,11 @@ struct EdgeLengths {
 
 /// True when the triangle's area is zero relative to its size: |(b−a)×(c−a)| ≤ 1e-12 · L², with
 /// L its longest edge (so a triangle whose three vertices coincide is degenerate too). The test
-/// is scale-invariant: it gives the same answer for a triangle scaled by 1e-9 or 1e9.
+/// is scale-invariant: it gives the same answer for a triangle scaled by 1e-9 or 1e9 (the edges
+/// are rescaled by a power of two before squaring, so nothing under- or overflows).
 bool isDegenerate(const Triangle& triangle) noexcept;
+
+// Threading: every function here reads its arguments only; safe to call concurrently.
 
 /// The number of degenerate triangles (see isDegenerate).
 std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
@@ -26,7 +29,9 @@ std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
 /// The sum of the triangles' areas.
 double surfaceArea(const Mesh& mesh) noexcept;
 
-/// Lengths of the distinct edges (an edge shared by two triangles counts once).
+/// Lengths of the distinct edges (an edge shared by two triangles counts once; triangles with a
+/// repeated index add none, as in analyzeTopology). Zero-length edges count; with no edge at
+/// all every statistic is 0 (never NaN).
 EdgeLengths edgeLengths(const Mesh& mesh);
 
 }  // namespace delta

@@ -7,7 +7,10 @@
 
 /// Built-in meshes. Every one except `quad` is closed and outward-oriented, with vertices joined.
 /// Invalid parameters (non-positive sizes, too few segments, non-finite values) throw
-/// delta::Error.
+/// delta::Error naming the parameter and its value.
+///
+/// Threading: no shared state (each granulate runs qhull with its own context); every function
+/// may be called from any number of threads at once.
 namespace delta::primitives {
 
 /// A sphere: the icosahedron (20 triangles) subdivided `subdivisions` times (0–8; 20·4ⁿ
@@ -23,10 +26,12 @@ Mesh cylinder(double radius = 1.0, double height = 1.0, int segments = 32, const
 /// A flat rectangle in the plane z = center.z, normal +z, two triangles. Open (a floor or wall).
 Mesh quad(double sizeX = 1.0, double sizeY = 1.0, const Vec3& center = {});
 
-/// A random convex granulate (a DEM particle): the convex hull (qhull) of `points` (≥ 4) random
-/// points on the ellipsoid with the given semi-axes, centred at the origin. The same seed gives
-/// the same mesh on every machine. With all points on the hull it has 2·points − 4 triangles
-/// (the default 42 points: 80 triangles).
+/// A random convex granulate (a DEM particle): the convex hull (qhull, triangulated) of `points`
+/// (≥ 4) random points on the ellipsoid with the given semi-axes, centred at the origin: unit
+/// directions uniform on the sphere (Marsaglia's method on std::mt19937_64's raw output, no
+/// standard-library distribution), stretched by the semi-axes. The same seed gives the same mesh
+/// on every machine. Vertices are the hull's points in the order drawn. With all points on the
+/// hull it has 2·points − 4 triangles (the default 42 points: 80 triangles).
 Mesh granulate(std::uint64_t seed, const Vec3& semiAxes = {1.0, 1.0, 1.0}, int points = 42);
 
 }  // namespace delta::primitives

@@ -13,14 +13,21 @@ struct Topology {
   std::size_t boundaryEdges = 0;     ///< edges with one incident triangle
   std::size_t nonManifoldEdges = 0;  ///< edges with three or more incident triangles
   std::size_t misorientedEdges = 0;  ///< two-triangle edges traversed in the same direction
-  bool closed = false;               ///< every edge has exactly two incident triangles
-  bool manifold = false;             ///< no edge has more than two incident triangles
+  bool closed = false;    ///< there are edges, and every one has exactly two incident triangles
+  bool manifold = false;  ///< no edge has more than two incident triangles
   bool consistentlyOriented =
       false;  ///< manifold, and neighbours traverse each shared edge oppositely
 };
 
-/// Edge-based analysis in O(n log n). A degenerate triangle with a repeated index contributes
-/// only its edges between distinct indices.
+/// Edge-based analysis in O(n log n) at worst, O(n) for bounded valence: the directed edges are
+/// bucketed by their smaller vertex index and sorted within each bucket (no map per edge).
+///
+/// A triangle with a repeated index contributes no edge: (a, a, b) traverses a→b and then b→a,
+/// a zero-width fold whose two traversals pair with each other. That is what import makes of a
+/// sliver whose two coincident vertices it joins; its neighbours' shared edge stays manifold and
+/// the mesh stays closed. (a, a, a) has no edge at all.
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 Topology analyzeTopology(const Mesh& mesh);
 
 }  // namespace delta

@@ -1,0 +1,12 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+/// The `delta` subcommands. Each adds itself to the app with its options and a callback that runs
+/// it; a callback reports bad input by throwing delta::Error, which main() turns into one line on
+/// stderr and a non-zero exit code.
+namespace delta::cli {
+
+void addInfoCommand(CLI::App& app);
+
+}  // namespace delta::cli

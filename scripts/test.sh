@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The whole test suite: set up (scripts/setup.sh); every test built with AddressSanitizer +
+# UndefinedBehaviorSanitizer; the threaded tests built with ThreadSanitizer; the library installed
+# and the find_package consumer example built against the installed copy; then every test in the
+# Release build (its ctest summary is the closing line CI reads). Fails on the first failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+
+echo "== sanitizer build (ASan + UBSan)"
+scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=Debug -DDELTA_SANITIZE=address,undefined \
+  -DDELTA_BUILD_BENCH=OFF
+(cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j"$jobs" --output-on-failure)
+
+echo "== ThreadSanitizer build: the threaded tests (every test whose name contains Thread)"
+scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDELTA_SANITIZE=thread \
+  -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
+(cd build-tsan && TSAN_OPTIONS=halt_on_error=1 ctest -j"$jobs" -R Thread --no-tests=error --output-on-failure)
+
+echo "== install and build the find_package consumer"
+scripts/setup.sh build
+rm -rf build/install build/consumer
+cmake --install build --prefix build/install >/dev/null
+cmake -S examples/find_package -B build/consumer -G Ninja -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
+cmake --build build/consumer
+./build/consumer/consumer
+
+echo "== release build: every test"
+(cd build && ctest -j"$jobs" --output-on-failure)

@@ -1,0 +1,124 @@
+#include "delta/mesh/mass_properties.h"
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/mesh/topology.h"
+
+namespace delta {
+namespace {
+
+/// Eberly's per-axis subexpressions for one triangle's coordinates w0, w1, w2 along an axis.
+struct AxisTerms {
+  double f1, f2, f3, g0, g1, g2;
+};
+
+constexpr AxisTerms axisTerms(double w0, double w1, double w2) noexcept {
+  const double sum01 = w0 + w1;
+  const double square0 = w0 * w0;
+  const double partial = square0 + w1 * sum01;
+  AxisTerms terms{};
+  terms.f1 = sum01 + w2;
+  terms.f2 = partial + w2 * terms.f1;
+  terms.f3 = w0 * square0 + w1 * partial + w2 * terms.f2;
+  terms.g0 = terms.f2 + w0 * (terms.f1 + w0);
+  terms.g1 = terms.f2 + w1 * (terms.f1 + w1);
+  terms.g2 = terms.f2 + w2 * (terms.f1 + w2);
+  return terms;
+}
+
+/// The integrals over the enclosed solid of 1, x, y, z, x², y², z², xy, yz, zx, in the frame
+/// whose origin is `origin` (D. Eberly, "Polyhedral Mass Properties (Revisited)", 2002: the
+/// divergence theorem turns each volume integral into a sum of closed-form triangle integrals).
+std::array<double, 10> volumeIntegrals(const Mesh& mesh, const Vec3& origin) noexcept {
+  std::array<double, 10> integral{};
+  for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const Triangle triangle = mesh.triangle(t);
+    const Vec3 p0 = triangle.a - origin;
+    const Vec3 p1 = triangle.b - origin;
+    const Vec3 p2 = triangle.c - origin;
+    const Vec3 n = cross(p1 - p0, p2 - p0);
+    const AxisTerms x = axisTerms(p0.x, p1.x, p2.x);
+    const AxisTerms y = axisTerms(p0.y, p1.y, p2.y);
+    const AxisTerms z = axisTerms(p0.z, p1.z, p2.z);
+    integral[0] += n.x * x.f1;
+    integral[1] += n.x * x.f2;
+    integral[2] += n.y * y.f2;
+    integral[3] += n.z * z.f2;
+    integral[4] += n.x * x.f3;
+    integral[5] += n.y * y.f3;
+    integral[6] += n.z * z.f3;
+    integral[7] += n.x * (p0.y * x.g0 + p1.y * x.g1 + p2.y * x.g2);
+    integral[8] += n.y * (p0.z * y.g0 + p1.z * y.g1 + p2.z * y.g2);
+    integral[9] += n.z * (p0.x * z.g0 + p1.x * z.g1 + p2.x * z.g2);
+  }
+  constexpr std::array<double, 10> kScale = {1.0 / 6,  1.0 / 24, 1.0 / 24,  1.0 / 24,  1.0 / 60,
+                                             1.0 / 60, 1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 120};
+  for (std::size_t i = 0; i < integral.size(); ++i)
+    integral[i] *= kScale[i];
+  return integral;
+}
+
+[[noreturn]] void fail(const std::string& what) {
+  throw Error("massProperties: " + what);
+}
+
+}  // namespace
+
+MassProperties massProperties(const Mesh& mesh, double density) {
+  if (!(std::isfinite(density) && density > 0.0))
+    fail("density " + toString(density) + " must be finite and positive");
+  const Topology topology = analyzeTopology(mesh);
+  if (!topology.closed)
+    fail("the mesh is not closed (" + std::to_string(topology.boundaryEdges) + " boundary and " +
+         std::to_string(topology.nonManifoldEdges) + " non-manifold edges)");
+  if (!topology.consistentlyOriented)
+    fail("the mesh is not consistently oriented (" + std::to_string(topology.misorientedEdges) +
+         " edges traversed the same way by both their triangles)");
+
+  const Aabb box = mesh.bounds();
+  const Vec3 origin = box.center();
+  const std::array<double, 10> integral = volumeIntegrals(mesh, origin);
+  const double volume = integral[0];
+  // Zero relative to the mesh's size: rounding alone makes a flat closed mesh's volume of order
+  // 1e-16 · diagonal³.
+  const double diagonal = box.diagonal();
+  const double zeroVolume = 1e-12 * diagonal * diagonal * diagonal;
+  if (volume < -zeroVolume)
+    fail("the mesh is inside-out (signed volume " + toString(volume) + "); reverse its triangles");
+  if (!(volume > zeroVolume)) fail("the mesh encloses zero volume (" + toString(volume) + ")");
+
+  // Centroid in the local frame, then the second moments moved from the local origin to it.
+  const Vec3 c = Vec3{integral[1], integral[2], integral[3]} / volume;
+  const double xx = integral[4] - volume * c.x * c.x;
+  const double yy = integral[5] - volume * c.y * c.y;
+  const double zz = integral[6] - volume * c.z * c.z;
+  const double xy = integral[7] - volume * c.x * c.y;
+  const double yz = integral[8] - volume * c.y * c.z;
+  const double zx = integral[9] - volume * c.z * c.x;
+
+  MassProperties properties;
+  properties.volume = volume;
+  properties.mass = density * volume;
+  properties.centroid = origin + c;
+  properties.inertia =
+      Mat3::fromRows({yy + zz, -xy, -zx}, {-xy, zz + xx, -yz}, {-zx, -yz, xx + yy}) * density;
+  return properties;
+}
+
+double signedVolume(const Mesh& mesh) noexcept {
+  // Relative to the box centre: the tetrahedra to the origin then stay as small as the mesh,
+  // and so does the rounding of their sum.
+  const Vec3 origin = mesh.bounds().center();
+  double sixTimesVolume = 0.0;
+  for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const Triangle triangle = mesh.triangle(t);
+    sixTimesVolume += dot(triangle.a - origin, cross(triangle.b - origin, triangle.c - origin));
+  }
+  return sixTimesVolume / 6.0;
+}
+
+}  // namespace delta

@@ -1,0 +1,61 @@
+#include "delta/mesh/measures.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "detail/edges.h"
+
+namespace delta {
+
+bool isDegenerate(const Triangle& triangle) noexcept {
+  Vec3 ab = triangle.b - triangle.a;
+  Vec3 ac = triangle.c - triangle.a;
+  const double size = std::fmax(maxAbs(ab), maxAbs(ac));
+  if (!(size > 0.0)) return true;  // the three vertices coincide
+  // Rescale by a power of two near 1/size (exact) so that neither L² nor the cross product can
+  // under- or overflow: the answer then depends only on the triangle's shape.
+  const double unit = std::ldexp(1.0, -std::ilogb(size));
+  ab *= unit;
+  ac *= unit;
+  const Vec3 bc = ac - ab;
+  const double longestSquared =
+      std::fmax(lengthSquared(ab), std::fmax(lengthSquared(ac), lengthSquared(bc)));
+  const double twiceAreaSquared = lengthSquared(cross(ab, ac));
+  constexpr double kRelativeArea = 1e-12;
+  return !(twiceAreaSquared > kRelativeArea * kRelativeArea * longestSquared * longestSquared);
+}
+
+std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept {
+  std::size_t count = 0;
+  for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
+    if (isDegenerate(mesh.triangle(t))) ++count;
+  return count;
+}
+
+double surfaceArea(const Mesh& mesh) noexcept {
+  double area = 0.0;
+  for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
+    area += mesh.triangle(t).area();
+  return area;
+}
+
+EdgeLengths edgeLengths(const Mesh& mesh) {
+  const std::vector<detail::DirectedEdge> edges = detail::sortedDirectedEdges(mesh);
+  const std::span<const Vec3> vertices = mesh.vertices();
+  EdgeLengths lengths;
+  std::size_t distinct = 0;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    if (i > 0 && edges[i].key == edges[i - 1].key) continue;
+    const double edgeLength = distance(vertices[detail::edgeFirstVertex(edges[i].key)],
+                                       vertices[detail::edgeSecondVertex(edges[i].key)]);
+    lengths.min = distinct == 0 ? edgeLength : std::min(lengths.min, edgeLength);
+    lengths.max = std::max(lengths.max, edgeLength);
+    sum += edgeLength;
+    ++distinct;
+  }
+  if (distinct > 0) lengths.mean = sum / static_cast<double>(distinct);
+  return lengths;
+}
+
+}  // namespace delta

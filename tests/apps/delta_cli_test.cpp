@@ -1,0 +1,115 @@
+// Runs the `delta` executable as a user would and checks the command-line contract: results on
+// stdout, one line on stderr and a non-zero exit code for every error, never a crash.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "delta/core/version.h"
+
+namespace {
+
+struct CliRun {
+  int exitCode = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+CliRun runDelta(const std::string& arguments) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("delta_cli_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string command = std::string("'") + DELTA_CLI + "' " + arguments + " >'" +
+                              (dir / "out").string() + "' 2>'" + (dir / "err").string() + "'";
+  const int status = std::system(command.c_str());
+  CliRun run;
+  run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  run.out = slurp(dir / "out");
+  run.err = slurp(dir / "err");
+  std::filesystem::remove_all(dir);
+  return run;
+}
+
+std::string dataPath(const std::string& relative) {
+  return std::string(DELTA_DATA_DIR) + "/" + relative;
+}
+
+void expectOneLineError(const CliRun& run, const std::string& needle) {
+  EXPECT_NE(run.exitCode, 0);
+  EXPECT_LT(run.exitCode, 128) << "killed by a signal: " << run.err;
+  EXPECT_TRUE(run.out.empty()) << run.out;
+  ASSERT_FALSE(run.err.empty());
+  EXPECT_EQ(run.err.find('\n'), run.err.size() - 1) << "more than one line: " << run.err;
+  EXPECT_NE(run.err.find(needle), std::string::npos) << run.err;
+}
+
+TEST(DeltaCli, PrintsVersionAndCommit) {
+  const CliRun run = runDelta("--version");
+  EXPECT_EQ(run.exitCode, 0);
+  EXPECT_NE(run.out.find(delta::version()), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(delta::gitCommit()), std::string::npos) << run.out;
+}
+
+TEST(DeltaCli, InfoOnArmadilloMatchesTheDataSet) {
+  if (!std::filesystem::exists(dataPath("meshes/armadillo.off")))
+    GTEST_FAIL() << "CGAL's meshes are missing from " << DELTA_DATA_DIR << ": run scripts/setup.sh";
+  const CliRun run = runDelta("info --json " + dataPath("meshes/armadillo.off"));
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_NE(run.out.find("\"triangles\":52000,"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("\"vertices\":26002,"), std::string::npos) << run.out;
+  for (const char* key : {"degenerate_triangles", "bounds", "bounding_sphere", "area", "volume",
+                          "closed", "mesh_size", "load_s", "peak_memory_bytes"})
+    EXPECT_NE(run.out.find(std::string("\"") + key + "\":"), std::string::npos) << key;
+  EXPECT_EQ(run.out.back(), '\n');
+  EXPECT_EQ(run.out.find('\n'), run.out.size() - 1) << "--json prints one line";
+}
+
+TEST(DeltaCli, InfoOnBuiltInPrimitives) {
+  const CliRun box = runDelta("info --json builtin:box");
+  ASSERT_EQ(box.exitCode, 0) << box.err;
+  EXPECT_NE(box.out.find("\"triangles\":12,"), std::string::npos) << box.out;
+  EXPECT_NE(box.out.find("\"volume\":1,"), std::string::npos) << box.out;
+  EXPECT_NE(box.out.find("\"closed\":true,"), std::string::npos) << box.out;
+  const CliRun quad = runDelta("info --json builtin:quad");
+  ASSERT_EQ(quad.exitCode, 0) << quad.err;
+  EXPECT_NE(quad.out.find("\"volume\":null,"), std::string::npos) << quad.out;
+  EXPECT_NE(quad.out.find("\"closed\":false,"), std::string::npos) << quad.out;
+  const CliRun text = runDelta("info builtin:icosphere:3");
+  ASSERT_EQ(text.exitCode, 0) << text.err;
+  EXPECT_NE(text.out.find("triangles            1280 (0 degenerate)"), std::string::npos)
+      << text.out;
+}
+
+TEST(DeltaCli, ErrorsAreOneLineAndNonZero) {
+  expectOneLineError(runDelta("info /nonexistent/mesh.off"), "/nonexistent/mesh.off");
+  expectOneLineError(runDelta("info " + std::string(DELTA_DATA_DIR)), DELTA_DATA_DIR);
+  expectOneLineError(runDelta("info builtin:teapot"), "builtin:teapot");
+  expectOneLineError(runDelta("info builtin:icosphere:x"), "builtin:icosphere:x");
+  expectOneLineError(runDelta("info builtin:icosphere:99"), "");
+  expectOneLineError(runDelta("info"), "MESH");
+  expectOneLineError(runDelta("frobnicate"), "frobnicate");
+  expectOneLineError(runDelta(""), "subcommand");
+  expectOneLineError(runDelta("--threads 0 info builtin:box"), "--threads");
+}
+
+TEST(DeltaCli, EveryCommandHasHelp) {
+  for (const char* command : {"--help", "info --help"}) {
+    const CliRun run = runDelta(command);
+    EXPECT_EQ(run.exitCode, 0) << command;
+    EXPECT_NE(run.out.find("Usage"), std::string::npos) << command << ": " << run.out;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,112 @@
+#include "delta/mesh/measures.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "delta/mesh/primitives.h"
+
+namespace delta {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+Triangle scaled(const Triangle& t, double factor) {
+  return {t.a * factor, t.b * factor, t.c * factor};
+}
+
+TEST(Measures, RightTriangleAndTetraAreas) {
+  const Mesh triangle({{0, 0, 0}, {3, 0, 0}, {0, 4, 0}}, {{0, 1, 2}});
+  EXPECT_DOUBLE_EQ(surfaceArea(triangle), 6.0);
+  const Mesh tetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  EXPECT_NEAR(surfaceArea(tetra), 1.5 + std::sqrt(3.0) / 2, 1e-15);
+  EXPECT_EQ(degenerateTriangleCount(tetra), 0u);
+}
+
+TEST(Measures, DegenerateIsScaleInvariant) {
+  // Area/L² of 2.5e-14 (below 1e-12) and of 2.5e-11 (above): the same verdict at every scale.
+  const Triangle sliver{{0, 0, 0}, {1, 0, 0}, {2, 1e-13, 0}};
+  const Triangle thin{{0, 0, 0}, {1, 0, 0}, {2, 1e-10, 0}};
+  for (double factor : {1.0, 1e-9, 1e9, 1e-150, 1e150}) {
+    EXPECT_TRUE(isDegenerate(scaled(sliver, factor))) << factor;
+    EXPECT_FALSE(isDegenerate(scaled(thin, factor))) << factor;
+  }
+}
+
+TEST(Measures, CoincidentAndCollinearVerticesAreDegenerate) {
+  EXPECT_TRUE(isDegenerate({{1, 2, 3}, {1, 2, 3}, {1, 2, 3}}));
+  EXPECT_TRUE(isDegenerate({{1, 2, 3}, {1, 2, 3}, {4, 5, 6}}));
+  EXPECT_TRUE(isDegenerate({{0, 0, 0}, {1, 1, 1}, {3, 3, 3}}));
+  EXPECT_FALSE(isDegenerate({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
+  // Far from the origin the edges, not the coordinates, set the scale.
+  EXPECT_FALSE(isDegenerate({{1e9, 1e9, 1e9}, {1e9 + 1, 1e9, 1e9}, {1e9, 1e9 + 1, 1e9}}));
+}
+
+TEST(Measures, CountsDegenerateTrianglesIncludingRepeatedIndices) {
+  const Mesh mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}},
+                  {{0, 1, 2}, {0, 1, 3}, {0, 0, 2}, {1, 1, 1}});
+  EXPECT_EQ(degenerateTriangleCount(mesh), 3u);
+  EXPECT_DOUBLE_EQ(surfaceArea(mesh), 0.5);
+}
+
+TEST(Measures, EdgeLengthsCountSharedEdgesOnce) {
+  // Unit square as two triangles: four sides of 1 and one diagonal of √2, the diagonal once.
+  const Mesh square({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}});
+  const EdgeLengths lengths = edgeLengths(square);
+  EXPECT_DOUBLE_EQ(lengths.min, 1.0);
+  EXPECT_DOUBLE_EQ(lengths.max, std::sqrt(2.0));
+  EXPECT_DOUBLE_EQ(lengths.mean, (4.0 + std::sqrt(2.0)) / 5.0);
+}
+
+TEST(Measures, ZeroLengthEdgesGiveZerosNotNaN) {
+  // Coincident but unjoined vertices: three edges of length zero.
+  const Mesh collapsed({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{0, 1, 2}});
+  EdgeLengths lengths = edgeLengths(collapsed);
+  EXPECT_EQ(lengths.min, 0.0);
+  EXPECT_EQ(lengths.mean, 0.0);
+  EXPECT_EQ(lengths.max, 0.0);
+  // Only repeated indices: no edge at all.
+  lengths = edgeLengths(Mesh({{1, 1, 1}}, {{0, 0, 0}}));
+  EXPECT_EQ(lengths.min, 0.0);
+  EXPECT_EQ(lengths.mean, 0.0);
+  EXPECT_EQ(lengths.max, 0.0);
+  // One zero-length edge among others: it is the minimum.
+  const Mesh pinched({{0, 0, 0}, {0, 0, 0}, {1, 0, 0}}, {{0, 1, 2}});
+  lengths = edgeLengths(pinched);
+  EXPECT_EQ(lengths.min, 0.0);
+  EXPECT_DOUBLE_EQ(lengths.max, 1.0);
+  EXPECT_DOUBLE_EQ(lengths.mean, 2.0 / 3.0);
+}
+
+TEST(Measures, AreasOfPrimitivesMatchAnalyticValues) {
+  EXPECT_NEAR(surfaceArea(primitives::box({1, 2, 3})), 22.0, 1e-14);
+  EXPECT_NEAR(surfaceArea(primitives::quad(2, 5)), 10.0, 1e-14);
+
+  const int n = 24;
+  const double r = 0.7;
+  const double h = 1.9;
+  const double cap = 0.5 * n * r * r * std::sin(2 * kPi / n);
+  const double side = n * 2 * r * std::sin(kPi / n) * h;
+  EXPECT_NEAR(surfaceArea(primitives::cylinder(r, h, n)), 2 * cap + side, 1e-13);
+
+  // A convex body inside another has the smaller area: the icosphere lies between the ball of
+  // its smallest face distance and its circumscribed ball.
+  const Mesh sphere = primitives::icosphere(4, 2.0);
+  double inscribed = 2.0;
+  for (std::size_t t = 0; t < sphere.triangleCount(); ++t) {
+    const Triangle face = sphere.triangle(t);
+    inscribed = std::fmin(inscribed, dot(face.a, normalized(face.areaVector())));
+  }
+  const double area = surfaceArea(sphere);
+  EXPECT_LT(area, 4 * kPi * 4.0);
+  EXPECT_GT(area, 4 * kPi * inscribed * inscribed);
+
+  const EdgeLengths lengths = edgeLengths(primitives::box({1, 2, 3}));
+  EXPECT_DOUBLE_EQ(lengths.min, 1.0);
+  EXPECT_DOUBLE_EQ(lengths.max, std::sqrt(13.0));  // the 2×3 face's diagonal
+}
+
+}  // namespace
+}  // namespace delta
