@@ -6,6 +6,7 @@
 #include "delta/core/aligned_allocator.h"
 #include "delta/core/error.h"
 #include "delta/core/mat3.h"
+#include "delta/core/parallel.h"
 #include "delta/core/rotation.h"
 #include "delta/core/sphere.h"
 #include "delta/core/triangle.h"
