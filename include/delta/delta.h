@@ -4,6 +4,7 @@
 
 #include "delta/core/aabb.h"
 #include "delta/core/aligned_allocator.h"
+#include "delta/core/contact_point.h"
 #include "delta/core/error.h"
 #include "delta/core/mat3.h"
 #include "delta/core/parallel.h"
@@ -20,3 +21,4 @@
 #include "delta/mesh/primitives.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/filter.h"

@@ -1,0 +1,23 @@
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "delta/core/contact_point.h"
+
+namespace delta::contactdetection {
+
+/// The seed's redundancy elimination, filter(h): walk the contact points by ascending normal
+/// length (ties in input order) and keep a point unless a point kept before it lies closer than
+/// `h` (strictly, compared as squares: |x − x_kept|² < h²). So the closest contact is always kept,
+/// and of a cluster of points closer together than the mesh size h only the deepest survives, while
+/// separate contact regions (a concave particle touching at two places) keep a point each.
+///
+/// Returns the kept points in their input order. Exactly the result of that quadratic definition,
+/// computed in O(n log n) with a uniform grid of cells no smaller than h (points closer than h
+/// lie in neighbouring cells). Throws delta::Error when `h` is not finite and positive.
+///
+/// Threading: a pure function; may be called from any number of threads at once.
+std::vector<ContactPoint> filter(std::span<const ContactPoint> contacts, double h);
+
+}  // namespace delta::contactdetection

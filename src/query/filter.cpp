@@ -1,0 +1,96 @@
+#include "delta/query/filter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <unordered_map>
+
+#include "delta/core/aabb.h"
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+
+namespace delta::contactdetection {
+namespace {
+
+/// Integer cell coordinates of a uniform grid, packed into one key.
+struct CellKey {
+  std::int64_t i, j, k;
+  friend bool operator==(const CellKey&, const CellKey&) = default;
+};
+
+struct CellHash {
+  std::size_t operator()(const CellKey& c) const noexcept {
+    // Large odd multipliers (from a 64-bit multiplicative hash) spread neighbouring cells.
+    return static_cast<std::size_t>(static_cast<std::uint64_t>(c.i) * 0x9E3779B97F4A7C15ull ^
+                                    static_cast<std::uint64_t>(c.j) * 0xC2B2AE3D27D4EB4Full ^
+                                    static_cast<std::uint64_t>(c.k) * 0x165667B19E3779F9ull);
+  }
+};
+
+/// A grid over the points' box with cells a little wider than `h` (so two points closer than h
+/// fall in neighbouring cells despite rounding in the cell computation), and at most 2⁴⁰ cells
+/// across, so the integer cell coordinates stay exact whatever the ratio of coordinates to h.
+class Grid {
+ public:
+  Grid(const Aabb& box, double h)
+      : origin_(box.lower), cell_(std::max(h * (1.0 + 1e-9), maxAbs(box.extent()) * 0x1p-40)) {}
+
+  CellKey cellOf(const Vec3& p) const noexcept {
+    return {index(p.x - origin_.x), index(p.y - origin_.y), index(p.z - origin_.z)};
+  }
+
+ private:
+  std::int64_t index(double offset) const noexcept {
+    return static_cast<std::int64_t>(std::floor(offset / cell_));
+  }
+
+  Vec3 origin_;
+  double cell_;
+};
+
+}  // namespace
+
+std::vector<ContactPoint> filter(std::span<const ContactPoint> contacts, double h) {
+  if (!std::isfinite(h) || !(h > 0.0))
+    throw Error("filter: h = " + toString(h) + " must be finite and positive");
+  std::vector<std::size_t> order(contacts.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return lengthSquared(contacts[a].normal) < lengthSquared(contacts[b].normal);
+  });
+
+  Aabb box;
+  for (const ContactPoint& contact : contacts)
+    box.extend(contact.x);
+  const Grid grid(box, h);
+  std::unordered_map<CellKey, std::vector<std::size_t>, CellHash> kept;
+  std::vector<bool> keep(contacts.size(), false);
+  const double hSquared = h * h;
+  for (std::size_t candidate : order) {
+    const Vec3& x = contacts[candidate].x;
+    const CellKey cell = grid.cellOf(x);
+    bool crowded = false;
+    for (std::int64_t di = -1; di <= 1 && !crowded; ++di)
+      for (std::int64_t dj = -1; dj <= 1 && !crowded; ++dj)
+        for (std::int64_t dk = -1; dk <= 1 && !crowded; ++dk) {
+          const auto found = kept.find({cell.i + di, cell.j + dj, cell.k + dk});
+          if (found == kept.end()) continue;
+          for (std::size_t other : found->second)
+            if (distanceSquared(contacts[other].x, x) < hSquared) {
+              crowded = true;
+              break;
+            }
+        }
+    if (crowded) continue;
+    keep[candidate] = true;
+    kept[cell].push_back(candidate);
+  }
+
+  std::vector<ContactPoint> result;
+  for (std::size_t i = 0; i < contacts.size(); ++i)
+    if (keep[i]) result.push_back(contacts[i]);
+  return result;
+}
+
+}  // namespace delta::contactdetection
