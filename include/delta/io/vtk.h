@@ -1,0 +1,47 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
+
+/// Output that ParaView opens: VTK XML PolyData (.vtp), binary, double precision.
+namespace delta::io {
+
+/// A named array of values attached to points or cells: `components` values per element
+/// (1 for a scalar, 3 for a vector), element after element.
+struct VtkArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+};
+
+/// Points, optionally joined into triangles, with data per point and per cell.
+///
+/// Cells are, in this order: one vertex cell per point when `pointsAsVertices` (so that a bare
+/// point set shows in ParaView), then the triangles. A cell array has one element per cell.
+struct VtkPolyData {
+  std::vector<Vec3> points;
+  std::vector<TriangleIndices> triangles;
+  bool pointsAsVertices = false;
+  std::vector<VtkArray> pointData;
+  std::vector<VtkArray> cellData;
+
+  /// The mesh's vertices and triangles.
+  static VtkPolyData fromMesh(const Mesh& mesh);
+  /// A point set, each point a vertex cell.
+  static VtkPolyData fromPoints(std::vector<Vec3> points);
+
+  std::size_t cellCount() const noexcept {
+    return (pointsAsVertices ? points.size() : 0) + triangles.size();
+  }
+};
+
+/// Writes `data` as a VTK XML PolyData file (format version 1.0, raw appended little-endian
+/// data, Float64 values, Int64 connectivity). Throws delta::Error naming the path when an array's
+/// size does not match its points or cells, a triangle refers past the points, or writing fails.
+void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
+
+}  // namespace delta::io
