@@ -34,7 +34,7 @@ TEST(ParallelFor, CoversTheRangeExactlyOnce) {
   EXPECT_EQ(coverage(4, 4, 8), std::vector<int>(5, 0));
 }
 
-TEST(ParallelFor, UsesSeveralWorkersWhenAllowed) {
+TEST(ParallelFor, UsesSeveralThreadsWhenAllowed) {
   if (omp_get_num_procs() < 2) GTEST_SKIP() << "one processor";
   omp_set_num_threads(2);
   std::vector<int> owner(64, -1);
