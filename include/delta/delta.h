@@ -14,6 +14,7 @@
 #include "delta/core/vec3.h"
 #include "delta/core/version.h"
 #include "delta/io/mesh_io.h"
+#include "delta/io/points.h"
 #include "delta/io/vtk.h"
 #include "delta/mesh/bounding_sphere.h"
 #include "delta/mesh/mass_properties.h"
