@@ -35,7 +35,7 @@ class AppendedData {
 
  private:
   void append(const void* data, std::size_t size) {
-    bytes_.append(static_cast<const char*>(data), size);
+    if (size > 0) bytes_.append(static_cast<const char*>(data), size);
   }
   static std::string escaped(const std::string& text) {
     std::string out;

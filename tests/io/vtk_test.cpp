@@ -41,7 +41,7 @@ std::vector<T> readArray(const std::string& file, const std::string& name) {
   std::uint64_t bytes = 0;
   std::memcpy(&bytes, file.data() + at, sizeof bytes);
   std::vector<T> values(bytes / sizeof(T));
-  std::memcpy(values.data(), file.data() + at + sizeof bytes, bytes);
+  if (bytes > 0) std::memcpy(values.data(), file.data() + at + sizeof bytes, bytes);
   return values;
 }
 
