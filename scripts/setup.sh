@@ -11,6 +11,7 @@ packages=(
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   libcgal-dev libgmp-dev libmpfr-dev
   libcgal-demo assimp-testmodels
+  libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
 )
 missing=()
 for package in "${packages[@]}"; do

@@ -8,5 +8,6 @@
 namespace delta::cli {
 
 void addInfoCommand(CLI::App& app);
+void addBenchCommand(CLI::App& app);
 
 }  // namespace delta::cli

@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
          "Threads to use (overrides OMP_NUM_THREADS)")
       ->check(CLI::Range(1, 4096));
   delta::cli::addInfoCommand(app);
+  delta::cli::addBenchCommand(app);
 
   try {
     rejectUnknownCommand(app, argc, argv);

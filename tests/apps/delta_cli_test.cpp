@@ -112,4 +112,50 @@ TEST(DeltaCli, EveryCommandHasHelp) {
   }
 }
 
+TEST(DeltaCli, BenchKernelsJsonHasEverySolver) {
+  const CliRun run = runDelta("bench kernels --pairs 400 --json");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_EQ(run.out.find('\n'), run.out.size() - 1) << "--json prints one line";
+  EXPECT_NE(run.out.find("\"pairs\":400,"), std::string::npos) << run.out;
+  for (const char* key :
+       {"\"solvers\":{", "\"bruteforce\":{", "\"penalty\":{", "\"hybrid\":{",
+        "\"pairs_per_s\":", "\"max_rel_error\":", "\"fallback_rate\":", "\"isa\":\""})
+    EXPECT_NE(run.out.find(key), std::string::npos) << key << " in " << run.out;
+  EXPECT_EQ(run.out.find("\"fcl\""), std::string::npos) << "FCL stays out of the CLI";
+}
+
+TEST(DeltaCli, BenchKernelsPrintsATable) {
+  const CliRun run = runDelta("bench kernels --pairs 300");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  for (const char* solver : {"bruteforce", "penalty", "hybrid", "pairs/s"})
+    EXPECT_NE(run.out.find(solver), std::string::npos) << solver << " in " << run.out;
+}
+
+TEST(DeltaCli, BenchKernelsChoosesTheIsa) {
+  const CliRun scalar = runDelta("bench kernels --pairs 100 --json --isa scalar");
+  ASSERT_EQ(scalar.exitCode, 0) << scalar.err;
+  EXPECT_NE(scalar.out.find("\"isa\":\"scalar\""), std::string::npos) << scalar.out;
+  ::setenv("DELTA_ISA", "scalar", 1);  // the override the kernels read once per process
+  const CliRun fromEnvironment = runDelta("bench kernels --pairs 100 --json");
+  ::unsetenv("DELTA_ISA");
+  ASSERT_EQ(fromEnvironment.exitCode, 0) << fromEnvironment.err;
+  EXPECT_NE(fromEnvironment.out.find("\"isa\":\"scalar\""), std::string::npos)
+      << fromEnvironment.out;
+}
+
+TEST(DeltaCli, BenchKernelsRejectsBadInput) {
+  expectOneLineError(runDelta("bench kernels --pairs 0"), "--pairs");
+  expectOneLineError(runDelta("bench kernels --pairs -5"), "--pairs");
+  expectOneLineError(runDelta("bench kernels --pairs many"), "--pairs");
+  expectOneLineError(runDelta("bench kernels --pairs 99999999999"), "--pairs");
+  expectOneLineError(runDelta("bench kernels --isa avx1024"), "avx1024");
+  expectOneLineError(runDelta("bench"), "kernels");
+  expectOneLineError(runDelta("bench frobnicate"), "frobnicate");
+  for (const char* command : {"bench --help", "bench kernels --help"}) {
+    const CliRun run = runDelta(command);
+    EXPECT_EQ(run.exitCode, 0) << command;
+    EXPECT_NE(run.out.find("Usage"), std::string::npos) << command << ": " << run.out;
+  }
+}
+
 }  // namespace

@@ -1,0 +1,61 @@
+#pragma once
+
+// The per-ISA table of batched kernels, as a template over the lane count W. Each file in
+// src/kernels/isa/ instantiates it once, for its own W, compiled with its own flags.
+
+#include <cstddef>
+
+#include "delta/kernels/detail/batch_views.h"
+#include "delta/kernels/detail/hybrid_candidates.h"
+#include "delta/kernels/detail/pair_lanes.h"
+#include "delta/kernels/detail/penalty_newton.h"
+
+namespace delta::detail {
+
+template <int W>
+struct PenaltyKernel {
+  PairOutputLanes<W> operator()(const PairLanes<W>& pair) const noexcept {
+    return penaltyLanes<W>(pair, PenaltySchedule::kTolerance);
+  }
+};
+
+template <int W>
+struct HybridKernel {
+  PairOutputLanes<W> operator()(const PairLanes<W>& pair) const noexcept {
+    return hybridLanes<W>(pair);
+  }
+};
+
+// [[gnu::flatten]]: everything the loop calls is inlined into it (GCC's heuristics would keep the
+// small Pack helpers out of line, passing registers through memory).
+template <int W>
+struct ExhaustiveKernel {
+  PairOutputLanes<W> operator()(const PairLanes<W>& pair) const noexcept {
+    return exhaustiveLanes<W>(pair);
+  }
+};
+
+template <int W, template <int> class Kernel>
+[[gnu::flatten]] void runBlocks(const SoaView& first, const SoaView& second, std::size_t count,
+                                const PairStreams& out) noexcept {
+  forEachPairOfBlocks<W>(first, second, count, out, Kernel<W>{});
+}
+
+template <int W, template <int> class Kernel>
+[[gnu::flatten]] void runOne(const TriangleCoordinates& one, const SoaView& block,
+                             std::size_t begin, std::size_t count,
+                             const PairStreams& out) noexcept {
+  forEachPairOfOne<W>(one, block, begin, count, out, Kernel<W>{});
+}
+
+template <int W>
+constexpr BatchKernels makeBatchKernels() noexcept {
+  return {W,
+          &runBlocks<W, PenaltyKernel>,
+          &runOne<W, PenaltyKernel>,
+          &runBlocks<W, HybridKernel>,
+          &runOne<W, HybridKernel>,
+          &runBlocks<W, ExhaustiveKernel>};
+}
+
+}  // namespace delta::detail

@@ -1,0 +1,61 @@
+#pragma once
+
+// Plain views that cross from the dispatching code into the per-ISA batch kernels: raw pointers
+// and sizes only, so the kernels compiled for one instruction set share no inline code with the
+// rest of the library.
+
+#include <cstddef>
+#include <cstdint>
+
+namespace delta::detail {
+
+/// The nine streams of a TriangleSoA (vertex slot v, axis a at index 3v + a), as plain pointers.
+struct SoaView {
+  const double* streams[9];
+  std::size_t paddedSize;  ///< readable doubles in every stream
+};
+
+/// One triangle's nine coordinates (a.x, a.y, a.z, b.x, …, c.z), broadcast to every lane.
+struct TriangleCoordinates {
+  double values[9];
+};
+
+/// Where a batched kernel writes: the streams of a PairResults, from its first pair on.
+struct PairStreams {
+  double* distanceSquared;
+  double* p[3];
+  double* q[3];
+  double* errorBound;
+  double* newtonStep;
+  std::uint8_t* intersect;
+  std::uint8_t* converged;
+};
+
+/// The batched kernels of one instruction set (one table per ISA, in src/kernels/isa/).
+struct BatchKernels {
+  int lanes;
+  /// Pairs (first[i], second[i]), i < count; writes pairs [0, count) of `out`.
+  void (*penaltyBlocks)(const SoaView& first, const SoaView& second, std::size_t count,
+                        const PairStreams& out) noexcept;
+  /// Pairs (one, block[begin + j]), j < count; writes pairs [0, count) of `out`.
+  void (*penaltyOne)(const TriangleCoordinates& one, const SoaView& block, std::size_t begin,
+                     std::size_t count, const PairStreams& out) noexcept;
+  /// The hybrid's first stage: `converged` is 0 where the pair needs the second.
+  void (*hybridBlocks)(const SoaView& first, const SoaView& second, std::size_t count,
+                       const PairStreams& out) noexcept;
+  void (*hybridOne)(const TriangleCoordinates& one, const SoaView& block, std::size_t begin,
+                    std::size_t count, const PairStreams& out) noexcept;
+  /// The hybrid's second stage (all 15 candidates), on pairs gathered from the first's
+  /// failures: `converged` is 0 where the scalar brute force must recompute the pair.
+  void (*exhaustiveBlocks)(const SoaView& first, const SoaView& second, std::size_t count,
+                           const PairStreams& out) noexcept;
+};
+
+/// The tables, one per translation unit compiled with that ISA's flags. Only call one whose ISA
+/// the CPU supports (delta::kernels::isSupported).
+const BatchKernels& scalarBatchKernels() noexcept;
+const BatchKernels& sse2BatchKernels() noexcept;
+const BatchKernels& avx2BatchKernels() noexcept;
+const BatchKernels& avx512BatchKernels() noexcept;
+
+}  // namespace delta::detail

@@ -1,0 +1,31 @@
+#pragma once
+
+#include "delta/core/sphere.h"
+#include "delta/core/triangle.h"
+#include "delta/core/vec3.h"
+
+namespace delta::kernels {
+
+/// Closest points between a sphere's surface and another geometry.
+struct SphereContactResult {
+  double gap = 0.0;      ///< surface-to-surface distance; negative by the depth when they overlap
+  Vec3 p;                ///< on the sphere's surface, toward the other geometry
+  Vec3 q;                ///< on the other geometry (for a sphere, on its surface)
+  Vec3 normal;           ///< unit vector from the other geometry toward the first sphere's centre
+  bool overlap = false;  ///< gap < 0
+};
+
+/// Sphere–sphere. Concentric spheres get the normal +x (any direction is correct). Lengths are
+/// computed with scaling, so centres 1e-300 or 1e300 apart work too.
+SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noexcept;
+
+/// Sphere–triangle (solid triangle). A centre on the triangle gets the face normal (for a
+/// zero-area triangle, any unit vector orthogonal to it, or +x for a point).
+///
+/// "On the triangle" means within 8ε of the scale (the centre's distance from triangle.a plus
+/// the longest edge), where the direction to the closest point is rounding noise; the face
+/// normal is then (b − a) × (c − a), normalised. Otherwise the normal is the unit vector from
+/// the closest point (`q`) to the centre, gap = |centre − q| − radius. Never NaN for finite input.
+SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept;
+
+}  // namespace delta::kernels

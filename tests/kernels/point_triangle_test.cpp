@@ -1,0 +1,176 @@
+#include "delta/kernels/point_triangle.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "kernels/exact_distance.h"
+#include "kernels/triangle_pairs.h"
+
+namespace delta::kernels {
+namespace {
+
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+
+std::string pasteablePoint(const Vec3& p, const Triangle& t) {
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "closestPointOnTriangle({%.17g, %.17g, %.17g},\n"
+                "                       {{%.17g, %.17g, %.17g}, {%.17g, %.17g, %.17g}, "
+                "{%.17g, %.17g, %.17g}})",
+                p.x, p.y, p.z, t.a.x, t.a.y, t.a.z, t.b.x, t.b.y, t.b.z, t.c.x, t.c.y, t.c.z);
+  return text;
+}
+
+Vec3 fromBarycentrics(const Triangle& t, double u, double v) {
+  return t.a + (t.b - t.a) * u + (t.c - t.a) * v;
+}
+
+struct Expected {
+  Vec3 p;
+  Vec3 closest;
+  double distanceSquared;
+  double u, v;
+  TriangleFeature feature;
+};
+
+TEST(PointTriangle, EveryVoronoiRegion) {
+  const Triangle t{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+  const Expected cases[] = {
+      {{-1, -1, 1}, {0, 0, 0}, 3, 0, 0, TriangleFeature::VertexA},
+      {{3, -1, 0}, {2, 0, 0}, 2, 1, 0, TriangleFeature::VertexB},
+      {{-1, 3, 0}, {0, 2, 0}, 2, 0, 1, TriangleFeature::VertexC},
+      {{1, -1, 2}, {1, 0, 0}, 5, 0.5, 0, TriangleFeature::EdgeAB},
+      {{2, 2, 1}, {1, 1, 0}, 3, 0.5, 0.5, TriangleFeature::EdgeBC},
+      {{-1, 1, 0}, {0, 1, 0}, 1, 0, 0.5, TriangleFeature::EdgeCA},
+      {{0.5, 0.5, -3}, {0.5, 0.5, 0}, 9, 0.25, 0.25, TriangleFeature::Face},
+      {{0.5, 1, 0}, {0.5, 1, 0}, 0, 0.25, 0.5, TriangleFeature::Face},  // on the face
+      {{1, 0, 0}, {1, 0, 0}, 0, 0.5, 0, TriangleFeature::EdgeAB},       // on an edge
+  };
+  for (const Expected& e : cases) {
+    SCOPED_TRACE(pasteablePoint(e.p, t));
+    const PointTriangleResult r = closestPointOnTriangle(e.p, t);
+    EXPECT_DOUBLE_EQ(r.distanceSquared, e.distanceSquared);
+    EXPECT_NEAR(r.closest.x, e.closest.x, 1e-15);
+    EXPECT_NEAR(r.closest.y, e.closest.y, 1e-15);
+    EXPECT_NEAR(r.closest.z, e.closest.z, 1e-15);
+    EXPECT_NEAR(r.u, e.u, 1e-15);
+    EXPECT_NEAR(r.v, e.v, 1e-15);
+    if (e.distanceSquared > 0) {
+      EXPECT_EQ(r.feature, e.feature);
+    }
+  }
+}
+
+TEST(PointTriangle, OrientationDoesNotMatter) {
+  const Triangle up{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}, down{{0, 0, 0}, {0, 2, 0}, {2, 0, 0}};
+  for (const Vec3 p : {Vec3{0.5, 0.5, 1}, Vec3{0.5, 0.5, -1}, Vec3{3, 3, 3}}) {
+    EXPECT_DOUBLE_EQ(closestPointOnTriangle(p, up).distanceSquared,
+                     closestPointOnTriangle(p, down).distanceSquared);
+  }
+}
+
+TEST(PointTriangle, ZeroAreaTriangleIsItsLongestEdge) {
+  const Triangle collinear{{0, 0, 0}, {1, 0, 0}, {3, 0, 0}};
+  const PointTriangleResult r = closestPointOnTriangle({2, 1, 0}, collinear);
+  EXPECT_EQ(r.distanceSquared, 1.0);
+  EXPECT_EQ(r.closest, (Vec3{2, 0, 0}));
+  EXPECT_NE(r.feature, TriangleFeature::Face);
+  const Vec3 back = fromBarycentrics(collinear, r.u, r.v);
+  EXPECT_NEAR(back.x, 2.0, 1e-15);
+  EXPECT_GE(r.u, 0.0);
+  EXPECT_GE(r.v, 0.0);
+  EXPECT_LE(r.u + r.v, 1.0);
+  // beyond the far end, and a repeated vertex
+  EXPECT_EQ(closestPointOnTriangle({5, 0, 0}, collinear).distanceSquared, 4.0);
+  const Triangle repeated{{0, 0, 0}, {0, 0, 0}, {0, 4, 0}};
+  const PointTriangleResult s = closestPointOnTriangle({1, 2, 0}, repeated);
+  EXPECT_EQ(s.distanceSquared, 1.0);
+  EXPECT_EQ(s.closest, (Vec3{0, 2, 0}));
+}
+
+TEST(PointTriangle, PointTriangleIsAPoint) {
+  const Triangle point{{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+  const PointTriangleResult r = closestPointOnTriangle({1, 1, 3}, point);
+  EXPECT_EQ(r.distanceSquared, 4.0);
+  EXPECT_EQ(r.closest, (Vec3{1, 1, 1}));
+  EXPECT_EQ(r.feature, TriangleFeature::VertexA);
+  EXPECT_EQ(closestPointOnTriangle({1, 1, 1}, point).distanceSquared, 0.0);
+}
+
+TEST(PointTriangle, SliverFaceIsExact) {
+  // Height 1e-10 of the length: a plain cross product tilts this face by 1e-6 rad.
+  const Triangle needle{{0.1, 0.2, 0.3}, {1.1, 0.7, -0.4}, {0.6, 0.45 + 1e-10, -0.05}};
+  testing::PairRandom random(3);
+  for (int i = 0; i < 2000; ++i) {
+    const double u = random.uniform(), v = random.uniform() * (1 - u);
+    const Vec3 p = fromBarycentrics(needle, u, v) + random.unitVector() * random.uniform(0, 1e-3);
+    const PointTriangleResult r = closestPointOnTriangle(p, needle);
+    const double exact = std::sqrt(testing::exactSquaredDistance(p, needle));
+    ASSERT_NEAR(std::sqrt(r.distanceSquared), exact, 1e-15) << pasteablePoint(p, needle);
+  }
+}
+
+TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
+  const Vec3 o{-1e6, 2e6, 3e6};
+  const Triangle t{o, o + Vec3{2, 0, 0}, o + Vec3{0, 2, 0}};
+  const PointTriangleResult r = closestPointOnTriangle(o + Vec3{0.5, 0.5, 0.25}, t);
+  EXPECT_DOUBLE_EQ(r.distanceSquared, 0.0625);
+  EXPECT_EQ(r.feature, TriangleFeature::Face);
+  EXPECT_DOUBLE_EQ(r.u, 0.25);
+}
+
+/// The vertices and centroid of B, and random points around A, against the exact distance, on
+/// every family; the closest point must lie on the triangle and match its barycentrics.
+TEST(PointTriangle, MatchesExactDistanceOnEveryFamily) {
+  testing::PairRandom random(17);
+  for (const auto family : testing::kAllFamilies) {
+    double worst = 0.0;
+    int failures = 0;
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 9)) {
+      const double size = testing::pairSize(a, b);
+      const Vec3 queries[] = {b.a,
+                              b.b,
+                              b.c,
+                              b.centroid(),
+                              a.centroid() + random.inCube(size),
+                              a.a + random.inCube(0.1 * size)};
+      const double twiceArea = length(cross(a.b - a.a, a.c - a.a));
+      const double longest = std::max({distance(a.a, a.b), distance(a.b, a.c), distance(a.c, a.a)});
+      // Barycentrics of a thin triangle are ill-conditioned (ε·L/h): check them only when
+      // the triangle is not a needle.
+      const bool wellShaped = twiceArea > 1e-3 * longest * longest;
+      for (const Vec3& p : queries) {
+        const PointTriangleResult r = closestPointOnTriangle(p, a);
+        ASSERT_TRUE(std::isfinite(r.distanceSquared) && isFinite(r.closest) && std::isfinite(r.u) &&
+                    std::isfinite(r.v))
+            << pasteablePoint(p, a);
+        const double exact = std::sqrt(testing::exactSquaredDistance(p, a));
+        const double error = std::fabs(std::sqrt(r.distanceSquared) - exact) / size;
+        worst = std::max(worst, error);
+        const double rounding = 4 * kEpsilon * std::max(maxAbs(p), maxAbs(r.closest));
+        const double off = std::sqrt(testing::exactSquaredDistance(r.closest, a));
+        const double consistency = std::fabs(distance(p, r.closest) - std::sqrt(r.distanceSquared));
+        const double reconstruction = distance(fromBarycentrics(a, r.u, r.v), r.closest);
+        const bool ok = error <= 1e-12 && off <= 1e-12 * size + rounding &&
+                        consistency <= 1e-12 * size + rounding && r.u >= 0 && r.v >= 0 &&
+                        r.u + r.v <= 1 + 4 * kEpsilon &&
+                        (!wellShaped || reconstruction <= 1e-12 * size + rounding);
+        if (!ok && failures++ < 3)
+          ADD_FAILURE() << testing::name(family) << ": error " << error << ", off " << off
+                        << ", |p-closest| vs d " << consistency << ", u " << r.u << ", v " << r.v
+                        << ", reconstruction " << reconstruction << " for\n"
+                        << pasteablePoint(p, a);
+      }
+    }
+    std::printf("[ stats    ] %-20s point-triangle: max |d - exact| / size = %.3g\n",
+                testing::name(family), worst);
+  }
+}
+
+}  // namespace
+}  // namespace delta::kernels

@@ -1,0 +1,144 @@
+#include "delta/kernels/sphere.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "kernels/exact_distance.h"
+#include "kernels/triangle_pairs.h"
+
+namespace delta::kernels {
+namespace {
+
+void expectNear(const Vec3& actual, const Vec3& expected, double tolerance) {
+  EXPECT_NEAR(actual.x, expected.x, tolerance);
+  EXPECT_NEAR(actual.y, expected.y, tolerance);
+  EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+bool finite(const SphereContactResult& r) {
+  return std::isfinite(r.gap) && isFinite(r.p) && isFinite(r.q) && isFinite(r.normal);
+}
+
+TEST(SphereContact, SeparatedSpheres) {
+  const auto r = sphereSphere({{0, 0, 0}, 1}, {{3, 0, 0}, 1});
+  EXPECT_DOUBLE_EQ(r.gap, 1.0);
+  EXPECT_FALSE(r.overlap);
+  EXPECT_EQ(r.normal, (Vec3{-1, 0, 0}));  // from the second toward the first
+  EXPECT_EQ(r.p, (Vec3{1, 0, 0}));
+  EXPECT_EQ(r.q, (Vec3{2, 0, 0}));
+}
+
+TEST(SphereContact, OverlappingSpheres) {
+  const auto r = sphereSphere({{0, 0, 0}, 1}, {{0, 1.5, 0}, 1});
+  EXPECT_DOUBLE_EQ(r.gap, -0.5);
+  EXPECT_TRUE(r.overlap);
+  EXPECT_EQ(r.normal, (Vec3{0, -1, 0}));
+  EXPECT_EQ(r.p, (Vec3{0, 1, 0}));
+  EXPECT_EQ(r.q, (Vec3{0, 0.5, 0}));
+}
+
+TEST(SphereContact, ConcentricSpheresGetPlusX) {
+  const auto r = sphereSphere({{1, 2, 3}, 1}, {{1, 2, 3}, 2});
+  EXPECT_DOUBLE_EQ(r.gap, -3.0);
+  EXPECT_TRUE(r.overlap);
+  EXPECT_EQ(r.normal, (Vec3{1, 0, 0}));
+}
+
+TEST(SphereContact, TinyAndHugeSeparationsStayFinite) {
+  const auto tiny = sphereSphere({{1e-300, 0, 0}, 0}, {{0, 0, 0}, 0});
+  EXPECT_TRUE(finite(tiny));
+  EXPECT_EQ(tiny.normal, (Vec3{1, 0, 0}));
+  EXPECT_GT(tiny.gap, 0.0);
+  const auto huge = sphereSphere({{1e300, 1e300, 0}, 1}, {{-1e300, -1e300, 0}, 1});
+  EXPECT_TRUE(finite(huge));
+  EXPECT_NEAR(length(huge.normal), 1.0, 1e-15);
+  const auto offset = sphereSphere({{1e6 + 0.5, 1e6, 1e6}, 0.25}, {{1e6, 1e6, 1e6}, 0.125});
+  EXPECT_DOUBLE_EQ(offset.gap, 0.125);
+}
+
+const Triangle kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+TEST(SphereContact, SphereAboveAndBelowTheFace) {
+  const auto above = sphereTriangle({{0.25, 0.25, 2}, 0.5}, kUnit);
+  EXPECT_DOUBLE_EQ(above.gap, 1.5);
+  EXPECT_FALSE(above.overlap);
+  expectNear(above.q, {0.25, 0.25, 0}, 1e-15);
+  expectNear(above.normal, {0, 0, 1}, 1e-15);
+  expectNear(above.p, {0.25, 0.25, 1.5}, 1e-15);
+  const auto below = sphereTriangle({{0.25, 0.25, -2}, 0.5}, kUnit);
+  expectNear(below.normal, {0, 0, -1}, 1e-15);
+}
+
+TEST(SphereContact, SphereNearAnEdgeAndAVertex) {
+  const auto edge = sphereTriangle({{0.5, -1, 0}, 0.5}, kUnit);
+  EXPECT_DOUBLE_EQ(edge.gap, 0.5);
+  expectNear(edge.q, {0.5, 0, 0}, 1e-15);
+  expectNear(edge.normal, {0, -1, 0}, 1e-15);
+  const auto vertex = sphereTriangle({{-1, -1, 0}, 1}, kUnit);
+  EXPECT_DOUBLE_EQ(vertex.gap, std::sqrt(2.0) - 1);
+  expectNear(vertex.q, {0, 0, 0}, 1e-15);
+  expectNear(vertex.normal, {-std::sqrt(0.5), -std::sqrt(0.5), 0}, 1e-15);
+}
+
+TEST(SphereContact, OverlappingTriangle) {
+  const auto r = sphereTriangle({{0.25, 0.25, 0.1}, 0.5}, kUnit);
+  EXPECT_DOUBLE_EQ(r.gap, -0.4);
+  EXPECT_TRUE(r.overlap);
+  expectNear(r.normal, {0, 0, 1}, 1e-15);
+}
+
+TEST(SphereContact, CentreOnTheTriangleGetsTheFaceNormal) {
+  const auto r = sphereTriangle({{0.25, 0.25, 0}, 0.5}, kUnit);
+  EXPECT_EQ(r.gap, -0.5);
+  EXPECT_TRUE(r.overlap);
+  expectNear(r.normal, {0, 0, 1}, 1e-15);
+  const Triangle flipped{kUnit.a, kUnit.c, kUnit.b};
+  expectNear(sphereTriangle({{0.25, 0.25, 0}, 0.5}, flipped).normal, {0, 0, -1}, 1e-15);
+  const auto onEdge = sphereTriangle({{0.5, 0, 0}, 0.5}, kUnit);
+  expectNear(onEdge.normal, {0, 0, 1}, 1e-15);
+}
+
+TEST(SphereContact, ZeroAreaTriangles) {
+  const Triangle segment{{0, 0, 0}, {2, 0, 0}, {1, 0, 0}};
+  const auto on = sphereTriangle({{1, 0, 0}, 0.5}, segment);
+  EXPECT_TRUE(finite(on));
+  EXPECT_NEAR(length(on.normal), 1.0, 1e-15);
+  EXPECT_NEAR(on.normal.x, 0.0, 1e-15);  // orthogonal to the segment
+  const auto off = sphereTriangle({{1, 3, 0}, 0.5}, segment);
+  EXPECT_DOUBLE_EQ(off.gap, 2.5);
+  expectNear(off.normal, {0, 1, 0}, 1e-15);
+  const Triangle point{{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
+  const auto atPoint = sphereTriangle({{1, 1, 1}, 2}, point);
+  EXPECT_EQ(atPoint.normal, (Vec3{1, 0, 0}));
+  EXPECT_EQ(atPoint.gap, -2.0);
+  const auto nearPoint = sphereTriangle({{1, 1, 4}, 2}, point);
+  EXPECT_EQ(nearPoint.gap, 1.0);
+  expectNear(nearPoint.normal, {0, 0, 1}, 1e-15);
+}
+
+/// Sphere–triangle gap is the point–triangle distance minus the radius, on every family
+/// (centres at the other triangle's vertices), never NaN, and p lies on the sphere.
+TEST(SphereContact, SphereTriangleMatchesExactDistanceOnEveryFamily) {
+  for (const auto family : testing::kAllFamilies) {
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(300), 13)) {
+      const double size = testing::pairSize(a, b);
+      for (const Vec3& centre : {b.a, b.b, b.c}) {
+        const Sphere sphere{centre, 0.1 * size};
+        const auto r = sphereTriangle(sphere, a);
+        ASSERT_TRUE(finite(r)) << testing::pasteable(a, b);
+        const double exact = std::sqrt(testing::exactSquaredDistance(centre, a));
+        const double rounding = 4 * std::numeric_limits<double>::epsilon() * maxAbs(centre);
+        EXPECT_NEAR(r.gap, exact - sphere.radius, 1e-12 * size + rounding)
+            << testing::name(family) << "\n"
+            << testing::pasteable(a, b);
+        EXPECT_NEAR(length(r.normal), 1.0, 1e-14);
+        EXPECT_NEAR(distance(r.p, centre), sphere.radius, 1e-12 * size + rounding);
+        EXPECT_EQ(r.overlap, r.gap < 0);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace delta::kernels

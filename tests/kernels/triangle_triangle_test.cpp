@@ -1,0 +1,462 @@
+#include "delta/kernels/triangle_triangle.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+
+#include "delta/core/rotation.h"
+
+#include "kernels/exact_distance.h"
+#include "kernels/triangle_pairs.h"
+
+namespace delta::kernels {
+namespace {
+
+using testing::exactIntersect;
+using testing::exactSquaredDistance;
+using testing::name;
+using testing::PairFamily;
+using testing::pairSize;
+using testing::pasteable;
+
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+/// The accuracy every result is held to, relative to the pair's size (its longest edge).
+constexpr double kTolerance = 1e-12;
+
+Vec3 fromBarycentrics(const Triangle& t, double u, double v) {
+  return t.a + (t.b - t.a) * u + (t.c - t.a) * v;
+}
+
+double distanceOf(const TriangleDistanceResult& r) {
+  return std::sqrt(r.distanceSquared);
+}
+
+/// Rounding of output coordinates: far from the origin, points cannot be closer to exact than
+/// their own spacing (about 1e-10 at 1e6).
+double coordinateRounding(const TriangleDistanceResult& r) {
+  return 4 * kEpsilon * std::max(maxAbs(r.p), maxAbs(r.q));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hand cases with known answers.
+
+const Triangle kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+TEST(TriangleDistance, ParallelFacesOneAbove) {
+  const Triangle above{{0.1, 0.1, 2}, {0.3, 0.1, 2}, {0.1, 0.3, 2}};
+  const auto r = triangleDistanceBruteForce(kUnit, above);
+  EXPECT_DOUBLE_EQ(r.distanceSquared, 4.0);
+  EXPECT_FALSE(r.intersect);
+  EXPECT_DOUBLE_EQ(r.p.z, 0.0);
+  EXPECT_DOUBLE_EQ(r.q.z, 2.0);
+  EXPECT_NEAR(r.p.x, r.q.x, 1e-15);
+  EXPECT_NEAR(r.p.y, r.q.y, 1e-15);
+}
+
+TEST(TriangleDistance, VertexAboveFace) {
+  const Triangle spike{{0.25, 0.25, 0.5}, {0, 0, 3}, {1, 1, 3}};
+  const auto r = triangleDistanceBruteForce(kUnit, spike);
+  EXPECT_DOUBLE_EQ(r.distanceSquared, 0.25);
+  EXPECT_NEAR(r.a1, 0.25, 1e-15);
+  EXPECT_NEAR(r.a2, 0.25, 1e-15);
+  EXPECT_EQ(r.a3, 0.0);  // B's vertex a
+  EXPECT_EQ(r.a4, 0.0);
+  EXPECT_EQ(r.q, spike.a);
+}
+
+TEST(TriangleDistance, SkewEdges) {
+  // B stands in the plane x = 0.5 below A's edge ab; its edge ab crosses A's at distance 1.
+  const Triangle b{{0.5, -1, -1}, {0.5, -1, 1}, {0.5, -3, 0}};
+  const auto r = triangleDistanceBruteForce(kUnit, b);
+  EXPECT_DOUBLE_EQ(r.distanceSquared, 1.0);
+  EXPECT_FALSE(r.intersect);
+  EXPECT_NEAR(distance(r.p, {0.5, 0, 0}), 0.0, 1e-15);
+  EXPECT_NEAR(distance(r.q, {0.5, -1, 0}), 0.0, 1e-15);
+  EXPECT_NEAR(r.a1, 0.5, 1e-15);
+  EXPECT_NEAR(r.a2, 0.0, 1e-15);
+  EXPECT_NEAR(r.a3, 0.5, 1e-15);
+  EXPECT_NEAR(r.a4, 0.0, 1e-15);
+}
+
+TEST(TriangleDistance, EdgePiercingFaceIntersectsOnTheSegment) {
+  // B's edge from (0.2, 0.2, -1) to (0.2, 0.2, 1) pierces A's interior; B's other vertex is
+  // above, so the intersection is a segment from (0.2, 0.2, 0) along B's plane y = 0.2.
+  const Triangle b{{0.2, 0.2, -1}, {0.2, 0.2, 1}, {0.6, 0.2, 1}};
+  const auto r = triangleDistanceBruteForce(kUnit, b);
+  EXPECT_TRUE(r.intersect);
+  EXPECT_EQ(r.distanceSquared, 0.0);
+  EXPECT_EQ(r.p, r.q);
+  // The intersection segment runs from (0.2, 0.2, 0) to (0.4, 0.2, 0): its midpoint.
+  EXPECT_NEAR(r.p.x, 0.3, 1e-15);
+  EXPECT_NEAR(r.p.y, 0.2, 1e-15);
+  EXPECT_NEAR(r.p.z, 0.0, 1e-15);
+  EXPECT_NEAR(distance(fromBarycentrics(kUnit, r.a1, r.a2), r.p), 0.0, 1e-15);
+  EXPECT_NEAR(distance(fromBarycentrics(b, r.a3, r.a4), r.p), 0.0, 1e-15);
+  EXPECT_TRUE(trianglesIntersect(kUnit, b));
+  EXPECT_TRUE(trianglesIntersect(b, kUnit));
+}
+
+TEST(TriangleDistance, CrossingTrianglesIntersectAtTheMiddleOfTheirCommonSegment) {
+  // Two triangles crossing like links of a chain.
+  const Triangle a{{-1, 0, -1}, {1, 0, -1}, {0, 0, 1}};
+  const Triangle b{{0, -1, 0}, {0, 1, 0}, {0, 0, 2}};
+  const auto r = triangleDistanceBruteForce(a, b);
+  EXPECT_TRUE(r.intersect);
+  // Common segment: x = 0, y = 0, z from 0 (B's lowest point on A) to 1 (A's apex).
+  EXPECT_NEAR(r.p.x, 0.0, 1e-15);
+  EXPECT_NEAR(r.p.y, 0.0, 1e-15);
+  EXPECT_NEAR(r.p.z, 0.5, 1e-15);
+}
+
+TEST(TriangleDistance, CoplanarOverlappingGivesAPointOfTheOverlap) {
+  const Triangle b{{0.2, 0.2, 0}, {2, 0.2, 0}, {0.2, 2, 0}};
+  const auto r = triangleDistanceBruteForce(kUnit, b);
+  EXPECT_TRUE(r.intersect);
+  EXPECT_EQ(r.distanceSquared, 0.0);
+  // The overlap is the triangle (0.2, 0.2), (0.8, 0.2), (0.2, 0.8).
+  EXPECT_GE(r.p.x, 0.2 - 1e-15);
+  EXPECT_GE(r.p.y, 0.2 - 1e-15);
+  EXPECT_LE(r.p.x + r.p.y, 1.0 + 1e-15);
+  EXPECT_EQ(r.p.z, 0.0);
+}
+
+TEST(TriangleDistance, CoplanarDisjoint) {
+  const Triangle b{{1, 1, 0}, {3, 1, 0}, {1, 3, 0}};
+  const auto r = triangleDistanceBruteForce(kUnit, b);
+  EXPECT_FALSE(r.intersect);
+  EXPECT_DOUBLE_EQ(r.distanceSquared, 0.5);  // from (1, 1) to the line x + y = 1
+  EXPECT_NEAR(r.p.x, 0.5, 1e-15);
+  EXPECT_EQ(r.q, b.a);
+}
+
+TEST(TriangleDistance, TouchingCountsAsIntersecting) {
+  const Triangle atVertex{{1, 0, 0}, {2, 0, 1}, {2, 1, 1}};            // shares vertex b
+  const Triangle onEdge{{0.5, 0.5, 0}, {1, 1, 1}, {2, 1, 0}};          // vertex on edge bc
+  const Triangle onFace{{0.25, 0.25, 0}, {0, 0, 1}, {1, 1, 1}};        // vertex on the face
+  const Triangle edgeOnEdge{{0.5, -1, 0}, {0.5, -1, 1}, {0.5, 0, 0}};  // vertex on edge ab
+  for (const Triangle& b : {atVertex, onEdge, onFace, edgeOnEdge}) {
+    SCOPED_TRACE(pasteable(kUnit, b));
+    const auto r = triangleDistanceBruteForce(kUnit, b);
+    EXPECT_TRUE(r.intersect);
+    EXPECT_EQ(r.distanceSquared, 0.0);
+    EXPECT_TRUE(trianglesIntersect(kUnit, b));
+    EXPECT_TRUE(exactIntersect(kUnit, b));
+  }
+  const auto r = triangleDistanceBruteForce(kUnit, atVertex);
+  EXPECT_NEAR(distance(r.p, {1, 0, 0}), 0.0, 1e-15);
+}
+
+TEST(TriangleDistance, ZeroAreaTrianglesAreSegmentsAndPoints) {
+  const Triangle segment{{0.2, 0.2, -1}, {0.2, 0.2, 1}, {0.2, 0.2, 0.5}};  // pierces kUnit
+  const auto pierce = triangleDistanceBruteForce(kUnit, segment);
+  EXPECT_TRUE(pierce.intersect);
+  EXPECT_NEAR(distance(pierce.p, {0.2, 0.2, 0}), 0.0, 1e-15);
+  const Triangle point{{0.2, 0.2, 3}, {0.2, 0.2, 3}, {0.2, 0.2, 3}};
+  const auto above = triangleDistanceBruteForce(kUnit, point);
+  EXPECT_FALSE(above.intersect);
+  EXPECT_EQ(above.distanceSquared, 9.0);
+  const auto both = triangleDistanceBruteForce(point, {{1, 2, 3}, {1, 2, 3}, {1, 2, 3}});
+  EXPECT_DOUBLE_EQ(both.distanceSquared, 0.64 + 3.24);
+  const Triangle crossing{{0, 0, 0}, {2, 2, 0}, {1, 1, 0}};  // a segment on the diagonal
+  const Triangle other{{0, 2, 0}, {2, 0, 0}, {2, 0, 0}};     // and across it
+  EXPECT_TRUE(triangleDistanceBruteForce(crossing, other).intersect);
+  EXPECT_TRUE(trianglesIntersect(crossing, other));
+  const Triangle skew{{0, 2, 1}, {2, 0, 1}, {2, 0, 1}};
+  EXPECT_DOUBLE_EQ(triangleDistanceBruteForce(crossing, skew).distanceSquared, 1.0);
+}
+
+TEST(TriangleDistance, FarFromTheOriginAsAccurateAsNearIt) {
+  const Vec3 o{1e6, 1e6, -2e6};
+  const Triangle above{o + Vec3{0.1, 0.1, 0.5}, o + Vec3{0.3, 0.1, 0.5}, o + Vec3{0.1, 0.3, 0.5}};
+  const Triangle base{o, o + Vec3{1, 0, 0}, o + Vec3{0, 1, 0}};
+  EXPECT_DOUBLE_EQ(triangleDistanceBruteForce(base, above).distanceSquared, 0.25);
+  EXPECT_DOUBLE_EQ(triangleDistanceBruteForce(above, base).distanceSquared, 0.25);
+}
+
+TEST(TriangleDistance, SliverPiercedThroughItsThinInterior) {
+  // A needle of height 1e-10, turned out of the coordinate planes and pierced across its width:
+  // distance 0, found only by the piercing test, and only with an accurate normal (a plain
+  // cross product tilts this face by 1e-6 rad).
+  const Quaternion turn = Quaternion::fromAxisAngle({0.3, -0.5, 0.8}, 0.7);
+  auto place = [&](const Triangle& t) {
+    return Triangle{turn.rotate(t.a), turn.rotate(t.b), turn.rotate(t.c)};
+  };
+  for (const double across : {0.25, 0.5, 0.75}) {
+    const Triangle needle = place({{0, 0, 0}, {1, 0, 0}, {0.5, 1e-10, 0}});
+    const Triangle pin = place({{0.5, across * 1e-10, -1}, {0.5, across * 1e-10, 1}, {3, 3, 3}});
+    ASSERT_TRUE(exactIntersect(needle, pin));
+    const auto r = triangleDistanceBruteForce(needle, pin);
+    EXPECT_TRUE(r.intersect) << pasteable(needle, pin);
+    EXPECT_TRUE(trianglesIntersect(needle, pin));
+    EXPECT_TRUE(triangleDistanceBruteForce(pin, needle).intersect);
+    // and a pin that stops 1e-9 short of the needle is 1e-9 away
+    const Triangle shortPin =
+        place({{0.5, across * 1e-10, -1}, {0.5, across * 1e-10, -1e-9}, {3, 3, -3}});
+    const auto gap = triangleDistanceBruteForce(needle, shortPin);
+    EXPECT_FALSE(gap.intersect);
+    EXPECT_NEAR(distanceOf(gap), std::sqrt(exactSquaredDistance(needle, shortPin)), 1e-15);
+    EXPECT_NEAR(distanceOf(gap), 1e-9, 1e-15);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Against the exact oracle.
+
+struct FamilyStats {
+  double worstError = 0.0;    // max |d − d_exact| / size
+  int flagDisagreements = 0;  // intersect ≠ exact do_intersect, exact distance < tolerance
+  int intersecting = 0;
+  int failures = 0;
+};
+
+/// Compares one pair with the exact oracle: distance, intersect flag, consistency with
+/// trianglesIntersect, closest points on their triangles, barycentrics, and the intersection
+/// point on both triangles. Prints the pair, pasteable, on failure.
+void checkAgainstOracle(const Triangle& a, const Triangle& b, const char* family,
+                        FamilyStats& stats) {
+  const auto r = triangleDistanceBruteForce(a, b);
+  const double size = pairSize(a, b);
+  const double exact = std::sqrt(exactSquaredDistance(a, b));
+  const bool exactFlag = exactIntersect(a, b);
+  const double error = std::fabs(distanceOf(r) - exact) / size;
+  stats.worstError = std::max(stats.worstError, error);
+  stats.intersecting += exactFlag;
+  std::string problem;
+  if (!(std::isfinite(r.distanceSquared) && isFinite(r.p) && isFinite(r.q) && std::isfinite(r.a1) &&
+        std::isfinite(r.a2) && std::isfinite(r.a3) && std::isfinite(r.a4)))
+    problem += " not finite;";
+  if (!(error <= kTolerance)) problem += " distance off by " + std::to_string(error) + " size;";
+  if (r.intersect != exactFlag) {
+    if (exact < kTolerance * size)
+      ++stats.flagDisagreements;
+    else
+      problem += " intersect flag wrong;";
+  }
+  if (r.intersect != (r.distanceSquared == 0.0)) problem += " intersect but distance > 0;";
+  if (trianglesIntersect(a, b) != r.intersect) problem += " trianglesIntersect disagrees;";
+  const double slack = kTolerance * size + coordinateRounding(r);
+  const double offA = std::sqrt(exactSquaredDistance(r.p, a));
+  const double offB = std::sqrt(exactSquaredDistance(r.q, b));
+  if (!(offA <= slack && offB <= slack)) problem += " p or q not on its triangle;";
+  if (!(std::fabs(distance(r.p, r.q) - distanceOf(r)) <= slack)) problem += " |p - q| != d;";
+  if (r.intersect && !(r.p == r.q)) problem += " intersecting but p != q;";
+  const double barycentricSlack = 4 * kEpsilon;
+  for (const auto& [u, v] : {std::pair{r.a1, r.a2}, std::pair{r.a3, r.a4}})
+    if (!(u >= 0 && v >= 0 && u <= 1 && v <= 1 && u + v <= 1 + barycentricSlack))
+      problem += " barycentrics outside the triangle;";
+  // Barycentrics of a needle are ill-conditioned (ε·L/h): reconstruct only well-shaped triangles.
+  auto wellShaped = [](const Triangle& t) {
+    const double longest = std::max({distance(t.a, t.b), distance(t.b, t.c), distance(t.c, t.a)});
+    return 2 * t.area() > 1e-3 * longest * longest;
+  };
+  if ((wellShaped(a) && !(distance(fromBarycentrics(a, r.a1, r.a2), r.p) <= slack)) ||
+      (wellShaped(b) && !(distance(fromBarycentrics(b, r.a3, r.a4), r.q) <= slack)))
+    problem += " barycentrics do not give p and q;";
+  if (!problem.empty() && stats.failures++ < 3) {
+    ADD_FAILURE() << family << ":" << problem << "\n d = " << distanceOf(r) << ", exact = " << exact
+                  << ", intersect = " << r.intersect << ", exact intersect = " << exactFlag
+                  << ", pair:\n"
+                  << pasteable(a, b);
+  }
+}
+
+void printStats(const char* what, const FamilyStats& s, std::size_t count) {
+  std::printf(
+      "[ stats    ] %-20s %8zu pairs: max |d - exact| / size = %.3g; %d intersect; %d touching "
+      "within tolerance flagged differently from do_intersect\n",
+      what, count, s.worstError, s.intersecting, s.flagDisagreements);
+}
+
+TEST(TriangleDistance, MatchesExactOracleOnEveryFamily) {
+  const std::size_t count = testing::scaledCount(3000);
+  for (const PairFamily family : testing::kAllFamilies) {
+    FamilyStats stats;
+    for (const auto& [a, b] : testing::makePairs(family, count, 2024))
+      checkAgainstOracle(a, b, name(family), stats);
+    printStats(name(family), stats, count);
+  }
+}
+
+/// The oracle itself: its interval filter against plain exact rationals, and its composition of
+/// 15 candidates against CGAL's own triangle–triangle distance (non-degenerate pairs: both are
+/// exact values rounded once, so they must be the same double).
+TEST(TriangleDistance, ExactOracleAgreesWithRationalArithmeticAndCgal) {
+  for (const PairFamily family : testing::kAllFamilies) {
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(100), 555)) {
+      const double rational = testing::exactSquaredDistanceRational(a, b);
+      const double filtered = exactSquaredDistance(a, b);
+      const double d = std::sqrt(rational);
+      EXPECT_LE(std::fabs(std::sqrt(filtered) - d),
+                1.01 * testing::kCertifiedFraction * (pairSize(a, b) + d))
+          << name(family) << "\n"
+          << pasteable(a, b);
+      // and its point–triangle and segment–segment parts
+      const double pointRational =
+          CGAL::to_double(testing::exact_detail::pointTriangle<testing::exact_detail::Rational>(
+              b.a, a, testing::exact_detail::degenerate(a)));
+      EXPECT_LE(std::fabs(std::sqrt(exactSquaredDistance(b.a, a)) - std::sqrt(pointRational)),
+                1.01 * testing::kCertifiedFraction * (pairSize(a, b) + std::sqrt(pointRational)));
+      const double edgeRational =
+          CGAL::to_double(testing::exact_detail::segmentSegment<testing::exact_detail::Rational>(
+              a.a, a.b, b.b, b.c));
+      EXPECT_LE(
+          std::fabs(std::sqrt(exactSquaredDistance(a.a, a.b, b.b, b.c)) - std::sqrt(edgeRational)),
+          1.01 * testing::kCertifiedFraction * (pairSize(a, b) + std::sqrt(edgeRational)));
+      const double thin = 1e-3 * pairSize(a, b) * pairSize(a, b);
+      if (a.area() > thin && b.area() > thin) {
+        EXPECT_EQ(rational, testing::cgalTriangleSquaredDistance(a, b)) << name(family) << "\n"
+                                                                        << pasteable(a, b);
+      }
+    }
+  }
+}
+
+/// 10^5 random pairs in CI (5·10^4 Random + 5·10^4 NearContact). Set DELTA_LONG_ORACLE=N to run N
+/// of each instead, e.g. DELTA_LONG_ORACLE=5000000 for 10^7 pairs (about 3 minutes).
+TEST(TriangleDistance, RandomPairsMatchExactOracle) {
+  std::size_t count = testing::scaledCount(50000);
+  if (const char* requested = std::getenv("DELTA_LONG_ORACLE"))
+    count = static_cast<std::size_t>(std::strtoull(requested, nullptr, 10));
+  constexpr std::size_t kBatch = 100000;  // generated in batches: 10^7 pairs need no 1 GB vector
+  for (const PairFamily family : {PairFamily::Random, PairFamily::NearContact}) {
+    FamilyStats stats;
+    for (std::size_t done = 0, batch = 0; done < count; done += kBatch, ++batch) {
+      for (const auto& [a, b] :
+           testing::makePairs(family, std::min(kBatch, count - done), 77 + batch))
+        checkAgainstOracle(a, b, name(family), stats);
+    }
+    printStats(name(family), stats, count);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Invariances.
+
+/// Whether two results of the same pair (moved, reordered, swapped) agree: distances within the
+/// tolerance; the intersect flags equal unless the pair touches within the tolerance.
+void expectSameDistance(const TriangleDistanceResult& r, const TriangleDistanceResult& other,
+                        const Triangle& a, const Triangle& b, double slack, int& failures) {
+  const double size = pairSize(a, b);
+  bool ok = std::fabs(distanceOf(r) - distanceOf(other)) <= kTolerance * size + slack;
+  if (r.intersect != other.intersect)
+    ok = ok && std::sqrt(exactSquaredDistance(a, b)) < kTolerance * size;
+  if (!ok && failures++ < 3)
+    ADD_FAILURE() << "d = " << distanceOf(r) << " vs " << distanceOf(other) << ", intersect "
+                  << r.intersect << " vs " << other.intersect << " for\n"
+                  << pasteable(a, b);
+}
+
+TEST(TriangleDistance, SymmetricInItsArguments) {
+  for (const PairFamily family : testing::kAllFamilies) {
+    int failures = 0;
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(2000), 31)) {
+      const auto r = triangleDistanceBruteForce(a, b);
+      const auto swapped = triangleDistanceBruteForce(b, a);
+      expectSameDistance(r, swapped, a, b, 0.0, failures);
+      EXPECT_EQ(trianglesIntersect(b, a), swapped.intersect);
+    }
+  }
+}
+
+TEST(TriangleDistance, InvariantUnderVertexOrderAndOrientation) {
+  for (const PairFamily family : testing::kAllFamilies) {
+    int failures = 0;
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 41)) {
+      const auto r = triangleDistanceBruteForce(a, b);
+      const Triangle rotatedA{a.b, a.c, a.a}, rotatedB{b.c, b.a, b.b};
+      const Triangle flippedA{a.a, a.c, a.b}, flippedB{b.b, b.a, b.c};
+      expectSameDistance(r, triangleDistanceBruteForce(rotatedA, b), a, b, 0.0, failures);
+      expectSameDistance(r, triangleDistanceBruteForce(a, rotatedB), a, b, 0.0, failures);
+      expectSameDistance(r, triangleDistanceBruteForce(flippedA, flippedB), a, b, 0.0, failures);
+      expectSameDistance(r, triangleDistanceBruteForce(rotatedB, flippedA), a, b, 0.0, failures);
+    }
+  }
+}
+
+TEST(TriangleDistance, InvariantUnderRigidMotion) {
+  testing::PairRandom random(5);
+  for (const PairFamily family : testing::kAllFamilies) {
+    int failures = 0;
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 43)) {
+      const double size = pairSize(a, b);
+      const Quaternion q = Quaternion::fromAxisAngle(random.unitVector(), random.uniform(0, 6.3));
+      const Vec3 shift = random.inCube(10 * size);
+      auto move = [&](const Triangle& t) {
+        return Triangle{q.rotate(t.a) + shift, q.rotate(t.b) + shift, q.rotate(t.c) + shift};
+      };
+      const Triangle movedA = move(a), movedB = move(b);
+      // The moved input is rounded: it is a different pair by up to ε·|coordinates|.
+      const double inputRounding =
+          8 * kEpsilon * std::max({maxAbs(movedA.a), maxAbs(movedB.a), maxAbs(a.a), maxAbs(b.a)});
+      expectSameDistance(triangleDistanceBruteForce(a, b),
+                         triangleDistanceBruteForce(movedA, movedB), a, b, inputRounding, failures);
+    }
+  }
+}
+
+TEST(TriangleDistance, NeverNaNOnDegenerateInput) {
+  const Vec3 p{0.25, 0.5, 0.75};
+  const Triangle cases[] = {
+      {p, p, p},
+      {p, p, p + Vec3{1e-300, 0, 0}},
+      {p, p + Vec3{1, 0, 0}, p + Vec3{2, 0, 0}},
+      {p, p + Vec3{1, 0, 0}, p + Vec3{1 + 1e-16, 0, 0}},
+      {{0, 0, 0}, {1e-200, 0, 0}, {0, 1e-200, 0}},
+      {{1e-6, 0, 0}, {0, 1e-6, 0}, {0, 0, 1e-6}},
+  };
+  for (const Triangle& a : cases) {
+    for (const Triangle& b : cases) {
+      const auto r = triangleDistanceBruteForce(a, b);
+      EXPECT_TRUE(std::isfinite(r.distanceSquared) && isFinite(r.p) && isFinite(r.q) &&
+                  std::isfinite(r.a1) && std::isfinite(r.a2) && std::isfinite(r.a3) &&
+                  std::isfinite(r.a4))
+          << pasteable(a, b);
+      EXPECT_EQ(r.intersect, trianglesIntersect(a, b)) << pasteable(a, b);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// trianglesIntersect on its own.
+
+TEST(TriangleIntersect, SeparatedPiercingTouchingAndCoplanar) {
+  EXPECT_FALSE(trianglesIntersect(kUnit, {{0, 0, 1e-9}, {1, 0, 1e-9}, {0, 1, 1}}));
+  EXPECT_TRUE(trianglesIntersect(kUnit, {{0, 0, 0}, {1, 0, 1e-9}, {0, 1, 1}}));        // vertex
+  EXPECT_TRUE(trianglesIntersect(kUnit, {{0.3, 0.3, -1}, {0.3, 0.3, 1}, {2, 2, 2}}));  // pierce
+  EXPECT_TRUE(trianglesIntersect(kUnit, {{0.9, 0.9, 0}, {0.9, -5, 0}, {5, 0.9, 0}}));  // coplanar
+  EXPECT_FALSE(trianglesIntersect(kUnit, {{0.6, 0.6, 0}, {2, 0.6, 0}, {0.6, 2, 0}}));
+  EXPECT_TRUE(trianglesIntersect(kUnit, {{0.5, 0.5, 0}, {2, 0.6, 0}, {0.6, 2, 0}}));  // on edge
+  EXPECT_TRUE(trianglesIntersect(kUnit, kUnit));
+}
+
+TEST(TriangleIntersect, AgreesWithExactDoIntersect) {
+  for (const PairFamily family : testing::kAllFamilies) {
+    int touching = 0, total = 0;
+    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(3000), 99)) {
+      const bool flag = trianglesIntersect(a, b);
+      ++total;
+      if (flag == exactIntersect(a, b)) continue;
+      const double exact = std::sqrt(exactSquaredDistance(a, b));
+      if (exact < kTolerance * pairSize(a, b)) {
+        ++touching;  // touching within the tolerance: either answer is right
+        continue;
+      }
+      ADD_FAILURE() << name(family) << ": trianglesIntersect = " << flag
+                    << ", exact distance = " << exact << " for\n"
+                    << pasteable(a, b);
+      break;
+    }
+    std::printf(
+        "[ stats    ] %-20s trianglesIntersect: %d of %d differ from do_intersect, all "
+        "touching within 1e-12 of the size\n",
+        name(family), touching, total);
+  }
+}
+
+}  // namespace
+}  // namespace delta::kernels
