@@ -7,6 +7,8 @@
 #include "delta/kernels/detail/hybrid_candidates.h"
 #include "delta/kernels/triangle_triangle.h"
 
+#include "detail/exact_store.h"
+
 namespace delta::kernels {
 
 static_assert(kHybridIterations == detail::HybridSchedule::kIterations);
@@ -99,20 +101,6 @@ class Recheck {
   detail::PairStreams out_{};
 };
 
-void storeBruteForce(const detail::PairStreams& out, std::size_t i,
-                     const TriangleDistanceResult& exact) noexcept {
-  out.distanceSquared[i] = exact.distanceSquared;
-  out.p[0][i] = exact.p.x;
-  out.p[1][i] = exact.p.y;
-  out.p[2][i] = exact.p.z;
-  out.q[0][i] = exact.q.x;
-  out.q[1][i] = exact.q.y;
-  out.q[2][i] = exact.q.z;
-  out.errorBound[i] = 0.0;
-  out.intersect[i] = exact.intersect;
-  out.converged[i] = 1;
-}
-
 /// The hybrid's second and third stages after its first: pairs not certified go through the
 /// exhaustive SIMD stage, and those it cannot certify either through the scalar brute force.
 /// `pairOf(i)` gives the two triangles of pair i.
@@ -123,7 +111,7 @@ BatchStatistics finish(const detail::BatchKernels& kernels, const detail::PairSt
   statistics.pairs = count;
   const auto bruteForce = [&](std::size_t i) {
     const auto [first, second] = pairOf(i);
-    storeBruteForce(out, i, triangleDistanceBruteForce(first, second));
+    detail::storeExact(out, i, triangleDistanceBruteForce(first, second));
     ++statistics.fallbacks;
   };
   Recheck recheck;

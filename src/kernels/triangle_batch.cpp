@@ -3,22 +3,15 @@
 #include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/kernels/triangle_triangle.h"
 
+#include "detail/exact_store.h"
+
 namespace delta::kernels {
 namespace {
 
 void store(const detail::PairStreams& out, std::size_t i,
            const TriangleDistanceResult& result) noexcept {
-  out.distanceSquared[i] = result.distanceSquared;
-  out.p[0][i] = result.p.x;
-  out.p[1][i] = result.p.y;
-  out.p[2][i] = result.p.z;
-  out.q[0][i] = result.q.x;
-  out.q[1][i] = result.q.y;
-  out.q[2][i] = result.q.z;
-  out.errorBound[i] = 0.0;
+  detail::storeExact(out, i, result);
   out.newtonStep[i] = 0.0;
-  out.intersect[i] = result.intersect;
-  out.converged[i] = 1;
 }
 
 }  // namespace
