@@ -33,3 +33,4 @@
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
 #include "delta/query/filter.h"
+#include "delta/query/minimum_distance.h"
