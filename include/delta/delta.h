@@ -32,5 +32,6 @@
 #include "delta/mesh/primitives.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"

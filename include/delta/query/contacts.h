@@ -1,0 +1,35 @@
+#pragma once
+
+#include <vector>
+
+#include "delta/core/contact_point.h"
+#include "delta/kernels/triangle_batch.h"
+#include "delta/mesh/triangle_soa.h"
+
+namespace delta::contactdetection {
+
+/// The seed's mesh–mesh contact detection: every pair of triangles (one of each mesh) closer than
+/// 2ε yields one ContactPoint — `x` midway between the closest points P (first mesh) and Q
+/// (second), `normal` = P − x, `direction` the unit vector from Q toward P, `distance` |P − Q|,
+/// `overlap` set where the two triangles intersect, and both triangle ids (0-based, the meshes'
+/// triangle order). Contacts come sorted by (first, second) ids, the same for any thread count.
+///
+/// For touching or intersecting triangles (P = Q) `direction` comes from the faces: the unit
+/// vector of n₂ − n₁ (n₁, n₂ the outward unit normals of the first and second triangle, so it
+/// points from the second mesh into the first), or n₂, or −n₁ when that vanishes, or +z for two
+/// zero-area triangles.
+///
+/// Pruning before any kernel runs: the meshes' boxes further apart than 2ε return at once; blocks
+/// of the second mesh whose box is further than 2ε from a triangle's box are skipped. With the
+/// hybrid (default) or brute-force solver the contact set is exact; with the penalty solver,
+/// approximate (a pair may be missed or misplaced where its Newton did not converge).
+///
+/// Throws delta::Error when ε is not finite and positive or a mesh has no triangles.
+///
+/// Threading: reads both meshes only; any number of threads may call it at once, and it runs in
+/// parallel over the first mesh's triangles itself (core/parallel.h).
+std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& second,
+                                   double epsilon,
+                                   kernels::Solver solver = kernels::Solver::Hybrid);
+
+}  // namespace delta::contactdetection
