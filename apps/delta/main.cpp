@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   delta::cli::addInfoCommand(app);
   delta::cli::addBenchCommand(app);
+  delta::cli::addContactCommand(app);
 
   try {
     rejectUnknownCommand(app, argc, argv);

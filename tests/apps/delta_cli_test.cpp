@@ -4,11 +4,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "delta/core/version.h"
 
@@ -156,6 +159,63 @@ TEST(DeltaCli, BenchKernelsRejectsBadInput) {
     EXPECT_EQ(run.exitCode, 0) << command;
     EXPECT_NE(run.out.find("Usage"), std::string::npos) << command << ": " << run.out;
   }
+}
+
+}  // namespace
+
+namespace {
+
+TEST(DeltaCli, ContactWithoutEpsilonGivesTheMinimumDistance) {
+  const CliRun run =
+      runDelta("contact builtin:box builtin:box --translate-b 1.5,0,0 --rotate-b 0,0,1,90 --json");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  const std::size_t at = run.out.find("\"min_distance\":");
+  ASSERT_NE(at, std::string::npos) << run.out;
+  EXPECT_NEAR(std::stod(run.out.substr(at + 15)), 0.5, 1e-12) << run.out;  // the turn rounds
+  for (const char* key : {"triangle_a", "triangle_b", "load_s", "build_s", "query_s"})
+    EXPECT_NE(run.out.find(std::string("\"") + key + "\":"), std::string::npos) << key;
+}
+
+TEST(DeltaCli, ContactWritesSortedCsvRows) {
+  const std::string csv = (std::filesystem::temp_directory_path() /
+                           ("delta_cli_contacts_" + std::to_string(::getpid()) + ".csv"))
+                              .string();
+  const CliRun run = runDelta(
+      "contact builtin:icosphere:2 builtin:icosphere:2 "
+      "--translate-b 1.9,0,0 --eps 0.1 --json --out " +
+      csv);
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  std::ifstream file(csv);
+  std::string header, line;
+  std::getline(file, header);
+  EXPECT_EQ(header, "triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap");
+  std::vector<std::pair<long, long>> ids;
+  while (std::getline(file, line)) {
+    long a = -1, b = -1;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%ld,%ld,", &a, &b), 2) << line;
+    ids.emplace_back(a, b);
+  }
+  std::filesystem::remove(csv);
+  ASSERT_FALSE(ids.empty());
+  EXPECT_TRUE(std::is_sorted(ids.begin(), ids.end()));
+  EXPECT_NE(run.out.find("\"contacts\":" + std::to_string(ids.size()) + ","), std::string::npos)
+      << run.out;
+}
+
+TEST(DeltaCli, ContactRejectsBadInputAndWritesNothing) {
+  const std::string csv = (std::filesystem::temp_directory_path() /
+                           ("delta_cli_bad_" + std::to_string(::getpid()) + ".csv"))
+                              .string();
+  for (const std::string arguments :
+       {"--eps 0", "--eps -1", "--eps nan", "--eps 0.1 --filter 0", "--translate-b 1,2",
+        "--rotate-b 0,0,0,30", "--eps 0.1 --method newton", "--filter 0.1"}) {
+    expectOneLineError(runDelta("contact builtin:box builtin:box --out " + csv + " " + arguments),
+                       "");
+    EXPECT_FALSE(std::filesystem::exists(csv)) << arguments;
+  }
+  expectOneLineError(runDelta("contact builtin:box /nonexistent.off --eps 0.1"),
+                     "/nonexistent.off");
+  expectOneLineError(runDelta("contact builtin:box builtin:box --eps 0.1 --out a.txt"), "a.txt");
 }
 
 }  // namespace

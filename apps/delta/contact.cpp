@@ -1,0 +1,207 @@
+// `delta contact MESH_A MESH_B`: where two meshes come closer than 2ε (contact points), or, without
+// --eps, their minimum distance and the closest triangle pair.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/io/vtk.h"
+#include "delta/query/contacts.h"
+#include "delta/query/filter.h"
+#include "delta/query/minimum_distance.h"
+
+#include "commands.h"
+#include "json.h"
+#include "mesh_source.h"
+#include "stopwatch.h"
+
+namespace delta::cli {
+namespace {
+
+struct ContactOptions {
+  std::string meshA, meshB;
+  std::optional<double> epsilon;
+  std::string method = "hybrid";
+  std::optional<double> filter;
+  std::string translateB, rotateB;
+  std::string out;
+  bool json = false;
+};
+
+/// `count` comma-separated finite numbers, e.g. "1,0,0,90".
+std::vector<double> numbers(const std::string& text, std::size_t count, const char* option) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    double value = 0.0;
+    const char* begin = text.data() + start;
+    const char* end = text.data() + comma;
+    const auto [stop, status] = std::from_chars(begin, end, value);
+    if (status != std::errc() || stop != end || !std::isfinite(value))
+      throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
+                  " finite numbers separated by commas");
+    values.push_back(value);
+    start = comma + 1;
+  }
+  if (values.size() != count)
+    throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
+                " numbers separated by commas");
+  return values;
+}
+
+/// --rotate-b about the centre of B's box, then --translate-b.
+void moveB(Mesh& b, const ContactOptions& options) {
+  if (!options.rotateB.empty()) {
+    const std::vector<double> r = numbers(options.rotateB, 4, "--rotate-b");
+    b.rotate({r[0], r[1], r[2]}, r[3] * std::numbers::pi / 180.0, b.bounds().center());
+  }
+  if (!options.translateB.empty()) {
+    const std::vector<double> t = numbers(options.translateB, 3, "--translate-b");
+    b.translate({t[0], t[1], t[2]});
+  }
+}
+
+std::string extensionOf(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+void validate(const ContactOptions& options) {
+  if (options.epsilon && !(std::isfinite(*options.epsilon) && *options.epsilon > 0.0))
+    throw Error("--eps " + toString(*options.epsilon) + " must be finite and positive");
+  if (options.filter && !(std::isfinite(*options.filter) && *options.filter > 0.0))
+    throw Error("--filter " + toString(*options.filter) + " must be finite and positive");
+  if (options.filter && !options.epsilon) throw Error("--filter needs --eps");
+  if (!options.out.empty() && !options.epsilon) throw Error("--out needs --eps");
+  const std::string extension = extensionOf(options.out);
+  if (!options.out.empty() && extension != ".csv" && extension != ".vtp")
+    throw Error("--out '" + options.out + "': write .csv or .vtp");
+  if (!kernels::parseSolver(options.method))
+    throw Error("--method '" + options.method + "': use hybrid, penalty or bruteforce");
+}
+
+void writeCsv(const std::vector<ContactPoint>& contacts, const std::string& path) {
+  std::ofstream file(path);
+  if (!file) throw Error("cannot write '" + path + "'");
+  file << "triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap\n";
+  char line[512];
+  for (const ContactPoint& c : contacts) {
+    std::snprintf(line, sizeof line, "%u,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n",
+                  c.first, c.second, c.x.x, c.x.y, c.x.z, c.normal.x, c.normal.y, c.normal.z,
+                  c.distance, c.overlap ? 1 : 0);
+    file << line;
+  }
+  if (!file.flush()) throw Error("writing '" + path + "' failed");
+}
+
+void writeVtp(const std::vector<ContactPoint>& contacts, const std::string& path) {
+  std::vector<Vec3> points;
+  io::VtkArray normal{"normal", 3, {}}, direction{"direction", 3, {}};
+  io::VtkArray gap{"distance", 1, {}}, overlap{"overlap", 1, {}};
+  io::VtkArray triangleA{"triangle_a", 1, {}}, triangleB{"triangle_b", 1, {}};
+  for (const ContactPoint& c : contacts) {
+    points.push_back(c.x);
+    normal.values.insert(normal.values.end(), {c.normal.x, c.normal.y, c.normal.z});
+    direction.values.insert(direction.values.end(), {c.direction.x, c.direction.y, c.direction.z});
+    gap.values.push_back(c.distance);
+    overlap.values.push_back(c.overlap ? 1.0 : 0.0);
+    triangleA.values.push_back(c.first);
+    triangleB.values.push_back(c.second);
+  }
+  io::VtkPolyData data = io::VtkPolyData::fromPoints(std::move(points));
+  data.pointData = {normal, direction, gap, overlap, triangleA, triangleB};
+  io::writeVtp(data, path);
+}
+
+void run(const ContactOptions& options) {
+  validate(options);
+  const kernels::Solver solver = *kernels::parseSolver(options.method);
+  Stopwatch clock;
+  const Mesh a = loadMeshSource(options.meshA).mesh;
+  Mesh b = loadMeshSource(options.meshB).mesh;
+  moveB(b, options);
+  const double loadSeconds = clock.restart();
+  const TriangleSoA flatA = flatten(a), flatB = flatten(b);
+  const double buildSeconds = clock.restart();
+
+  JsonWriter json;
+  json.beginObject().value("method", options.method);
+  if (!options.epsilon) {
+    const contactdetection::MinimumDistance closest =
+        contactdetection::minimumDistance(flatA, flatB, solver);
+    const double querySeconds = clock.seconds();
+    if (!options.json)
+      std::printf("minimum distance %.17g between triangle %u of A and triangle %u of B%s\n",
+                  closest.distance, closest.first, closest.second,
+                  closest.intersect ? " (they intersect)" : "");
+    json.value("min_distance", closest.distance)
+        .value("triangle_a", std::size_t{closest.first})
+        .value("triangle_b", std::size_t{closest.second})
+        .value("intersect", closest.intersect)
+        .value("load_s", loadSeconds)
+        .value("build_s", buildSeconds)
+        .value("query_s", querySeconds);
+  } else {
+    std::vector<ContactPoint> found =
+        contactdetection::contacts(flatA, flatB, *options.epsilon, solver);
+    const std::size_t unfiltered = found.size();
+    if (options.filter) found = contactdetection::filter(found, *options.filter);
+    const double querySeconds = clock.restart();
+    const std::size_t overlaps = static_cast<std::size_t>(
+        std::count_if(found.begin(), found.end(), [](const ContactPoint& c) { return c.overlap; }));
+    if (extensionOf(options.out) == ".csv") writeCsv(found, options.out);
+    if (extensionOf(options.out) == ".vtp") writeVtp(found, options.out);
+    if (!options.json)
+      std::printf(
+          "%zu contact points (%zu overlapping)%s, epsilon %g%s\n", found.size(), overlaps,
+          options.filter ? (" after filter(h) of " + std::to_string(unfiltered)).c_str() : "",
+          *options.epsilon, options.out.empty() ? "" : (", written to " + options.out).c_str());
+    json.value("contacts", found.size())
+        .value("overlapping", overlaps)
+        .value("unfiltered_contacts", unfiltered)
+        .value("epsilon", *options.epsilon)
+        .value("load_s", loadSeconds)
+        .value("build_s", buildSeconds)
+        .value("query_s", querySeconds);
+  }
+  if (options.json) std::printf("%s\n", json.endObject().str().c_str());
+}
+
+}  // namespace
+
+void addContactCommand(CLI::App& app) {
+  auto options = std::make_shared<ContactOptions>();
+  CLI::App* contact = app.add_subcommand(
+      "contact", "Contact points of two meshes closer than 2ε, or their minimum distance");
+  contact->add_option("MESH_A", options->meshA, meshSourceHelp())->required();
+  contact->add_option("MESH_B", options->meshB, "The second mesh (same forms as MESH_A)")
+      ->required();
+  contact->add_option("--eps", options->epsilon,
+                      "Contact distance ε: pairs closer than 2ε are contacts (without it: the "
+                      "minimum distance and the closest triangle pair)");
+  contact->add_option("--method", options->method, "Solver: hybrid (default), penalty, bruteforce");
+  contact->add_option("--filter", options->filter,
+                      "Keep a contact only if no deeper kept contact lies closer than H");
+  contact->add_option("--translate-b", options->translateB, "Move B by X,Y,Z (after rotating)");
+  contact->add_option("--rotate-b", options->rotateB,
+                      "Turn B about the centre of its box: axis AX,AY,AZ and DEGREES");
+  contact->add_option("--out", options->out,
+                      "Write the contact points: FILE.csv (one row each, sorted by triangle ids) "
+                      "or FILE.vtp (ParaView)");
+  contact->add_flag("--json", options->json, "Print one JSON object instead of text");
+  contact->callback([options] { run(*options); });
+}
+
+}  // namespace delta::cli
