@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  g++ cmake ninja-build git ca-certificates clang libomp-dev
+  g++ cmake ninja-build git ca-certificates clang libclang-rt-dev libomp-dev
   libassimp-dev libqhull-dev libcli11-dev
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   libcgal-dev libgmp-dev libmpfr-dev
