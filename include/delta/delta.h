@@ -35,3 +35,4 @@
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"
+#include "delta/query/winding_number.h"

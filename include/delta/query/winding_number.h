@@ -1,0 +1,27 @@
+#pragma once
+
+#include "delta/core/vec3.h"
+#include "delta/mesh/triangle_soa.h"
+
+namespace delta {
+
+/// The generalized winding number of a triangle mesh at a point (Jacobson, Kavan and
+/// Sorkine-Hornung, "Robust Inside-Outside Segmentation using Generalized Winding Numbers",
+/// SIGGRAPH 2013): the signed solid angles of the triangles seen from `point`, summed and divided
+/// by 4π, each by the formula of Van Oosterom and Strackee (1983).
+///
+/// For a closed, outward-oriented mesh it is 1 inside and 0 outside (−1 inside an inside-out
+/// mesh; k inside k nested shells), robustly: no ray is cast, so a point in line with an edge or
+/// a vertex is no special case, and small holes or overlaps change it only near them. On the
+/// surface itself it is about ½ and the question "inside?" has no robust answer: there the
+/// distance (zero) is what matters. Degenerate (zero-area) triangles contribute 0.
+///
+/// O(triangles). Threading: reads the mesh only; safe to call from any number of threads.
+double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept;
+
+/// windingNumber(mesh, point) > ½: inside a closed, outward-oriented mesh.
+inline bool inside(const TriangleSoA& mesh, const Vec3& point) noexcept {
+  return windingNumber(mesh, point) > 0.5;
+}
+
+}  // namespace delta
