@@ -10,5 +10,6 @@ namespace delta::cli {
 void addInfoCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addContactCommand(CLI::App& app);
+void addDistanceCommand(CLI::App& app);
 
 }  // namespace delta::cli

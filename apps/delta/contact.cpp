@@ -20,6 +20,7 @@
 #include "delta/query/minimum_distance.h"
 
 #include "commands.h"
+#include "files.h"
 #include "json.h"
 #include "mesh_source.h"
 #include "stopwatch.h"
@@ -69,13 +70,6 @@ void moveB(Mesh& b, const ContactOptions& options) {
     const std::vector<double> t = numbers(options.translateB, 3, "--translate-b");
     b.translate({t[0], t[1], t[2]});
   }
-}
-
-std::string extensionOf(const std::string& path) {
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
 }
 
 void validate(const ContactOptions& options) {
@@ -133,14 +127,14 @@ void run(const ContactOptions& options) {
   Mesh b = loadMeshSource(options.meshB).mesh;
   moveB(b, options);
   const double loadSeconds = clock.restart();
-  const TriangleSoA flatA = flatten(a), flatB = flatten(b);
+  const QueryMesh queryA(a), queryB(b);
   const double buildSeconds = clock.restart();
 
   JsonWriter json;
   json.beginObject().value("method", options.method);
   if (!options.epsilon) {
     const contactdetection::MinimumDistance closest =
-        contactdetection::minimumDistance(flatA, flatB, solver);
+        contactdetection::minimumDistance(queryA.triangles(), queryB.triangles(), solver);
     const double querySeconds = clock.seconds();
     if (!options.json)
       std::printf("minimum distance %.17g between triangle %u of A and triangle %u of B%s\n",
@@ -155,7 +149,7 @@ void run(const ContactOptions& options) {
         .value("query_s", querySeconds);
   } else {
     std::vector<ContactPoint> found =
-        contactdetection::contacts(flatA, flatB, *options.epsilon, solver);
+        contactdetection::contacts(queryA, queryB, *options.epsilon, solver);
     const std::size_t unfiltered = found.size();
     if (options.filter) found = contactdetection::filter(found, *options.filter);
     const double querySeconds = clock.restart();

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   delta::cli::addInfoCommand(app);
   delta::cli::addBenchCommand(app);
   delta::cli::addContactCommand(app);
+  delta::cli::addDistanceCommand(app);
 
   try {
     rejectUnknownCommand(app, argc, argv);

@@ -1,20 +1,51 @@
 #include "delta/query/minimum_distance.h"
 
+#include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <vector>
 
+#include "delta/core/aabb.h"
 #include "delta/core/error.h"
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
+#include "delta/mesh/mesh.h"
 
 namespace delta::contactdetection {
 namespace {
 
-/// Pairs handed to the kernels at once: one triangle against this many of the other mesh.
-constexpr std::size_t kBlock = 256;
-/// Triangles of the first mesh per parallel chunk.
-constexpr std::size_t kGrain = 8;
+// Branch and bound over boxes. The second mesh is sorted along a Morton curve of its triangles'
+// centroids and cut into blocks of kBlock triangles, each with its box (and superblocks of kSuper
+// blocks, so that far ones cost one box test); the first mesh likewise into groups of kGroup
+// triangles, searched nearest first. Each group lists the blocks by ascending box distance; each of
+// its triangles visits them in that order (so its first block is a good first guess) and runs the
+// kernels on a block only where the block's box is not further than the best distance known:
+// the triangle's own best or the best any triangle has found so far (shared by all threads).
+//
+// Why the answer is the all-pairs one, for any thread count: the bound only ever holds the
+// squared distance of a pair actually computed, so it never falls below the minimum d*², and a
+// block is skipped only where its box is further than the bound (plus rounding slack): never
+// the block of a pair at distance d*. Every pair attaining d*² is thus computed by its first
+// triangle, whose best keeps the smallest second id among equal distances (blocks come out of
+// id order, so ties compare ids), and the serial reduction keeps the smallest first id. A stale
+// bound only prunes less. Every pair is computed in the same block whatever the thread count.
+// The brute force and the penalty compute each pair alone (lane by lane), so their bits are
+// those of any all-pairs loop; the hybrid's last bits can depend on the rest of the batch (its
+// second stage runs a lone pair on the scalar kernels, several on the SIMD ones), which can
+// only change which of two pairs equal to rounding is named.
+
+/// Triangles of the second mesh handed to the kernels at once, and pruned as one box.
+constexpr std::size_t kBlock = 64;
+/// Blocks per superblock: the box tests of a group against far superblocks skip their blocks.
+constexpr std::size_t kSuper = 16;
+/// Triangles of the first mesh sharing one sorted list of blocks (and one parallel chunk).
+constexpr std::size_t kGroup = 32;
+/// Relative slack on distances compared with box gaps: the kernels' distances and the boxes'
+/// gaps are both rounded (the kernels' by at most ~10⁻¹² of the pair's size plus a few ulps of
+/// the coordinates), so a gap is widened to a bound by far more than either.
+constexpr double kSlack = 1e-9;
 
 struct Closest {
   double distanceSquared = std::numeric_limits<double>::infinity();
@@ -23,24 +54,191 @@ struct Closest {
   bool intersect = false;
 };
 
-/// The closest triangle of `second` to `one`; ties go to the smallest id (blocks and pairs are
-/// visited in order and only a strictly smaller distance replaces the best).
-Closest closestTo(const Triangle& one, const TriangleSoA& second, kernels::Solver solver,
-                  kernels::PairResults& results) {
-  Closest best;
-  for (std::size_t begin = 0; begin < second.size(); begin += kBlock) {
-    const std::size_t end = begin + kBlock < second.size() ? begin + kBlock : second.size();
-    kernels::distances(solver, one, second, begin, end, results);
-    for (std::size_t j = 0; j < results.size(); ++j)
-      if (results.distanceSquared(j) < best.distanceSquared) {
-        best.distanceSquared = results.distanceSquared(j);
-        best.second = static_cast<std::uint32_t>(begin + j);
-        best.p = results.p(j);
-        best.q = results.q(j);
-        best.intersect = results.intersect(j);
-      }
+/// The squared box gap up to which a block may still hold a pair whose computed squared
+/// distance is at most `bound`: the distance widened relatively by kSlack and absolutely by
+/// `slack` (kSlack times the largest coordinate, the scale of the kernels' rounding).
+double pruneLimit(double bound, double slack) noexcept {
+  if (!(bound < std::numeric_limits<double>::infinity())) return bound;
+  const double widened = std::sqrt(bound) * (1.0 + kSlack) + slack;
+  return widened * widened;
+}
+
+/// Lowers `bound` to `value` if that is smaller (a lock-free atomic minimum).
+void lowerTo(std::atomic<double>& bound, double value) noexcept {
+  double current = bound.load(std::memory_order_relaxed);
+  while (value < current &&
+         !bound.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
   }
-  return best;
+}
+
+/// The 21 low bits of `x` spread to every third bit of a 63-bit Morton code.
+std::uint64_t spreadBits(std::uint64_t x) noexcept {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+/// The triangle ids of `mesh` in Morton order of their centroids within the mesh's box (ties,
+/// such as repeated triangles, by id): consecutive runs are spatially compact.
+std::vector<std::uint32_t> mortonOrder(const TriangleSoA& mesh) {
+  std::vector<Vec3> centroids(mesh.size());
+  Aabb box;
+  for (std::size_t i = 0; i < mesh.size(); ++i) {
+    centroids[i] = mesh.triangle(i).centroid();
+    box.extend(centroids[i]);
+  }
+  constexpr double kCells = 2097151.0;  // 2²¹ − 1
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(mesh.size());
+  for (std::size_t i = 0; i < mesh.size(); ++i) {
+    std::uint64_t code = 0;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double extent = box.upper[axis] - box.lower[axis];
+      double unit = extent > 0.0 ? (centroids[i][axis] - box.lower[axis]) / extent : 0.0;
+      if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
+      const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
+      code |= spreadBits(cell) << axis;
+    }
+    keys[i] = {code, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::uint32_t> order(mesh.size());
+  for (std::size_t i = 0; i < mesh.size(); ++i)
+    order[i] = keys[i].second;
+  return order;
+}
+
+/// The second mesh cut into spatially compact blocks: its triangles in Morton order, flattened
+/// again, with the original id of each, the box of each block of kBlock and of each run of
+/// kSuper blocks.
+struct Blocks {
+  TriangleSoA triangles;
+  std::vector<std::uint32_t> ids;
+  std::vector<Aabb> boxes;
+  std::vector<Aabb> superBoxes;
+
+  /// Calls `visit(block, gap²)` for every block whose squared gap to `box` is at most `limit`
+  /// (for every block when it is +∞), skipping the superblocks further than that.
+  template <class Visit>
+  void near(const Aabb& box, double limit, const Visit& visit) const {
+    for (std::size_t s = 0; s < superBoxes.size(); ++s) {
+      if (distanceSquared(box, superBoxes[s]) > limit) continue;
+      const std::size_t end = std::min((s + 1) * kSuper, boxes.size());
+      for (std::size_t b = s * kSuper; b < end; ++b) {
+        const double gap = distanceSquared(box, boxes[b]);
+        if (gap <= limit) visit(b, gap);
+      }
+    }
+  }
+};
+
+Blocks blocksOf(const TriangleSoA& mesh) {
+  Blocks blocks;
+  blocks.ids = mortonOrder(mesh);
+  std::vector<Vec3> vertices(3 * mesh.size());
+  std::vector<TriangleIndices> triangles(mesh.size());
+  blocks.boxes.resize((mesh.size() + kBlock - 1) / kBlock);
+  for (std::size_t k = 0; k < mesh.size(); ++k) {
+    const Triangle t = mesh.triangle(blocks.ids[k]);
+    vertices[3 * k] = t.a;
+    vertices[3 * k + 1] = t.b;
+    vertices[3 * k + 2] = t.c;
+    const auto first = static_cast<std::uint32_t>(3 * k);
+    triangles[k] = {first, first + 1, first + 2};
+    blocks.boxes[k / kBlock].extend(t.bounds());
+  }
+  blocks.superBoxes.resize((blocks.boxes.size() + kSuper - 1) / kSuper);
+  for (std::size_t b = 0; b < blocks.boxes.size(); ++b)
+    blocks.superBoxes[b / kSuper].extend(blocks.boxes[b]);
+  blocks.triangles = TriangleSoA(Mesh(std::move(vertices), std::move(triangles)));
+  return blocks;
+}
+
+/// The largest absolute coordinate of both meshes: the scale of the kernels' rounding.
+double magnitude(const std::vector<Aabb>& boxes) noexcept {
+  double largest = 0.0;
+  for (const Aabb& box : boxes)
+    largest = std::max({largest, maxAbs(box.lower), maxAbs(box.upper)});
+  return largest;
+}
+
+/// A block (or a group) and its box gap, ordered by gap, then index.
+struct Candidate {
+  double gapSquared;
+  std::uint32_t index;
+  friend bool operator<(const Candidate& a, const Candidate& b) noexcept {
+    return a.gapSquared < b.gapSquared || (a.gapSquared == b.gapSquared && a.index < b.index);
+  }
+};
+
+/// Everything the search of one group reads, shared by all threads.
+struct Search {
+  const TriangleSoA& first;
+  const Blocks& blocks;
+  const std::vector<std::uint32_t>& firstOrder;  ///< groups are runs of kGroup of these
+  kernels::Solver solver;
+  double slack;
+  std::atomic<double>& bestSoFar;  ///< the least squared distance any triangle has found
+};
+
+/// Finds the closest triangle of the second mesh to each triangle of group `group`, or proves
+/// it further than the best known distance (then leaves its distance infinite).
+void searchGroup(const Search& search, std::size_t group, std::vector<Candidate>& candidates,
+                 kernels::PairResults& results, std::vector<Closest>& closest) {
+  const std::size_t begin = group * kGroup;
+  const std::size_t end = std::min(begin + kGroup, search.firstOrder.size());
+  std::array<Triangle, kGroup> triangles;
+  std::array<Aabb, kGroup> boxes;
+  Aabb groupBox;
+  for (std::size_t k = begin; k < end; ++k) {
+    triangles[k - begin] = search.first.triangle(search.firstOrder[k]);
+    boxes[k - begin] = triangles[k - begin].bounds();
+    groupBox.extend(boxes[k - begin]);
+  }
+  const double groupLimit =
+      pruneLimit(search.bestSoFar.load(std::memory_order_relaxed), search.slack);
+  candidates.clear();
+  search.blocks.near(groupBox, groupLimit, [&](std::size_t block, double gap) {
+    candidates.push_back({gap, static_cast<std::uint32_t>(block)});
+  });
+  std::sort(candidates.begin(), candidates.end());
+
+  const TriangleSoA& second = search.blocks.triangles;
+  for (std::size_t k = begin; k < end; ++k) {
+    Closest best;
+    double bound = std::numeric_limits<double>::infinity();
+    double limit = bound;
+    for (const Candidate& candidate : candidates) {
+      const double now =
+          std::min(best.distanceSquared, search.bestSoFar.load(std::memory_order_relaxed));
+      if (now != bound) {
+        bound = now;
+        limit = pruneLimit(bound, search.slack);
+      }
+      // Candidates ascend and a triangle's box lies inside its group's: none further can pass.
+      if (candidate.gapSquared > limit) break;
+      if (distanceSquared(boxes[k - begin], search.blocks.boxes[candidate.index]) > limit) continue;
+      const std::size_t from = candidate.index * kBlock;
+      const std::size_t to = std::min(from + kBlock, second.size());
+      kernels::distances(search.solver, triangles[k - begin], second, from, to, results);
+      for (std::size_t j = 0; j < results.size(); ++j) {
+        const double d2 = results.distanceSquared(j);
+        const std::uint32_t id = search.blocks.ids[from + j];
+        if (d2 < best.distanceSquared || (d2 == best.distanceSquared && id < best.second)) {
+          best.distanceSquared = d2;
+          best.second = id;
+          best.p = results.p(j);
+          best.q = results.q(j);
+          best.intersect = results.intersect(j);
+        }
+      }
+    }
+    lowerTo(search.bestSoFar, best.distanceSquared);
+    closest[search.firstOrder[k]] = best;
+  }
 }
 
 }  // namespace
@@ -49,12 +247,38 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
                                 kernels::Solver solver) {
   if (first.size() == 0 || second.size() == 0)
     throw Error("minimumDistance: a mesh has no triangles");
-  std::vector<Closest> closest(first.size());
-  parallelFor(0, first.size(), kGrain, [&](std::size_t begin, std::size_t end) {
-    kernels::PairResults results(kBlock);
-    for (std::size_t i = begin; i < end; ++i)
-      closest[i] = closestTo(first.triangle(i), second, solver, results);
+  const Blocks blocks = blocksOf(second);
+  const std::vector<std::uint32_t> firstOrder = mortonOrder(first);
+  const std::size_t groups = (first.size() + kGroup - 1) / kGroup;
+
+  std::vector<Aabb> groupBoxes(groups);
+  for (std::size_t k = 0; k < first.size(); ++k)
+    groupBoxes[k / kGroup].extend(first.triangle(firstOrder[k]).bounds());
+  const double slack = kSlack * std::max(magnitude(groupBoxes), magnitude(blocks.boxes));
+
+  // Groups nearest the second mesh (its superblocks) first, so the shared bound falls early.
+  std::vector<Candidate> groupOrder(groups);
+  parallelFor(0, groups, kGroup, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t g = begin; g < end; ++g) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Aabb& box : blocks.superBoxes)
+        nearest = std::min(nearest, distanceSquared(groupBoxes[g], box));
+      groupOrder[g] = {nearest, static_cast<std::uint32_t>(g)};
+    }
   });
+  std::sort(groupOrder.begin(), groupOrder.end());
+
+  std::atomic<double> bestSoFar{std::numeric_limits<double>::infinity()};
+  const Search search{first, blocks, firstOrder, solver, slack, bestSoFar};
+  std::vector<Closest> closest(first.size());
+  parallelFor(0, groups, 1, [&](std::size_t begin, std::size_t end) {
+    std::vector<Candidate> candidates;
+    candidates.reserve(blocks.boxes.size());
+    kernels::PairResults results(kBlock);
+    for (std::size_t g = begin; g < end; ++g)
+      searchGroup(search, groupOrder[g].index, candidates, results, closest);
+  });
+
   std::size_t bestFirst = 0;  // serial reduction in id order: the same answer for any threads
   for (std::size_t i = 1; i < closest.size(); ++i)
     if (closest[i].distanceSquared < closest[bestFirst].distanceSquared) bestFirst = i;

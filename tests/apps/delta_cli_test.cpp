@@ -218,4 +218,98 @@ TEST(DeltaCli, ContactRejectsBadInputAndWritesNothing) {
   expectOneLineError(runDelta("contact builtin:box builtin:box --eps 0.1 --out a.txt"), "a.txt");
 }
 
+/// A file in the temporary folder, named for this process, removed when it goes out of scope.
+struct TemporaryFile {
+  explicit TemporaryFile(const std::string& name)
+      : path((std::filesystem::temp_directory_path() /
+              ("delta_cli_" + std::to_string(::getpid()) + "_" + name))
+                 .string()) {}
+  ~TemporaryFile() { std::filesystem::remove(path); }
+  void write(const std::string& text) const { std::ofstream(path) << text; }
+  std::string path;
+};
+
+std::vector<std::string> lines(const std::string& path) {
+  std::ifstream file(path);
+  std::vector<std::string> all;
+  for (std::string line; std::getline(file, line);)
+    all.push_back(line);
+  return all;
+}
+
+TEST(DeltaCli, DistanceWritesOneRowPerPointInInputOrder) {
+  // builtin:box is the unit cube centred at the origin: faces at ±0.5.
+  const TemporaryFile points("points.xyz"), csv("distances.csv");
+  points.write("# x y z\n0 0 2\n0 0 0\n\n0.5 0.5 0.5\n0.3 0 0.25\n");
+  const CliRun run = runDelta("distance builtin:box --points " + points.path +
+                              " --signed --json --out " + csv.path);
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  const std::vector<std::string> rows = lines(csv.path);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[0], "index,distance,closest_x,closest_y,closest_z,triangle,inside");
+  double expected[][2] = {{1.5, 0}, {0.5, 1}, {0, 0}, {0.2, 1}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    unsigned index = 99, triangle = 99, inside = 9;
+    double distance = -1, x, y, z;
+    ASSERT_EQ(std::sscanf(rows[i + 1].c_str(), "%u,%lf,%lf,%lf,%lf,%u,%u", &index, &distance, &x,
+                          &y, &z, &triangle, &inside),
+              7)
+        << rows[i + 1];
+    EXPECT_EQ(index, i);
+    EXPECT_NEAR(distance, expected[i][0], 1e-15) << rows[i + 1];
+    EXPECT_EQ(inside, expected[i][1]) << rows[i + 1];
+    EXPECT_LT(triangle, 12u);
+  }
+  EXPECT_NE(run.out.find("\"points\":4,"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("\"inside\":2,"), std::string::npos) << run.out;
+  for (const char* key : {"\"load_s\":", "\"build_s\":", "\"query_s\":"})
+    EXPECT_NE(run.out.find(key), std::string::npos) << key << run.out;
+}
+
+TEST(DeltaCli, DistanceWithEpsilonLeavesFarPointsEmpty) {
+  const TemporaryFile points("near.xyz"), csv("near.csv"), vtp("near.vtp");
+  points.write("0 0 0.6\n0 0 3\n");
+  const CliRun run = runDelta("distance builtin:box --points " + points.path +
+                              " --eps 0.25 --json --out " + csv.path);
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  const std::vector<std::string> rows = lines(csv.path);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], "index,distance,closest_x,closest_y,closest_z,triangle");
+  EXPECT_EQ(rows[1].rfind("0,0.0999", 0), 0u) << rows[1];
+  EXPECT_EQ(rows[2], "1,,,,,");
+  EXPECT_NE(run.out.find("\"within\":1,"), std::string::npos) << run.out;
+  const CliRun paraview =
+      runDelta("distance builtin:icosphere:2 --points builtin:uniform:50 --out " + vtp.path);
+  ASSERT_EQ(paraview.exitCode, 0) << paraview.err;
+  const std::string xml = slurp(vtp.path);
+  EXPECT_NE(xml.find("<VTKFile type=\"PolyData\""), std::string::npos);
+  EXPECT_NE(xml.find("NumberOfPoints=\"50\""), std::string::npos);
+  EXPECT_NE(xml.find("Name=\"distance\""), std::string::npos);
+}
+
+TEST(DeltaCli, DistanceRejectsBadInputAndWritesNothing) {
+  const TemporaryFile points("bad.xyz"), empty("empty.xyz"), csv("bad.csv");
+  points.write("0 0 0\n1 1 1\n1 2 x\n");
+  empty.write("# nothing\n");
+  const std::string good = "distance builtin:box --points builtin:uniform:10 --out " + csv.path;
+  for (const std::string arguments : {" --eps 0", " --eps -1", " --eps nan", " --eps inf"}) {
+    expectOneLineError(runDelta(good + arguments), "--eps");
+    EXPECT_FALSE(std::filesystem::exists(csv.path)) << arguments;
+  }
+  expectOneLineError(
+      runDelta("distance builtin:box --out " + csv.path + " --points " + points.path), "line 3");
+  expectOneLineError(runDelta("distance builtin:box --out " + csv.path + " --points " + empty.path),
+                     empty.path);
+  expectOneLineError(
+      runDelta("distance builtin:quad --signed --out " + csv.path + " --points builtin:uniform:10"),
+      "not closed");
+  expectOneLineError(runDelta("distance builtin:box --points builtin:uniform:0 --out " + csv.path),
+                     "builtin:uniform:0");
+  expectOneLineError(runDelta("distance builtin:box --points builtin:grid:3"), "builtin:grid:3");
+  EXPECT_FALSE(std::filesystem::exists(csv.path));
+  expectOneLineError(runDelta("distance builtin:box --points builtin:uniform:5 --out a.txt"),
+                     "a.txt");
+  expectOneLineError(runDelta("distance builtin:box"), "--points");
+}
+
 }  // namespace

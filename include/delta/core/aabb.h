@@ -34,6 +34,41 @@ struct Aabb {
     return p.x >= lower.x && p.x <= upper.x && p.y >= lower.y && p.y <= upper.y && p.z >= lower.z &&
            p.z <= upper.z;
   }
+  /// The box grown by `margin` on every side.
+  constexpr Aabb grown(double margin) const noexcept {
+    return {lower - Vec3{margin, margin, margin}, upper + Vec3{margin, margin, margin}};
+  }
 };
+
+/// The squared distance from a point to a box (0 inside).
+constexpr double distanceSquared(const Vec3& p, const Aabb& box) noexcept {
+  double sum = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const double below = box.lower[axis] - p[axis], above = p[axis] - box.upper[axis];
+    const double gap = below > above ? (below > 0.0 ? below : 0.0) : (above > 0.0 ? above : 0.0);
+    sum += gap * gap;
+  }
+  return sum;
+}
+
+/// The squared distance between two boxes (0 where they overlap): a lower bound of the squared
+/// distance between any point of one and any point of the other.
+constexpr double distanceSquared(const Aabb& a, const Aabb& b) noexcept {
+  double sum = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const double below = a.lower[axis] - b.upper[axis], above = b.lower[axis] - a.upper[axis];
+    const double gap = below > above ? (below > 0.0 ? below : 0.0) : (above > 0.0 ? above : 0.0);
+    sum += gap * gap;
+  }
+  return sum;
+}
+
+/// Whether two boxes are at least `gap` apart along some axis (then every pair of their points
+/// is at least `gap` apart): the cheapest prune, one comparison per axis and side.
+constexpr bool apart(const Aabb& a, const Aabb& b, double gap) noexcept {
+  for (std::size_t axis = 0; axis < 3; ++axis)
+    if (a.lower[axis] - b.upper[axis] >= gap || b.lower[axis] - a.upper[axis] >= gap) return true;
+  return false;
+}
 
 }  // namespace delta

@@ -14,6 +14,12 @@ namespace delta {
 /// defined also where the normal cannot give one: for touching or intersecting triangles
 /// (P = Q, `normal` = 0) it is the contact direction derived from the triangles' faces.
 ///
+/// Where the geometries overlap and the query can say by how much — a sphere sunk into a wall
+/// (query/sphere_contacts.h) — P is the first geometry's deepest point beyond Q, so `normal`
+/// points the other way (−direction · depth / 2) and `distance` is the depth; `direction` always
+/// points from the second geometry toward the first. `first` is a triangle id, a point index
+/// (points–mesh) or a sphere index (sphere–mesh); `second` a triangle id.
+///
 /// Threading: a value type; no shared state.
 struct ContactPoint {
   Vec3 x;
@@ -21,7 +27,7 @@ struct ContactPoint {
   Vec3 direction;            ///< unit vector from the second geometry toward the first
   double distance = 0.0;     ///< |P − Q|
   bool overlap = false;      ///< the geometries interpenetrate here
-  std::uint32_t first = 0;   ///< triangle (or point) id in the first geometry
+  std::uint32_t first = 0;   ///< triangle, point or sphere id in the first geometry
   std::uint32_t second = 0;  ///< triangle id in the second geometry
 };
 

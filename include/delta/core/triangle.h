@@ -1,5 +1,6 @@
 #pragma once
 
+#include "delta/core/aabb.h"
 #include "delta/core/vec3.h"
 
 namespace delta {
@@ -17,6 +18,8 @@ struct Triangle {
   constexpr Vec3 areaVector() const noexcept { return cross(b - a, c - a); }
   double area() const noexcept { return 0.5 * length(areaVector()); }
   constexpr Vec3 centroid() const noexcept { return (a + b + c) / 3.0; }
+  /// The box of the three vertices.
+  constexpr Aabb bounds() const noexcept { return {min(min(a, b), c), max(max(a, b), c)}; }
 };
 
 }  // namespace delta

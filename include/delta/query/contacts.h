@@ -5,6 +5,7 @@
 #include "delta/core/contact_point.h"
 #include "delta/kernels/triangle_batch.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/query_mesh.h"
 
 namespace delta::contactdetection {
 
@@ -30,6 +31,16 @@ namespace delta::contactdetection {
 /// parallel over the first mesh's triangles itself (core/parallel.h).
 std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& second,
                                    double epsilon,
+                                   kernels::Solver solver = kernels::Solver::Hybrid);
+
+/// The same contacts for prepared meshes, with the full overlap marker: a contact is also marked
+/// `overlap` where its point x lies inside both meshes (when both are closed; QueryMesh::closed)
+/// — two parallel faces each inside the other mesh, a pair that does not intersect although the
+/// meshes interpenetrate there. Inside is decided as by a signed point query
+/// (query/point_distance.h); a point on either surface is not inside.
+///
+/// Throws and threading as the flattened form.
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver = kernels::Solver::Hybrid);
 
 }  // namespace delta::contactdetection

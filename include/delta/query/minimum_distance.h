@@ -24,7 +24,23 @@ struct MinimumDistance {
 /// attain the minimum, the one with the smallest (first, second) ids is returned, so the answer
 /// is the same for every thread count.
 ///
-/// O(|first|·|second|) kernel calls, in parallel over the first mesh's triangles (core/parallel.h).
+/// Branch and bound, not all pairs: the second mesh's triangles are sorted along a Morton curve
+/// and cut into blocks of 64 (and runs of 16 blocks) with their boxes, and a triangle of the
+/// first mesh runs the kernels only on blocks whose box is not further than the least distance
+/// found so far (its own, or any triangle's: a bound shared by the threads), nearest blocks
+/// first. The bound is always the distance of a pair actually computed, widened against
+/// rounding, so no pair attaining the minimum is ever skipped: the answer is that of the
+/// all-pairs loop for any thread count. Cost: for each group of 32 triangles of the first mesh,
+/// a box test per run of blocks and per block of the near runs, and kernel calls on the few
+/// blocks near each triangle where the meshes come closest; in parallel over those groups
+/// (core/parallel.h). Allocates a reordered copy of the second mesh (about 80 bytes a
+/// triangle, twice that while it is built).
+///
+/// With the hybrid solver a pair's last bits may depend on the batch it is computed in (see the
+/// hybrid's contract: 10⁻¹² of the pair's size), so between pairs whose distances agree to
+/// rounding it may name another pair than an all-pairs loop batched otherwise; the distance is
+/// the same to that tolerance, and the answer is the same for every thread count.
+///
 /// Throws delta::Error when either mesh has no triangles.
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once.

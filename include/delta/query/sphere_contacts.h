@@ -1,0 +1,61 @@
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "delta/core/contact_point.h"
+#include "delta/core/sphere.h"
+#include "delta/mesh/triangle_soa.h"
+
+namespace delta::contactdetection {
+
+/// Sphere–mesh contact detection, for DEM codes whose particles are spheres against triangulated
+/// walls: every triangle whose surface-to-surface gap to a sphere is below 2ε (strictly, as for
+/// mesh–mesh contacts) yields one ContactPoint. The first geometry is the sphere, the second the
+/// mesh. Per (sphere, triangle), with kernels::sphereTriangle (triangles are solid and two-sided):
+///
+/// - Q is the point of the triangle closest to the centre c, and the gap is |c − Q| − r.
+/// - `direction` is the unit vector from Q toward c (from the wall toward the sphere's centre).
+///   Where c lies on the triangle (within rounding) it is the triangle's unit face normal (the
+///   sense of Triangle::areaVector), so a centre on an outward-oriented wall is pushed out of the
+///   wall; for a zero-area triangle, a unit vector orthogonal to it (+x for a single point).
+/// - P = c − r·direction: the sphere's point closest to the triangle when apart, and its point
+///   deepest beyond the triangle when they overlap (Q then lies on the segment from c to P).
+/// - `x` = (P + Q) / 2 and `normal` = P − x.
+/// - `distance` = |P − Q| = |gap|: the gap when apart (0 when touching), the penetration depth
+///   r − |c − Q| when overlapping. It is taken from the kernel's gap, computed in the triangle's
+///   frame, so it keeps its accuracy far from the origin where P − Q would cancel.
+/// - `overlap` = gap < 0. Apart, `normal` = +(distance / 2)·direction, as for every
+///   ContactPoint; overlapping, `normal` = −(distance / 2)·direction: still P − x, but it
+///   points into the wall, away from the centre. A DEM force acts along `direction` with a
+///   magnitude that grows with the depth `distance`.
+/// - `first` = the sphere's index (0 for the one-sphere overload), `second` = the triangle id
+///   (0-based, the mesh's triangle order).
+///
+/// Contacts come sorted by (first, second), the same for any thread count: exactly the
+/// triangles for which kernels::sphereTriangle gives a gap below 2ε, with its P, Q and normal.
+///
+/// Pruning before any kernel runs: a sphere whose box is further than 2ε from the mesh's box
+/// gets none; blocks of 64 consecutive triangles whose box does not meet the centre's box grown
+/// by r + 2ε are skipped. Both tests are conservative by a few ulps of the coordinates, so
+/// rounding never drops a triangle the kernel would report.
+///
+/// Throws delta::Error when ε is not finite and positive, when the mesh has no triangles, or
+/// when a sphere's centre is not finite or its radius is not finite and positive (the message
+/// names the sphere's index); these are checked before any work, even for an empty span of
+/// spheres, which otherwise gives no contacts. Ids are 32-bit: more than 2³² spheres or
+/// triangles throw too.
+///
+/// Threading: reads its inputs only; any number of threads may call it at once on the same
+/// mesh and spheres. The one-sphere overload runs on the calling thread; the many-sphere
+/// overload runs in parallel over the spheres itself (core/parallel.h), and serially when
+/// called inside an enclosing OpenMP parallel region.
+std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA& mesh,
+                                         double epsilon);
+
+/// Many spheres (a DEM particle set) against one mesh: the contacts of every sphere as above,
+/// `first` being its index in `spheres`, sorted by (sphere index, triangle id).
+std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const TriangleSoA& mesh,
+                                         double epsilon);
+
+}  // namespace delta::contactdetection

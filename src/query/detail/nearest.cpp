@@ -1,0 +1,136 @@
+#include <algorithm>
+#include <cmath>
+
+#include "delta/query/winding_number.h"
+
+#include "query_mesh_data.h"
+
+namespace delta::detail {
+namespace {
+
+struct Pending {
+  double bound;
+  std::uint32_t level;
+  std::uint32_t node;
+};
+
+/// (distance², id) order: the smaller distance, or the same distance and the smaller id.
+/// Before anything is found, only a distance strictly below the limit counts.
+bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexcept {
+  return distanceSquared < best.distanceSquared ||
+         (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
+}
+
+/// The triangles [first, last) of a leaf, nearest box first: most are farther than the best
+/// already found by their own box (grown by the slack), a cheap bound that skips the kernel.
+void visitLeaf(const QueryMeshData& mesh, const Vec3& point, std::size_t first, std::size_t last,
+               Nearest& best) noexcept {
+  struct Candidate {
+    double bound;
+    std::size_t k;
+    Triangle triangle;
+  };
+  Candidate candidates[kFanout];
+  std::size_t count = 0;
+  for (std::size_t k = first; k < last; ++k) {
+    const Triangle triangle = mesh.sorted.triangle(k);
+    const double bound = distanceSquared(point, triangle.bounds().grown(mesh.slack));
+    if (bound > best.distanceSquared) continue;
+    std::size_t at = count++;  // insertion into ascending order
+    for (; at > 0 && candidates[at - 1].bound > bound; --at)
+      candidates[at] = candidates[at - 1];
+    candidates[at] = {bound, k, triangle};
+  }
+  for (std::size_t c = 0; c < count; ++c) {
+    if (candidates[c].bound > best.distanceSquared) break;
+    const kernels::PointTriangleResult r =
+        kernels::closestPointOnTriangle(point, candidates[c].triangle);
+    const std::size_t k = candidates[c].k;
+    if (better(r.distanceSquared, mesh.order[k], best)) {
+      best.distanceSquared = r.distanceSquared;
+      best.triangle = mesh.order[k];
+      best.sorted = static_cast<std::uint32_t>(k);
+      best.closest = r;
+    }
+  }
+}
+
+}  // namespace
+
+Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
+                        double limitSquared) noexcept {
+  Nearest best;
+  best.distanceSquared = limitSquared;
+  // Nearest-first, depth first: children are pushed farthest first, and every entry is checked
+  // against the best distance again when it is popped. A node is skipped only when its box is
+  // strictly farther than the best, so ties still reach the smaller id.
+  constexpr std::size_t kCapacity = 16 * kFanout;  // depth ≤ 11 for 2³² triangles
+  Pending stack[kCapacity];
+  std::size_t top = 0;
+  const std::uint32_t rootLevel = static_cast<std::uint32_t>(mesh.levels.size() - 1);
+  stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), rootLevel, 0};
+  while (top > 0) {
+    const Pending entry = stack[--top];
+    if (entry.bound > best.distanceSquared) continue;
+    const std::size_t first = std::size_t{entry.node} * kFanout;
+    if (entry.level == 0) {
+      visitLeaf(mesh, point, first, std::min(first + kFanout, mesh.sorted.size()), best);
+      continue;
+    }
+    const std::vector<Aabb>& children = mesh.levels[entry.level - 1];
+    const std::size_t last = std::min(first + kFanout, children.size());
+    Pending near[kFanout];
+    std::size_t count = 0;
+    for (std::size_t c = first; c < last; ++c) {
+      const double bound = distanceSquared(point, children[c]);
+      if (bound > best.distanceSquared) continue;
+      // Insertion into descending order, so the nearest child is pushed last.
+      std::size_t at = count++;
+      for (; at > 0 && near[at - 1].bound < bound; --at)
+        near[at] = near[at - 1];
+      near[at] = {bound, entry.level - 1, static_cast<std::uint32_t>(c)};
+    }
+    for (std::size_t c = 0; c < count; ++c)
+      stack[top++] = near[c];
+  }
+  return best;
+}
+
+bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {
+  if (!(nearest.distanceSquared > 0.0)) return false;  // on the surface
+  Vec3 normal;
+  using kernels::TriangleFeature;
+  const std::array<Vec3, 6>& pseudonormal = mesh.pseudonormals[nearest.sorted];
+  switch (nearest.closest.feature) {
+    case TriangleFeature::VertexA:
+      normal = pseudonormal[0];
+      break;
+    case TriangleFeature::VertexB:
+      normal = pseudonormal[1];
+      break;
+    case TriangleFeature::VertexC:
+      normal = pseudonormal[2];
+      break;
+    case TriangleFeature::EdgeAB:
+      normal = pseudonormal[3];
+      break;
+    case TriangleFeature::EdgeBC:
+      normal = pseudonormal[4];
+      break;
+    case TriangleFeature::EdgeCA:
+      normal = pseudonormal[5];
+      break;
+    case TriangleFeature::Face:
+      normal = mesh.sorted.triangle(nearest.sorted).areaVector();
+      break;
+  }
+  const Vec3 offset = point - nearest.closest.closest;
+  const double side = dot(offset, normal) * mesh.orientation;
+  // Exactly, the side is positive outside and negative inside (Bærentzen and Aanæs); where it
+  // is within rounding of zero (a degenerate triangle's zero normal, a point almost tangent to
+  // the surface) the winding number, O(n) but robust, decides.
+  if (std::abs(side) > 1e-9 * length(offset) * length(normal)) return side < 0.0;
+  return windingNumber(mesh.triangles, point) * mesh.orientation > 0.5;
+}
+
+}  // namespace delta::detail

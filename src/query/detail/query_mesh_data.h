@@ -1,0 +1,59 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "delta/core/aabb.h"
+#include "delta/core/vec3.h"
+#include "delta/kernels/point_triangle.h"
+#include "delta/mesh/topology.h"
+#include "delta/mesh/triangle_soa.h"
+
+namespace delta::detail {
+
+/// Children per tree node and triangles per leaf.
+inline constexpr std::size_t kFanout = 8;
+
+/// What a QueryMesh holds (see query_mesh.h).
+struct QueryMeshData {
+  TriangleSoA triangles;  ///< mesh order
+  TriangleSoA sorted;     ///< tree order: sorted[k] is triangles[order[k]]
+  std::vector<std::uint32_t> order;
+  /// levels[0]: the leaves' boxes (leaf i holds sorted triangles [8i, 8i + 8)); levels[l]: node i
+  /// has the children [8i, 8i + 8) of level l − 1; levels.back() holds the root alone. Boxes are
+  /// grown by `slack` on every side, so a box's distance never exceeds a computed triangle
+  /// distance inside it (rounding included).
+  std::vector<std::vector<Aabb>> levels;
+  /// Per sorted triangle: the pseudonormals of vertices a, b, c, then of edges ab, bc, ca (not
+  /// normalised). Empty unless the mesh is closed.
+  std::vector<std::array<Vec3, 6>> pseudonormals;
+  Topology topology;
+  bool closed = false;
+  double orientation = 1.0;  ///< −1 for an inside-out closed mesh
+  Aabb bounds;
+  double slack = 0.0;
+};
+
+/// The closest triangle to a point.
+struct Nearest {
+  double distanceSquared = std::numeric_limits<double>::infinity();
+  std::uint32_t triangle = std::numeric_limits<std::uint32_t>::max();  ///< mesh order
+  std::uint32_t sorted = 0;                                            ///< tree order
+  kernels::PointTriangleResult closest;
+  bool found() const noexcept { return triangle != std::numeric_limits<std::uint32_t>::max(); }
+};
+
+/// The triangle closest to `point` among those closer than √limitSquared (strictly), by
+/// nearest-first descent of the tree; the smallest triangle id wins a tie, so the answer is that
+/// of a loop over all triangles in id order. Not found when none is that close.
+Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared) noexcept;
+
+/// Whether `point` lies inside the closed mesh, given its nearest triangle: the sign of the
+/// offset from the closest point along the pseudonormal of the feature it lies on, or, where that
+/// is too close to zero to trust, the generalized winding number. False on the surface
+/// (distance 0). The mesh must be closed.
+bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept;
+
+}  // namespace delta::detail

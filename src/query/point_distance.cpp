@@ -1,0 +1,136 @@
+#include "delta/query/point_distance.h"
+
+#include <cmath>
+#include <string>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/core/parallel.h"
+
+#include "detail/query_mesh_data.h"
+
+namespace delta::contactdetection {
+namespace {
+
+/// Points per parallel chunk: a few hundred tree descents amortise the scheduling.
+constexpr std::size_t kGrain = 256;
+
+void validate(const QueryMesh& mesh, const PointQuery& query) {
+  if (std::isnan(query.epsilon) || !(query.epsilon > 0.0))
+    throw Error("point distances: epsilon = " + toString(query.epsilon) + " must be positive");
+  if (query.signedDistance && !mesh.closed()) {
+    const Topology& t = mesh.topology();
+    throw Error("signed distance needs a closed, consistently oriented mesh; this one has " +
+                std::to_string(t.boundaryEdges) + " boundary, " +
+                std::to_string(t.nonManifoldEdges) + " non-manifold and " +
+                std::to_string(t.misorientedEdges) + " misoriented edges");
+  }
+}
+
+/// Throws for the first point (in index order) with a non-finite coordinate.
+template <typename PointAt>
+void validatePoints(std::size_t count, const PointAt& pointAt) {
+  for (std::size_t i = 0; i < count; ++i)
+    if (!isFinite(pointAt(i)))
+      throw Error("point distances: point " + std::to_string(i) + " (" + toString(pointAt(i)) +
+                  ") has a non-finite coordinate");
+}
+
+PointDistance answer(const detail::QueryMeshData& data, const Vec3& point,
+                     const PointQuery& query) {
+  const double limit = query.epsilon * query.epsilon;
+  const detail::Nearest nearest = detail::nearestTriangle(data, point, limit);
+  PointDistance result;
+  if (!nearest.found()) {
+    if (std::isinf(query.epsilon))
+      throw Error("point distances: the distance from " + toString(point) +
+                  " to the mesh overflows a double");
+    return result;
+  }
+  result.distance = std::sqrt(nearest.distanceSquared);
+  result.closest = nearest.closest.closest;
+  result.triangle = nearest.triangle;
+  if (query.signedDistance) result.inside = detail::insideAt(data, point, nearest);
+  return result;
+}
+
+template <typename PointAt>
+void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
+               const PointQuery& query, std::span<PointDistance> out) {
+  validate(mesh, query);
+  validatePoints(count, pointAt);
+  parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      out[i] = answer(mesh.data(), pointAt(i), query);
+  });
+}
+
+}  // namespace
+
+void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQuery& query,
+               std::span<PointDistance> out) {
+  if (out.size() != points.size())
+    throw Error("point distances: " + std::to_string(points.size()) + " points but room for " +
+                std::to_string(out.size()) + " answers");
+  answerAll(
+      mesh, points.size(), [points](std::size_t i) { return points[i]; }, query, out);
+}
+
+std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const Vec3> points,
+                                     const PointQuery& query) {
+  std::vector<PointDistance> out(points.size());
+  distances(mesh, points, query, out);
+  return out;
+}
+
+std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const double> x,
+                                     std::span<const double> y, std::span<const double> z,
+                                     const PointQuery& query) {
+  if (y.size() != x.size() || z.size() != x.size())
+    throw Error("point distances: coordinate arrays of different lengths (" +
+                std::to_string(x.size()) + ", " + std::to_string(y.size()) + ", " +
+                std::to_string(z.size()) + ")");
+  std::vector<PointDistance> out(x.size());
+  answerAll(
+      mesh, x.size(),
+      [x, y, z](std::size_t i) {
+        return Vec3{x[i], y[i], z[i]};
+      },
+      query, out);
+  return out;
+}
+
+PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query) {
+  validate(mesh, query);
+  validatePoints(1, [&point](std::size_t) { return point; });
+  return answer(mesh.data(), point, query);
+}
+
+std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> points,
+                                   double epsilon) {
+  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
+    throw Error("point contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  const std::vector<PointDistance> near =
+      distances(mesh, points, {.epsilon = epsilon, .signedDistance = mesh.closed()});
+  const detail::QueryMeshData& data = mesh.data();
+  std::vector<ContactPoint> found;
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    if (!near[i].found()) continue;
+    ContactPoint contact;
+    contact.x = (points[i] + near[i].closest) * 0.5;
+    contact.normal = points[i] - contact.x;
+    contact.distance = near[i].distance;
+    contact.direction = normalized(points[i] - near[i].closest);
+    if (!(lengthSquared(contact.direction) > 0.5))
+      contact.direction =
+          normalized(data.triangles.triangle(near[i].triangle).areaVector() * data.orientation);
+    if (!(lengthSquared(contact.direction) > 0.5)) contact.direction = {0, 0, 1};
+    contact.overlap = near[i].inside;
+    contact.first = static_cast<std::uint32_t>(i);
+    contact.second = near[i].triangle;
+    found.push_back(contact);
+  }
+  return found;
+}
+
+}  // namespace delta::contactdetection

@@ -1,0 +1,200 @@
+#include "delta/query/query_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "delta/core/error.h"
+#include "delta/mesh/mass_properties.h"
+
+#include "detail/query_mesh_data.h"
+
+namespace delta {
+namespace {
+
+/// Orders `ids[begin, end)` so that every aligned run of `size` / kFanout of them (the children
+/// of a node of `size` triangles) is spatially compact: three rounds of binary splits at the
+/// median of the centroids along the longest axis of their box, at run boundaries.
+void splitIntoRuns(std::vector<std::uint32_t>& ids, const std::vector<Vec3>& centroids,
+                   std::size_t begin, std::size_t end, std::size_t run) {
+  if (end - begin <= run) return;
+  Aabb box;
+  for (std::size_t k = begin; k < end; ++k)
+    box.extend(centroids[ids[k]]);
+  const Vec3 extent = box.extent();
+  const std::size_t axis = extent.x >= extent.y && extent.x >= extent.z ? 0
+                           : extent.y >= extent.z                       ? 1
+                                                                        : 2;
+  const std::size_t runs = (end - begin + run - 1) / run;
+  const std::size_t middle = begin + (runs + 1) / 2 * run;
+  const auto first = ids.begin() + static_cast<std::ptrdiff_t>(begin);
+  std::nth_element(first, ids.begin() + static_cast<std::ptrdiff_t>(middle),
+                   ids.begin() + static_cast<std::ptrdiff_t>(end),
+                   [&](std::uint32_t i, std::uint32_t j) {
+                     const double ci = centroids[i][axis], cj = centroids[j][axis];
+                     return ci < cj || (ci == cj && i < j);
+                   });
+  splitIntoRuns(ids, centroids, begin, middle, run);
+  splitIntoRuns(ids, centroids, middle, end, run);
+}
+
+/// Orders the triangles of a node of `size` (a power of kFanout) into kFanout compact children,
+/// and each child likewise, down to leaves of kFanout triangles.
+void buildOrder(std::vector<std::uint32_t>& ids, const std::vector<Vec3>& centroids,
+                std::size_t begin, std::size_t end, std::size_t size) {
+  if (size <= detail::kFanout) return;
+  const std::size_t child = size / detail::kFanout;
+  splitIntoRuns(ids, centroids, begin, end, child);
+  for (std::size_t b = begin; b < end; b += child)
+    buildOrder(ids, centroids, b, std::min(b + child, end), child);
+}
+
+/// Triangle ids in tree order: node i of level l (leaves l = 0) holds the aligned run
+/// [i·8^(l+1), (i + 1)·8^(l+1)), split top-down at centroid medians.
+std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
+  std::vector<Vec3> centroids(mesh.triangleCount());
+  for (std::size_t i = 0; i < centroids.size(); ++i)
+    centroids[i] = mesh.triangle(i).centroid();
+  std::vector<std::uint32_t> ids(centroids.size());
+  std::iota(ids.begin(), ids.end(), 0u);
+  std::size_t size = detail::kFanout;
+  while (size < ids.size())
+    size *= detail::kFanout;
+  buildOrder(ids, centroids, 0, ids.size(), size);
+  return ids;
+}
+
+/// Leaf boxes over the sorted triangles, then parents of kFanout children up to one root.
+std::vector<std::vector<Aabb>> buildLevels(const TriangleSoA& sorted, double slack) {
+  std::vector<std::vector<Aabb>> levels(1);
+  levels[0].resize((sorted.size() + detail::kFanout - 1) / detail::kFanout);
+  for (std::size_t k = 0; k < sorted.size(); ++k)
+    levels[0][k / detail::kFanout].extend(sorted.triangle(k).bounds());
+  for (Aabb& leaf : levels[0])
+    leaf = leaf.grown(slack);
+  while (levels.back().size() > 1) {
+    const std::vector<Aabb>& children = levels.back();
+    std::vector<Aabb> parents((children.size() + detail::kFanout - 1) / detail::kFanout);
+    for (std::size_t c = 0; c < children.size(); ++c)
+      parents[c / detail::kFanout].extend(children[c]);
+    levels.push_back(std::move(parents));
+  }
+  return levels;
+}
+
+/// The angle of a triangle at corner `from`, between the edges to `next` and `previous`.
+double cornerAngle(const Vec3& from, const Vec3& next, const Vec3& previous) noexcept {
+  const Vec3 e1 = next - from, e2 = previous - from;
+  return std::atan2(length(cross(e1, e2)), dot(e1, e2));
+}
+
+/// Angle-weighted vertex pseudonormals and edge pseudonormals (sum of the two faces' unit
+/// normals), per triangle in tree order. For a closed, consistently oriented mesh every edge of
+/// a triangle with three distinct indices has exactly one partner.
+std::vector<std::array<Vec3, 6>> pseudonormals(const Mesh& mesh,
+                                               const std::vector<std::uint32_t>& order) {
+  const std::size_t n = mesh.triangleCount();
+  std::vector<Vec3> faceNormal(n);
+  std::vector<Vec3> vertexNormal(mesh.vertexCount());
+  struct EdgeUse {
+    std::uint64_t key;
+    std::uint32_t triangle;
+    std::uint32_t slot;
+    auto operator<=>(const EdgeUse&) const = default;
+  };
+  std::vector<EdgeUse> edges;
+  edges.reserve(3 * n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const TriangleIndices& v = mesh.triangles()[t];
+    const Triangle triangle = mesh.triangle(t);
+    faceNormal[t] = normalized(triangle.areaVector());
+    const Vec3 corners[3] = {triangle.a, triangle.b, triangle.c};
+    for (std::size_t k = 0; k < 3; ++k)
+      vertexNormal[v[k]] +=
+          cornerAngle(corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]) * faceNormal[t];
+    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;  // a fold: no edges (topology.h)
+    for (std::uint32_t slot = 0; slot < 3; ++slot) {
+      const std::uint32_t from = v[slot], to = v[(slot + 1) % 3];
+      const std::uint64_t key = std::uint64_t{std::min(from, to)} << 32 | std::max(from, to);
+      edges.push_back({key, static_cast<std::uint32_t>(t), slot});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+
+  std::vector<std::uint32_t> position(n);  // mesh id → tree order
+  for (std::size_t k = 0; k < n; ++k)
+    position[order[k]] = static_cast<std::uint32_t>(k);
+  std::vector<std::array<Vec3, 6>> normals(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const TriangleIndices& v = mesh.triangles()[t];
+    for (std::size_t k = 0; k < 3; ++k)
+      normals[position[t]][k] = vertexNormal[v[k]];
+  }
+  for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
+    if (edges[e].key != edges[e + 1].key) continue;
+    const Vec3 sum = faceNormal[edges[e].triangle] + faceNormal[edges[e + 1].triangle];
+    normals[position[edges[e].triangle]][3 + edges[e].slot] = sum;
+    normals[position[edges[e + 1].triangle]][3 + edges[e + 1].slot] = sum;
+    ++e;
+  }
+  return normals;
+}
+
+}  // namespace
+
+QueryMesh::QueryMesh(const Mesh& mesh) {
+  if (mesh.triangleCount() == 0) throw Error("QueryMesh: the mesh has no triangles");
+  if (mesh.triangleCount() >= std::numeric_limits<std::uint32_t>::max())
+    throw Error("QueryMesh: more triangles than 32-bit ids can name");
+  auto data = std::make_shared<detail::QueryMeshData>();
+  data->triangles = flatten(mesh);
+  data->bounds = mesh.bounds();
+  data->order = treeOrder(mesh);
+  std::vector<TriangleIndices> sortedIndices(mesh.triangleCount());
+  for (std::size_t k = 0; k < sortedIndices.size(); ++k)
+    sortedIndices[k] = mesh.triangles()[data->order[k]];
+  const Mesh sortedMesh(std::vector<Vec3>(mesh.vertices().begin(), mesh.vertices().end()),
+                        std::move(sortedIndices));
+  data->sorted = flatten(sortedMesh);
+  // Boxes grow by far more than the rounding of a box distance or a point–triangle distance
+  // (a few ulps of the coordinates and the distance), so pruning by box never drops a triangle
+  // whose computed distance would win.
+  data->slack = 0x1p-36 * (std::max(maxAbs(data->bounds.lower), maxAbs(data->bounds.upper)) +
+                           data->bounds.diagonal());
+  data->levels = buildLevels(data->sorted, data->slack);
+  data->topology = analyzeTopology(mesh);
+  data->closed = data->topology.closed && data->topology.consistentlyOriented;
+  if (data->closed) {
+    data->pseudonormals = pseudonormals(mesh, data->order);
+    data->orientation = signedVolume(mesh) < 0.0 ? -1.0 : 1.0;
+  }
+  data_ = std::move(data);
+}
+
+std::size_t QueryMesh::size() const noexcept {
+  return data_->triangles.size();
+}
+const TriangleSoA& QueryMesh::triangles() const noexcept {
+  return data_->triangles;
+}
+const Topology& QueryMesh::topology() const noexcept {
+  return data_->topology;
+}
+bool QueryMesh::closed() const noexcept {
+  return data_->closed;
+}
+const Aabb& QueryMesh::bounds() const noexcept {
+  return data_->bounds;
+}
+
+std::size_t QueryMesh::memoryBytes() const noexcept {
+  std::size_t bytes = data_->triangles.memoryBytes() + data_->sorted.memoryBytes() +
+                      data_->order.capacity() * sizeof(std::uint32_t) +
+                      data_->pseudonormals.capacity() * sizeof(std::array<Vec3, 6>);
+  for (const std::vector<Aabb>& level : data_->levels)
+    bytes += level.capacity() * sizeof(Aabb);
+  return bytes;
+}
+
+}  // namespace delta

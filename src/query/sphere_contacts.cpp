@@ -1,0 +1,134 @@
+#include "delta/query/sphere_contacts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "delta/core/aabb.h"
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/core/parallel.h"
+#include "delta/kernels/sphere.h"
+
+namespace delta::contactdetection {
+namespace {
+
+/// Consecutive triangles pruned as one box (as for mesh–mesh contacts).
+constexpr std::size_t kBlock = 64;
+/// Spheres per parallel chunk: each costs a box test per block and a few kernels.
+constexpr std::size_t kGrain = 32;
+/// The prune's slack, in units of the coordinates' magnitude: box corners c ± r and their
+/// differences round, and so does the kernel's gap (a few ulps of |c − a|, the edges and r), so
+/// a box test that is exact to within this never skips a triangle the kernel would report.
+constexpr double kPruneUlps = 32.0 * std::numeric_limits<double>::epsilon();
+
+/// The boxes of consecutive blocks of kBlock triangles, and the mesh's box.
+struct MeshBoxes {
+  std::vector<Aabb> blocks;
+  Aabb mesh;
+  double scale = 0.0;  ///< the largest absolute coordinate of the mesh
+};
+
+MeshBoxes boxesOf(const TriangleSoA& mesh) {
+  MeshBoxes boxes;
+  boxes.blocks.resize((mesh.size() + kBlock - 1) / kBlock);
+  for (std::size_t i = 0; i < mesh.size(); ++i)
+    boxes.blocks[i / kBlock].extend(mesh.triangle(i).bounds());
+  for (const Aabb& block : boxes.blocks)
+    boxes.mesh.extend(block);
+  boxes.scale = std::fmax(maxAbs(boxes.mesh.lower), maxAbs(boxes.mesh.upper));
+  return boxes;
+}
+
+void checkEpsilonAndMesh(double epsilon, const TriangleSoA& mesh) {
+  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
+    throw Error("sphereContacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  if (mesh.size() == 0) throw Error("sphereContacts: the mesh has no triangles");
+  if (mesh.size() > std::numeric_limits<std::uint32_t>::max())
+    throw Error("sphereContacts: the mesh has " + std::to_string(mesh.size()) +
+                " triangles, more than 32-bit ids reach");
+}
+
+void checkSphere(const Sphere& sphere, std::size_t index) {
+  if (!isFinite(sphere.center))
+    throw Error("sphereContacts: sphere " + std::to_string(index) +
+                " center = " + toString(sphere.center) + " must be finite");
+  if (!std::isfinite(sphere.radius) || !(sphere.radius > 0.0))
+    throw Error("sphereContacts: sphere " + std::to_string(index) +
+                " radius = " + toString(sphere.radius) + " must be finite and positive");
+}
+
+ContactPoint contactPoint(const kernels::SphereContactResult& r, std::size_t sphere,
+                          std::size_t triangle) noexcept {
+  ContactPoint contact;
+  contact.x = (r.p + r.q) * 0.5;
+  contact.normal = r.p - contact.x;
+  contact.direction = r.normal;
+  contact.distance = std::fabs(r.gap);
+  contact.overlap = r.overlap;
+  contact.first = static_cast<std::uint32_t>(sphere);
+  contact.second = static_cast<std::uint32_t>(triangle);
+  return contact;
+}
+
+/// The contacts of one (validated) sphere with every triangle of `mesh`, in id order.
+void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh,
+                const MeshBoxes& boxes, double epsilon, std::vector<ContactPoint>& out) {
+  const Vec3 extent{sphere.radius, sphere.radius, sphere.radius};
+  const Aabb box{sphere.center - extent, sphere.center + extent};
+  const double reach = 2.0 * epsilon;
+  const double slack = kPruneUlps * (maxAbs(sphere.center) + sphere.radius + boxes.scale);
+  if (apart(box, boxes.mesh, reach + slack)) return;
+  for (std::size_t block = 0; block < boxes.blocks.size(); ++block) {
+    if (apart(box, boxes.blocks[block], reach + slack)) continue;
+    const std::size_t end = std::min((block + 1) * kBlock, mesh.size());
+    for (std::size_t j = block * kBlock; j < end; ++j) {
+      const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, mesh.triangle(j));
+      if (r.gap < reach) out.push_back(contactPoint(r, index, j));
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA& mesh,
+                                         double epsilon) {
+  checkEpsilonAndMesh(epsilon, mesh);
+  checkSphere(sphere, 0);
+  std::vector<ContactPoint> found;
+  contactsOf(sphere, 0, mesh, boxesOf(mesh), epsilon, found);
+  return found;
+}
+
+std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const TriangleSoA& mesh,
+                                         double epsilon) {
+  checkEpsilonAndMesh(epsilon, mesh);
+  if (spheres.size() > std::numeric_limits<std::uint32_t>::max())
+    throw Error("sphereContacts: " + std::to_string(spheres.size()) +
+                " spheres, more than 32-bit ids reach");
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+    checkSphere(spheres[i], i);
+  if (spheres.empty()) return {};
+  const MeshBoxes boxes = boxesOf(mesh);
+
+  // One list per chunk of kGrain spheres, filled in sphere order: chunk k starts at sphere
+  // k·kGrain (a serial run hands the whole range to chunk 0, still in order).
+  std::vector<std::vector<ContactPoint>> perChunk((spheres.size() + kGrain - 1) / kGrain);
+  parallelFor(0, spheres.size(), kGrain, [&](std::size_t begin, std::size_t end) {
+    std::vector<ContactPoint>& out = perChunk[begin / kGrain];
+    for (std::size_t i = begin; i < end; ++i)
+      contactsOf(spheres[i], i, mesh, boxes, epsilon, out);
+  });
+  std::size_t count = 0;
+  for (const std::vector<ContactPoint>& some : perChunk)
+    count += some.size();
+  std::vector<ContactPoint> all;
+  all.reserve(count);
+  for (const std::vector<ContactPoint>& some : perChunk)
+    all.insert(all.end(), some.begin(), some.end());
+  return all;
+}
+
+}  // namespace delta::contactdetection

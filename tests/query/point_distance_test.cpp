@@ -1,0 +1,369 @@
+#include "delta/query/point_distance.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/io/mesh_io.h"
+#include "delta/kernels/point_triangle.h"
+#include "delta/mesh/mass_properties.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/contacts.h"
+#include "delta/query/winding_number.h"
+
+namespace delta::contactdetection {
+namespace {
+
+const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
+
+/// Uniform in [0, 1) from the generator's raw bits (the same on every platform).
+double unit(std::mt19937_64& random) {
+  return static_cast<double>(random() >> 11) * 0x1p-53;
+}
+
+/// The reference: every triangle in id order, a strictly smaller distance replaces the best.
+PointDistance byAllTriangles(const Mesh& mesh, const Vec3& point) {
+  PointDistance best;
+  double bestSquared = std::numeric_limits<double>::infinity();
+  for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+    const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, mesh.triangle(t));
+    if (r.distanceSquared < bestSquared) {
+      bestSquared = r.distanceSquared;
+      best.distance = std::sqrt(r.distanceSquared);
+      best.closest = r.closest;
+      best.triangle = t;
+    }
+  }
+  return best;
+}
+
+/// Random points in the box grown by 10% per side, points near the surface (vertices, edge
+/// midpoints and centroids nudged by ±1e-6 of the size and exactly on them), and far points.
+std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  const Aabb box = mesh.bounds();
+  const Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;
+  std::vector<Vec3> points;
+  for (std::size_t i = 0; i < count; ++i)
+    points.push_back(lower +
+                     Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)});
+  const double nudge = 1e-6 * box.diagonal();
+  for (std::size_t i = 0; i < count / 4; ++i) {
+    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
+    const Vec3 normal = normalized(t.areaVector());
+    for (const Vec3& on : {t.a, (t.a + t.b) * 0.5, t.centroid()})
+      for (double side : {-1.0, 0.0, 1.0})
+        points.push_back(on + normal * (side * nudge));
+  }
+  points.push_back(box.center() + Vec3{1e3, -2e3, 5e2} * box.diagonal());
+  points.push_back(box.center());
+  return points;
+}
+
+void expectSameAsAllTriangles(const Mesh& mesh, const std::vector<Vec3>& points, const char* name) {
+  const QueryMesh query(mesh);
+  const std::vector<PointDistance> found = distances(query, points);
+  ASSERT_EQ(found.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const PointDistance expected = byAllTriangles(mesh, points[i]);
+    ASSERT_EQ(found[i].distance, expected.distance) << name << ", point " << i;
+    ASSERT_EQ(found[i].triangle, expected.triangle) << name << ", point " << i;
+    ASSERT_EQ(found[i].closest, expected.closest) << name << ", point " << i;
+    ASSERT_FALSE(found[i].inside);
+  }
+}
+
+TEST(PointDistance, SameAsEveryTriangleOnPrimitives) {
+  Mesh far = primitives::granulate(5, {1, 0.5, 0.2});
+  far.translate({1e6, -1e6, 3e5});
+  const std::pair<const char*, Mesh> meshes[] = {
+      {"icosphere", primitives::icosphere(3)},
+      {"box (ties on every face)", primitives::box({1, 2, 3})},
+      {"cylinder", primitives::cylinder(0.5, 2, 17)},
+      {"quad (open)", primitives::quad(2, 1)},
+      {"flat granulate at 1e6", far},
+      {"tiny icosphere", primitives::icosphere(2, 1e-9, {1, 1, 1})}};
+  for (const auto& [name, mesh] : meshes)
+    expectSameAsAllTriangles(mesh, probes(mesh, 400, 7), name);
+}
+
+TEST(PointDistance, SameAsEveryTriangleOnRealMeshes) {
+  for (const char* file : {"fandisk.off", "elephant.off", "cube-meshed.off"}) {
+    const Mesh mesh = io::load(kMeshes / file);
+    expectSameAsAllTriangles(mesh, probes(mesh, 300, 11), file);
+  }
+}
+
+TEST(PointDistance, DegenerateTrianglesAndExactTies) {
+  // A zero-area triangle, a needle and a repeated triangle among ordinary ones.
+  const Mesh mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {1, 1e-300, 0}, {0.5, 0.5, 1}},
+                  {{0, 1, 2}, {0, 1, 3}, {1, 3, 4}, {0, 1, 2}, {2, 1, 5}, {4, 4, 4}});
+  std::vector<Vec3> points = probes(mesh, 200, 3);
+  for (double x = -1; x <= 3; x += 0.25)
+    points.push_back({x, 0.5, 0.5});
+  expectSameAsAllTriangles(mesh, points, "degenerate");
+}
+
+TEST(PointDistance, EpsilonIsStrict) {
+  const QueryMesh box(primitives::box());  // faces at ±0.5
+  const std::vector<Vec3> points = {{0, 0, 0.75}, {0, 0, 0.7}, {0, 0, 5}};
+  const std::vector<PointDistance> found = distances(box, points, {.epsilon = 0.25});
+  EXPECT_FALSE(found[0].found());  // exactly 0.25 away
+  EXPECT_TRUE(std::isinf(found[0].distance));
+  ASSERT_TRUE(found[1].found());
+  EXPECT_DOUBLE_EQ(found[1].distance, 0.2);
+  EXPECT_FALSE(found[2].found());
+  EXPECT_TRUE(distances(box, points, {.epsilon = std::nextafter(0.25, 1.0)})[0].found());
+}
+
+TEST(PointDistance, WithinEpsilonAgreesWithTheFullQuery) {
+  const Mesh mesh = io::load(kMeshes / "fandisk.off");
+  const QueryMesh query(mesh);
+  const std::vector<Vec3> points = probes(mesh, 2000, 5);
+  const double epsilon = 0.01 * mesh.bounds().diagonal();
+  const std::vector<PointDistance> all = distances(query, points);
+  const std::vector<PointDistance> near = distances(query, points, {.epsilon = epsilon});
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ASSERT_EQ(near[i].found(), all[i].distance < epsilon) << i;
+    if (!near[i].found()) continue;
+    ++within;
+    EXPECT_EQ(near[i].distance, all[i].distance);
+    EXPECT_EQ(near[i].triangle, all[i].triangle);
+  }
+  EXPECT_GT(within, points.size() / 4);  // the nudged points at least
+}
+
+/// Inside by the generalized winding number over all triangles.
+void expectSignsOfTheWindingNumber(const Mesh& mesh, const std::vector<Vec3>& points,
+                                   const char* name) {
+  const QueryMesh query(mesh);
+  ASSERT_TRUE(query.closed()) << name;
+  const TriangleSoA flat = flatten(mesh);
+  const std::vector<PointDistance> found = distances(query, points, {.signedDistance = true});
+  const double orientation = signedVolume(mesh) < 0 ? -1.0 : 1.0;
+  const double surface = 1e-9 * mesh.bounds().diagonal();
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (found[i].distance <= surface) continue;
+    const bool expected = orientation * windingNumber(flat, points[i]) > 0.5;
+    ASSERT_EQ(found[i].inside, expected)
+        << name << ", point " << i << " at distance " << found[i].distance;
+    inside += expected;
+  }
+  EXPECT_GT(inside, 0u) << name;
+  EXPECT_LT(inside, points.size()) << name;
+}
+
+/// Points along the pseudonormal directions of vertices and through the middles of edges, close
+/// to the surface: where a nearest triangle's own face normal would give the wrong sign.
+std::vector<Vec3> featureProbes(const Mesh& mesh, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::vector<Vec3> points = probes(mesh, count, seed);
+  const double step = 1e-4 * mesh.bounds().diagonal();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
+    const Vec3 normal = normalized(t.areaVector());
+    for (const Vec3& on : {t.b, (t.b + t.c) * 0.5})
+      for (double side : {-3.0, -1.0, 1.0, 3.0})
+        points.push_back(on + (normal + Vec3{unit(random), unit(random), unit(random)} * 0.5) *
+                                  (side * step));
+  }
+  return points;
+}
+
+TEST(PointDistance, SignedAgreesWithTheWindingNumber) {
+  const Mesh sphere = primitives::icosphere(2);
+  std::vector<TriangleIndices> reversed(sphere.triangles().begin(), sphere.triangles().end());
+  for (TriangleIndices& t : reversed)
+    std::swap(t[1], t[2]);  // every face turned inward
+  const Mesh insideOut({sphere.vertices().begin(), sphere.vertices().end()}, reversed);
+  const std::pair<const char*, Mesh> meshes[] = {
+      {"icosphere", primitives::icosphere(3)},
+      {"box", primitives::box({1, 2, 3}, {1e6, 0, 0})},
+      {"granulate", primitives::granulate(9, {1, 0.3, 0.6})},
+      {"inside-out icosphere", insideOut},
+      {"elephant", io::load(kMeshes / "elephant.off")},
+      {"knot1", io::load(kMeshes / "knot1.off")}};
+  for (const auto& [name, mesh] : meshes)
+    expectSignsOfTheWindingNumber(mesh, featureProbes(mesh, 400, 13), name);
+}
+
+TEST(PointDistance, SignedOnAClosedMeshWithZeroAreaTriangles) {
+  // Triangle (a, b, c) of an icosphere split at the middle m of ab into (a, m, c) and (m, b, c),
+  // with the collinear sliver (a, b, m) closing the gap toward the neighbour across ab, and a
+  // fold (c, c, a): still closed and consistently oriented, with two zero-area triangles whose
+  // normals sign nothing.
+  const Mesh sphere = primitives::icosphere(1);
+  std::vector<Vec3> vertices(sphere.vertices().begin(), sphere.vertices().end());
+  std::vector<TriangleIndices> triangles(sphere.triangles().begin(), sphere.triangles().end());
+  const auto [a, b, c] = triangles[0];
+  vertices.push_back((vertices[a] + vertices[b]) * 0.5);
+  const auto m = static_cast<std::uint32_t>(vertices.size() - 1);
+  triangles[0] = {a, m, c};
+  triangles.push_back({m, b, c});
+  triangles.push_back({a, b, m});
+  triangles.push_back({c, c, a});
+  const Mesh split(vertices, triangles);
+  ASSERT_TRUE(QueryMesh(split).closed());
+  std::vector<Vec3> points = featureProbes(split, 200, 17);
+  const Vec3 outward = normalized(vertices[m]);
+  for (double step : {1e-6, 1e-3, 0.1})  // along the sliver's line, both sides of the surface
+    for (double side : {-1.0, 1.0})
+      for (const Vec3& on : {vertices[m], vertices[a] * 0.75 + vertices[b] * 0.25})
+        points.push_back(on + outward * (side * step));
+  expectSignsOfTheWindingNumber(split, points, "split icosphere");
+}
+
+TEST(PointDistance, OpenMeshRefusesSignedButAnswersUnsigned) {
+  const QueryMesh quad(primitives::quad());
+  EXPECT_FALSE(quad.closed());
+  try {
+    distances(quad, std::vector<Vec3>{{0, 0, 1}}, {.signedDistance = true});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("4 boundary"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(distance(quad, {0, 0, 1}).distance, 1.0);
+}
+
+TEST(PointDistance, BadInputThrows) {
+  const QueryMesh box(primitives::box());
+  const std::vector<Vec3> points = {{0, 0, 0}, {0, std::nan(""), 0}};
+  for (double epsilon : {0.0, -1.0, std::nan("")})
+    EXPECT_THROW(distances(box, points, {.epsilon = epsilon}), Error);
+  try {
+    distances(box, points);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("point 1 "), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(distance(box, {0, INFINITY, 0}), Error);
+  const std::vector<double> x = {0, 1}, y = {0, 1}, z = {0};
+  EXPECT_THROW(distances(box, x, y, z), Error);
+  std::vector<PointDistance> small(1);
+  EXPECT_THROW(distances(box, points, {}, small), Error);
+  EXPECT_TRUE(distances(box, std::vector<Vec3>{}).empty());
+  EXPECT_THROW(QueryMesh(Mesh({}, {})), Error);
+  EXPECT_THROW(contacts(box, points, INFINITY), Error);
+}
+
+TEST(PointDistance, StructureOfArraysGivesTheSameAnswers) {
+  const Mesh mesh = primitives::granulate(2);
+  const QueryMesh query(mesh);
+  const std::vector<Vec3> points = probes(mesh, 300, 19);
+  std::vector<double> x, y, z;
+  for (const Vec3& p : points) {
+    x.push_back(p.x);
+    y.push_back(p.y);
+    z.push_back(p.z);
+  }
+  const std::vector<PointDistance> a = distances(query, points, {.signedDistance = true});
+  const std::vector<PointDistance> b = distances(query, x, y, z, {.signedDistance = true});
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].distance, b[i].distance);
+    EXPECT_EQ(a[i].triangle, b[i].triangle);
+    EXPECT_EQ(a[i].inside, b[i].inside);
+  }
+}
+
+TEST(PointDistance, PointContactsAreThePointsWithinEpsilon) {
+  const Mesh mesh = primitives::icosphere(3);
+  const QueryMesh query(mesh);
+  const std::vector<Vec3> points = probes(mesh, 500, 23);
+  const double epsilon = 0.05;
+  const std::vector<ContactPoint> found = contacts(query, points, epsilon);
+  const std::vector<PointDistance> all = distances(query, points, {.signedDistance = true});
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!(all[i].distance < epsilon)) continue;
+    ASSERT_LT(k, found.size());
+    const ContactPoint& c = found[k++];
+    EXPECT_EQ(c.first, i);
+    EXPECT_EQ(c.second, all[i].triangle);
+    EXPECT_EQ(c.distance, all[i].distance);
+    EXPECT_EQ(c.overlap, all[i].inside);
+    EXPECT_NEAR(length(c.direction), 1.0, 1e-15);
+    EXPECT_EQ(c.x + c.normal, points[i]);
+    // The direction points from the surface to the point: outward for a point outside (off
+    // the surface by more than rounding: the probes include points exactly on faces).
+    if (c.distance > 1e-9) {
+      EXPECT_EQ(dot(c.direction, points[i]) > 0, !c.overlap) << i;
+    }
+  }
+  EXPECT_EQ(k, found.size());
+  EXPECT_GT(found.size(), 100u);
+}
+
+TEST(PointDistance, MeshContactsMarkPointsInsideBothMeshes) {
+  // A sphere pokes up through the bottom face (z = 0) of a box. Its triangles just above z = 0
+  // are inside the box and closer than 2ε to the bottom face without crossing it; below them,
+  // the contact point lies inside both meshes: an overlap that no triangle pair shows.
+  const Mesh box = primitives::box({4, 4, 2}, {0, 0, 1});
+  const Mesh sphere = primitives::icosphere(3, 1.0, {0.1, 0.05, -0.6});
+  const QueryMesh a(box), b(sphere);
+  const double epsilon = 0.05;
+  const std::vector<ContactPoint> flat = contacts(a.triangles(), b.triangles(), epsilon);
+  const std::vector<ContactPoint> full = contacts(a, b, epsilon);
+  ASSERT_EQ(flat.size(), full.size());
+  std::size_t insideBoth = 0, outside = 0;
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    ASSERT_EQ(full[k].first, flat[k].first);
+    ASSERT_EQ(full[k].second, flat[k].second);
+    if (flat[k].overlap) {
+      EXPECT_TRUE(full[k].overlap) << k;
+      continue;
+    }
+    const Vec3 x = full[k].x;
+    if (distance(a, x).distance < 1e-9 || distance(b, x).distance < 1e-9) continue;  // on one
+    const bool expected =
+        windingNumber(a.triangles(), x) > 0.5 && windingNumber(b.triangles(), x) > 0.5;
+    EXPECT_EQ(full[k].overlap, expected) << k;
+    (expected ? insideBoth : outside) += 1;
+  }
+  EXPECT_GT(insideBoth, 0u);
+  EXPECT_GT(outside, 0u);
+  // Open meshes have no inside: the marker is the triangles' intersection alone.
+  const QueryMesh floor(primitives::quad(4, 4));
+  const std::vector<ContactPoint> open = contacts(floor, b, epsilon);
+  const std::vector<ContactPoint> openFlat = contacts(floor.triangles(), b.triangles(), epsilon);
+  ASSERT_EQ(open.size(), openFlat.size());
+  for (std::size_t k = 0; k < open.size(); ++k)
+    EXPECT_EQ(open[k].overlap, openFlat[k].overlap);
+}
+
+TEST(PointDistance, SameAnswersForAnyThreadCountAndFromManyThreads) {
+  const Mesh mesh = io::load(kMeshes / "elephant.off");
+  const QueryMesh query(mesh);
+  const std::vector<Vec3> points = probes(mesh, 4000, 29);
+  omp_set_num_threads(1);
+  const std::vector<PointDistance> serial = distances(query, points, {.signedDistance = true});
+  omp_set_num_threads(2);
+  const auto same = [&](const std::vector<PointDistance>& other) {
+    ASSERT_EQ(other.size(), serial.size());
+    for (std::size_t i = 0; i < serial.size(); ++i) {
+      ASSERT_EQ(other[i].distance, serial[i].distance);
+      ASSERT_EQ(other[i].triangle, serial[i].triangle);
+      ASSERT_EQ(other[i].inside, serial[i].inside);
+    }
+  };
+  same(distances(query, points, {.signedDistance = true}));
+  std::vector<std::vector<PointDistance>> answers(4);
+  std::vector<std::thread> callers;
+  for (auto& answer : answers)
+    callers.emplace_back([&] { answer = distances(query, points, {.signedDistance = true}); });
+  for (std::thread& caller : callers)
+    caller.join();
+  for (const auto& answer : answers)
+    same(answer);
+}
+
+}  // namespace
+}  // namespace delta::contactdetection
