@@ -134,7 +134,7 @@ void run(const ContactOptions& options) {
   json.beginObject().value("method", options.method);
   if (!options.epsilon) {
     const contactdetection::MinimumDistance closest =
-        contactdetection::minimumDistance(queryA.triangles(), queryB.triangles(), solver);
+        contactdetection::minimumDistance(queryA, queryB, solver);
     const double querySeconds = clock.seconds();
     if (!options.json)
       std::printf("minimum distance %.17g between triangle %u of A and triangle %u of B%s\n",

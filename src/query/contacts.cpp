@@ -9,6 +9,7 @@
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
 
+#include "detail/dual_traversal.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
@@ -21,6 +22,13 @@ constexpr std::size_t kMaxTriangles = std::size_t{1} << 32;
 /// Tasks (one triangle against one block, at most kBlock kernel pairs, a few µs) per parallel
 /// chunk: enough to amortise the chunk's scratch and scheduling, few enough to balance.
 constexpr std::size_t kTaskGrain = 2;
+/// Leaf pairs (at most 8 × 8 kernel pairs) per parallel chunk in the prepared meshes' search.
+constexpr std::size_t kLeafGrain = 8;
+
+/// A triangle moved rigidly, each vertex as Mesh::transform moves it.
+Triangle transformed(const Triangle& t, const RigidTransform& motion) noexcept {
+  return {motion.apply(t.a), motion.apply(t.b), motion.apply(t.c)};
+}
 
 /// The boxes of consecutive blocks of kBlock triangles.
 std::vector<Aabb> blockBoxes(const TriangleSoA& mesh) {
@@ -146,29 +154,82 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver) {
-  // In tree order the 64-triangle blocks are spatially compact whatever the file's triangle order
-  // (a scattered order would leave every block box spanning the mesh); ids map back, then sort.
+  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
+    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  // Both trees are descended together down to pairs of leaves within reach (boxes grown by the
+  // slack, so no pair the kernel would find is dropped); then each triangle of the first leaf
+  // against the second leaf's eight. Moved meshes meet in the first one's prepared frame: the
+  // second's boxes and, leaf by leaf, its triangles are carried there; nothing is rebuilt.
   const detail::QueryMeshData &a = first.data(), &b = second.data();
-  std::vector<ContactPoint> found = contacts(a.sorted, b.sorted, epsilon, solver);
-  for (ContactPoint& contact : found) {
-    contact.first = a.order[contact.first];
-    contact.second = b.order[contact.second];
-  }
+  const bool moved = first.moved() || second.moved();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const std::vector<std::vector<Aabb>> secondLevels =
+      moved ? detail::movedLevels(b.levels, secondToFirst) : std::vector<std::vector<Aabb>>{};
+  const double reach = 2.0 * epsilon;
+  const std::vector<detail::LeafPair> leafPairs =
+      detail::leafPairsWithin(a.levels, moved ? secondLevels : b.levels, reach);
+
+  std::vector<std::vector<ContactPoint>> perChunk((leafPairs.size() + kLeafGrain - 1) / kLeafGrain);
+  parallelFor(0, leafPairs.size(), kLeafGrain, [&](std::size_t begin, std::size_t end) {
+    kernels::PairResults results(detail::kFanout);
+    TriangleSoA movedLeaf;
+    Triangle leafTriangles[detail::kFanout];
+    std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
+    for (std::size_t p = begin; p < end; ++p) {
+      const detail::LeafPair pair = leafPairs[p];
+      const std::size_t secondBegin = std::size_t{pair.second} * detail::kFanout;
+      const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
+      const Aabb& secondBox = (moved ? secondLevels : b.levels)[0][pair.second];
+      const TriangleSoA* leaf = &b.sorted;
+      std::size_t from = secondBegin, to = secondEnd;
+      if (moved) {
+        for (std::size_t k = secondBegin; k < secondEnd; ++k)
+          leafTriangles[k - secondBegin] = transformed(b.sorted.triangle(k), secondToFirst);
+        movedLeaf.assign(std::span(leafTriangles, secondEnd - secondBegin));
+        leaf = &movedLeaf, from = 0, to = secondEnd - secondBegin;
+      }
+      const std::size_t firstBegin = std::size_t{pair.first} * detail::kFanout;
+      const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
+      for (std::size_t i = firstBegin; i < firstEnd; ++i) {
+        const Triangle one = a.sorted.triangle(i);
+        if (apart(one.bounds(), secondBox, reach)) continue;
+        kernels::distances(solver, one, *leaf, from, to, results);
+        for (std::size_t k = 0; k < results.size(); ++k)
+          if (results.distanceSquared(k) < reach * reach)
+            out.push_back(contactPoint(one, leaf->triangle(from + k), results.p(k), results.q(k),
+                                       results.intersect(k), a.order[i], b.order[secondBegin + k]));
+      }
+    }
+    perChunk[begin / kLeafGrain] = std::move(out);
+  });
+  std::vector<ContactPoint> found;
+  for (const std::vector<ContactPoint>& some : perChunk)
+    found.insert(found.end(), some.begin(), some.end());
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
-  if (!first.closed() || !second.closed()) return found;
-  // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
-  const double limit = 4.0 * epsilon * epsilon;
-  const auto inside = [limit](const QueryMesh& mesh, const Vec3& x) {
-    const detail::Nearest nearest = detail::nearestTriangle(mesh.data(), x, limit);
-    return nearest.found() && detail::insideAt(mesh.data(), x, nearest);
-  };
-  parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i)
-      if (!found[i].overlap)
-        found[i].overlap = inside(first, found[i].x) && inside(second, found[i].x);
-  });
+
+  if (first.closed() && second.closed()) {
+    // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
+    const double limit = 4.0 * epsilon * epsilon;
+    const RigidTransform firstToSecond = secondToFirst.inverse();
+    const auto inside = [limit](const detail::QueryMeshData& mesh, const Vec3& x) {
+      const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
+      return nearest.found() && detail::insideAt(mesh, x, nearest);
+    };
+    parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        if (!found[i].overlap)
+          found[i].overlap = inside(a, found[i].x) &&
+                             inside(b, moved ? firstToSecond.apply(found[i].x) : found[i].x);
+    });
+  }
+  if (first.moved())
+    for (ContactPoint& contact : found) {
+      contact.x = first.pose().apply(contact.x);
+      contact.normal = first.pose().rotation.rotate(contact.normal);
+      contact.direction = first.pose().rotation.rotate(contact.direction);
+    }
   return found;
 }
 

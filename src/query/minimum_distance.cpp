@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <queue>
+#include <span>
 #include <vector>
 
 #include "delta/core/aabb.h"
@@ -12,6 +14,9 @@
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
 #include "delta/mesh/mesh.h"
+
+#include "detail/dual_traversal.h"
+#include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -289,6 +294,102 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
           best.p,
           best.q,
           best.intersect};
+}
+
+MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
+                                kernels::Solver solver) {
+  // Best first over pairs of nodes of the two prepared trees: the pair with the nearest boxes is
+  // opened next, and the search ends when the nearest remaining boxes are farther than the best
+  // pair found (strictly: equal boxes may still hold a tie with smaller ids). Moved meshes meet in
+  // the first one's prepared frame; the second's boxes and, leaf by leaf, its triangles are
+  // carried there. Serial: the search is short and its answer must not depend on threads.
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const std::vector<std::vector<Aabb>> movedLevels =
+      moved ? detail::movedLevels(b.levels, secondToFirst) : std::vector<std::vector<Aabb>>{};
+  const std::vector<std::vector<Aabb>>& secondLevels = moved ? movedLevels : b.levels;
+
+  struct Entry {
+    double bound;
+    std::uint32_t firstLevel, firstNode, secondLevel, secondNode;
+    bool operator>(const Entry& other) const noexcept { return bound > other.bound; }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+  const auto push = [&](std::uint32_t la, std::uint32_t na, std::uint32_t lb, std::uint32_t nb) {
+    open.push({distanceSquared(a.levels[la][na], secondLevels[lb][nb]), la, na, lb, nb});
+  };
+  push(static_cast<std::uint32_t>(a.levels.size() - 1), 0,
+       static_cast<std::uint32_t>(secondLevels.size() - 1), 0);
+
+  MinimumDistance best;
+  double bestSquared = std::numeric_limits<double>::infinity();
+  bool found = false;
+  kernels::PairResults results(detail::kFanout);
+  TriangleSoA movedLeaf;
+  Triangle leafTriangles[detail::kFanout];
+  while (!open.empty()) {
+    const Entry entry = open.top();
+    open.pop();
+    if (entry.bound > bestSquared) break;
+    if (entry.firstLevel > 0 && (entry.secondLevel == 0 || entry.firstLevel >= entry.secondLevel)) {
+      const std::size_t begin = std::size_t{entry.firstNode} * detail::kFanout;
+      const std::size_t end =
+          std::min(begin + detail::kFanout, a.levels[entry.firstLevel - 1].size());
+      for (std::size_t c = begin; c < end; ++c)
+        push(entry.firstLevel - 1, static_cast<std::uint32_t>(c), entry.secondLevel,
+             entry.secondNode);
+      continue;
+    }
+    if (entry.secondLevel > 0) {
+      const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
+      const std::size_t end =
+          std::min(begin + detail::kFanout, secondLevels[entry.secondLevel - 1].size());
+      for (std::size_t c = begin; c < end; ++c)
+        push(entry.firstLevel, entry.firstNode, entry.secondLevel - 1,
+             static_cast<std::uint32_t>(c));
+      continue;
+    }
+    // Two leaves: each triangle of the first against the second's (at most) eight.
+    const std::size_t secondBegin = std::size_t{entry.secondNode} * detail::kFanout;
+    const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
+    const TriangleSoA* leaf = &b.sorted;
+    std::size_t from = secondBegin, to = secondEnd;
+    if (moved) {
+      for (std::size_t k = secondBegin; k < secondEnd; ++k) {
+        const Triangle t = b.sorted.triangle(k);
+        leafTriangles[k - secondBegin] = {secondToFirst.apply(t.a), secondToFirst.apply(t.b),
+                                          secondToFirst.apply(t.c)};
+      }
+      movedLeaf.assign(std::span(leafTriangles, secondEnd - secondBegin));
+      leaf = &movedLeaf, from = 0, to = secondEnd - secondBegin;
+    }
+    const Aabb& secondBox = secondLevels[0][entry.secondNode];
+    const std::size_t firstBegin = std::size_t{entry.firstNode} * detail::kFanout;
+    const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
+    for (std::size_t i = firstBegin; i < firstEnd; ++i) {
+      const Triangle one = a.sorted.triangle(i);
+      if (distanceSquared(one.bounds(), secondBox) > bestSquared) continue;
+      kernels::distances(solver, one, *leaf, from, to, results);
+      for (std::size_t k = 0; k < results.size(); ++k) {
+        const double d = results.distanceSquared(k);
+        const std::uint32_t ia = a.order[i], ib = b.order[secondBegin + k];
+        const bool better =
+            d < bestSquared || (d == bestSquared && found &&
+                                (ia < best.first || (ia == best.first && ib < best.second)));
+        if (!better) continue;
+        bestSquared = d;
+        found = true;
+        best = {0.0, ia, ib, results.p(k), results.q(k), results.intersect(k)};
+      }
+    }
+  }
+  best.distance = std::sqrt(bestSquared);
+  if (first.moved()) {
+    best.p = first.pose().apply(best.p);
+    best.q = first.pose().apply(best.q);
+  }
+  return best;
 }
 
 }  // namespace delta::contactdetection

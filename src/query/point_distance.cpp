@@ -36,8 +36,11 @@ void validatePoints(std::size_t count, const PointAt& pointAt) {
                   ") has a non-finite coordinate");
 }
 
-PointDistance answer(const detail::QueryMeshData& data, const Vec3& point,
-                     const PointQuery& query) {
+/// One point's answer. A moved mesh is searched in the frame it was prepared in: the point goes
+/// in by the inverse pose, the closest point comes out by the pose (distances are unchanged).
+PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQuery& query) {
+  const detail::QueryMeshData& data = mesh.data();
+  const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
   const detail::Nearest nearest = detail::nearestTriangle(data, point, limit);
   PointDistance result;
@@ -48,7 +51,8 @@ PointDistance answer(const detail::QueryMeshData& data, const Vec3& point,
     return result;
   }
   result.distance = std::sqrt(nearest.distanceSquared);
-  result.closest = nearest.closest.closest;
+  result.closest =
+      mesh.moved() ? mesh.pose().apply(nearest.closest.closest) : nearest.closest.closest;
   result.triangle = nearest.triangle;
   if (query.signedDistance) result.inside = detail::insideAt(data, point, nearest);
   return result;
@@ -61,7 +65,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   validatePoints(count, pointAt);
   parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
-      out[i] = answer(mesh.data(), pointAt(i), query);
+      out[i] = answer(mesh, pointAt(i), query);
   });
 }
 
@@ -103,7 +107,7 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
 PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query) {
   validate(mesh, query);
   validatePoints(1, [&point](std::size_t) { return point; });
-  return answer(mesh.data(), point, query);
+  return answer(mesh, point, query);
 }
 
 std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> points,
@@ -122,8 +126,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
     contact.distance = near[i].distance;
     contact.direction = normalized(points[i] - near[i].closest);
     if (!(lengthSquared(contact.direction) > 0.5))
-      contact.direction =
-          normalized(data.triangles.triangle(near[i].triangle).areaVector() * data.orientation);
+      contact.direction = mesh.pose().rotation.rotate(
+          normalized(data.triangles.triangle(near[i].triangle).areaVector() * data.orientation));
     if (!(lengthSquared(contact.direction) > 0.5)) contact.direction = {0, 0, 1};
     contact.overlap = near[i].inside;
     contact.first = static_cast<std::uint32_t>(i);

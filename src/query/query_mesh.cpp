@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/mesh/mass_properties.h"
 
 #include "detail/query_mesh_data.h"
@@ -170,6 +171,18 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
     data->orientation = signedVolume(mesh) < 0.0 ? -1.0 : 1.0;
   }
   data_ = std::move(data);
+}
+
+QueryMesh& QueryMesh::transform(const RigidTransform& motion) {
+  if (!isFinite(motion.translation))
+    throw Error("QueryMesh::transform: translation " + toString(motion.translation) +
+                " is not finite");
+  const Quaternion& q = motion.rotation;
+  const RigidTransform unit{Quaternion::fromComponents(q.w, q.x, q.y, q.z), motion.translation};
+  pose_ = unit * pose_;
+  inversePose_ = pose_.inverse();
+  moved_ = true;
+  return *this;
 }
 
 std::size_t QueryMesh::size() const noexcept {

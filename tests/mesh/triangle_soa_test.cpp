@@ -69,5 +69,23 @@ TEST(TriangleSoA, IsASnapshotAndCopiesDeeply) {
   EXPECT_NE(copy.stream(0, 0), before.stream(0, 0));
 }
 
+TEST(TriangleSoA, TransformedIsTheFlattenedMovedMeshBitForBit) {
+  const Mesh mesh = randomMesh(37, 5);
+  const RigidTransform motion{Quaternion::fromAxisAngle({1, -2, 0.5}, 2.1), {1e3, -4, 0.25}};
+  const TriangleSoA moved = flatten(mesh).transformed(motion);
+  const TriangleSoA expected = flatten(Mesh(mesh).transform(motion));
+  ASSERT_EQ(moved.size(), expected.size());
+  ASSERT_EQ(moved.paddedSize(), expected.paddedSize());
+  for (int vertex = 0; vertex < 3; ++vertex)
+    for (int axis = 0; axis < 3; ++axis)
+      for (std::size_t i = 0; i < moved.paddedSize(); ++i) {
+        const double a = moved.stream(vertex, axis)[i], b = expected.stream(vertex, axis)[i];
+        if (i < moved.size())
+          ASSERT_EQ(a, b) << vertex << axis << i;
+        else
+          ASSERT_TRUE(std::isnan(a));
+      }
+}
+
 }  // namespace
 }  // namespace delta

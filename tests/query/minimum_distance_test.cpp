@@ -17,6 +17,7 @@
 #include "delta/kernels/triangle_batch.h"
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/primitives.h"
+#include "delta/query/query_mesh.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -222,31 +223,38 @@ TEST(MinimumDistance, PrunedSearchMatchesEveryPairOnAdversarialScenes) {
     const double size = scene.first.bounds().diagonal() + scene.second.bounds().diagonal();
     const double tolerance = 1e-12 * (size + maxAbs(scene.first.bounds().upper));
     const TriangleSoA first = flatten(scene.first), second = flatten(scene.second);
-    for (kernels::Solver solver : {kernels::Solver::Hybrid, kernels::Solver::BruteForce}) {
-      const std::string label = scene.name + ", " + kernels::name(solver);
-      const MinimumDistance actual = minimumDistance(first, second, solver);
-      EXPECT_NEAR(actual.distance, expected.distance, tolerance) << label;
-      EXPECT_EQ(actual.intersect, expected.intersect) << label;
-      const auto check = kernels::triangleDistanceBruteForce(scene.first.triangle(actual.first),
-                                                             scene.second.triangle(actual.second));
-      EXPECT_NEAR(std::sqrt(check.distanceSquared), expected.distance, tolerance) << label;
-      EXPECT_NEAR(distance(actual.p, actual.q), actual.distance, tolerance) << label;
-      if (solver == kernels::Solver::BruteForce) {
-        // every pair computed by the same scalar code: the reference to the bit
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(actual.distance),
-                  std::bit_cast<std::uint64_t>(expected.distance))
-            << label << ": " << actual.distance << " vs " << expected.distance;
-        EXPECT_EQ(actual.p, expected.p) << label;
-        EXPECT_EQ(actual.q, expected.q) << label;
+    const QueryMesh preparedFirst(scene.first), preparedSecond(scene.second);
+    for (kernels::Solver solver : {kernels::Solver::Hybrid, kernels::Solver::BruteForce})
+      for (bool prepared : {false, true}) {  // flattened blocks, and the QueryMesh trees
+        const std::string label =
+            scene.name + ", " + kernels::name(solver) + (prepared ? ", QueryMesh" : "");
+        const MinimumDistance actual = prepared
+                                           ? minimumDistance(preparedFirst, preparedSecond, solver)
+                                           : minimumDistance(first, second, solver);
+        EXPECT_NEAR(actual.distance, expected.distance, tolerance) << label;
+        EXPECT_EQ(actual.intersect, expected.intersect) << label;
+        const auto check = kernels::triangleDistanceBruteForce(
+            scene.first.triangle(actual.first), scene.second.triangle(actual.second));
+        EXPECT_NEAR(std::sqrt(check.distanceSquared), expected.distance, tolerance) << label;
+        EXPECT_NEAR(distance(actual.p, actual.q), actual.distance, tolerance) << label;
+        if (solver == kernels::Solver::BruteForce) {
+          // every pair computed by the same scalar code: the reference to the bit
+          EXPECT_EQ(std::bit_cast<std::uint64_t>(actual.distance),
+                    std::bit_cast<std::uint64_t>(expected.distance))
+              << label << ": " << actual.distance << " vs " << expected.distance;
+          EXPECT_EQ(actual.p, expected.p) << label;
+          EXPECT_EQ(actual.q, expected.q) << label;
+        }
+        if (solver == kernels::Solver::BruteForce || scene.exactTies || expected.intersect) {
+          EXPECT_EQ(actual.first, expected.first) << label;
+          EXPECT_EQ(actual.second, expected.second) << label;
+        }
+        // the same distance with the meshes swapped
+        const MinimumDistance swapped = prepared
+                                            ? minimumDistance(preparedSecond, preparedFirst, solver)
+                                            : minimumDistance(second, first, solver);
+        EXPECT_NEAR(swapped.distance, expected.distance, tolerance) << label << ", swapped";
       }
-      if (solver == kernels::Solver::BruteForce || scene.exactTies || expected.intersect) {
-        EXPECT_EQ(actual.first, expected.first) << label;
-        EXPECT_EQ(actual.second, expected.second) << label;
-      }
-      // the same distance with the meshes swapped
-      EXPECT_NEAR(minimumDistance(second, first, solver).distance, expected.distance, tolerance)
-          << label << ", swapped";
-    }
   }
 }
 

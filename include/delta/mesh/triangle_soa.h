@@ -1,8 +1,10 @@
 #pragma once
 
 #include <cstddef>
+#include <span>
 
 #include "delta/core/aligned_allocator.h"
+#include "delta/core/rotation.h"
 #include "delta/core/triangle.h"
 
 namespace delta {
@@ -49,6 +51,14 @@ class TriangleSoA {
   Triangle triangle(std::size_t index) const noexcept {
     return {vertex(0, index), vertex(1, index), vertex(2, index)};
   }
+
+  /// Fills the streams with `triangles` (in order), reusing the storage when it is large enough:
+  /// scratch for a few triangles moved into another frame, without an allocation per use.
+  void assign(std::span<const Triangle> triangles);
+
+  /// A copy with every vertex moved by `motion` (rotation, then translation), padding kept NaN:
+  /// O(n), for comparing meshes that are prepared once and then moved rigidly.
+  TriangleSoA transformed(const RigidTransform& motion) const;
 
   /// Bytes held on the heap.
   std::size_t memoryBytes() const noexcept { return data_.capacity() * sizeof(double); }

@@ -39,6 +39,12 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 /// meshes interpenetrate there. Inside is decided as by a signed point query
 /// (query/point_distance.h); a point on either surface is not inside.
 ///
+/// Found by descending both QueryMesh trees at once to the pairs of leaves whose boxes are within
+/// 2ε (work in proportion to the contact region, not to |first|·|second|), then, in parallel over
+/// those leaf pairs, each triangle of the first leaf against the second's. Moved meshes
+/// (QueryMesh::transform) are compared where they are: the second's boxes and, leaf by leaf, its
+/// triangles are carried into the first's prepared frame; nothing is rebuilt.
+///
 /// Throws and threading as the flattened form.
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver = kernels::Solver::Hybrid);

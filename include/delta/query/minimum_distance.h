@@ -5,6 +5,7 @@
 #include "delta/core/vec3.h"
 #include "delta/kernels/triangle_batch.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/query_mesh.h"
 
 namespace delta::contactdetection {
 
@@ -45,6 +46,16 @@ struct MinimumDistance {
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once.
 MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& second,
+                                kernels::Solver solver = kernels::Solver::Hybrid);
+
+/// The same for prepared meshes, by a best-first descent of both QueryMesh trees at once: node
+/// pairs are opened nearest boxes first and the search stops when the nearest remaining boxes
+/// are farther than the best pair found — no per-call sorting, the DEM case where meshes are
+/// prepared once and then moved (QueryMesh::transform): the second's boxes and, leaf by leaf,
+/// its triangles are carried into the first's prepared frame, and `p`, `q` come back where the
+/// meshes are. The same exact distance (to the kernels' rounding) and the same tie rule
+/// (smallest (first, second) ids among pairs at exactly the minimum). Runs on the calling thread.
+MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
                                 kernels::Solver solver = kernels::Solver::Hybrid);
 
 }  // namespace delta::contactdetection

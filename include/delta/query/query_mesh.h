@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "delta/core/aabb.h"
+#include "delta/core/rotation.h"
 #include "delta/mesh/mesh.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
@@ -29,22 +30,39 @@ struct QueryMeshData;
 /// signed queries and the "inside both meshes" overlap marker need. An inside-out closed mesh
 /// (negative signed volume) is handled: inside is where its winding number is −1.
 ///
+/// A QueryMesh can be moved rigidly (`transform`) in O(1): the tree, the pseudonormals and
+/// everything built from them move with it, nothing is rebuilt — queries carry points into the
+/// frame the mesh was prepared in and answers back out. Copies share the prepared data and each
+/// has its own pose, so particles of one shape in a DEM code share one QueryMesh's data. A
+/// motion that is not rigid (a scale, a stretch) needs a new QueryMesh from the moved Mesh.
+///
 /// Throws delta::Error for a mesh with no triangles.
 ///
-/// Threading: immutable after construction; any number of threads may query one QueryMesh at
-/// once. Copies share the immutable data (a copy costs a reference count).
+/// Threading: the prepared data is immutable and shared; any number of threads may query one
+/// QueryMesh (or copies of it) at once. `transform` changes only this object's pose: not while
+/// other threads query this same object. Copies cost a reference count.
 class QueryMesh {
  public:
   explicit QueryMesh(const Mesh& mesh);
 
+  /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose. O(1).
+  QueryMesh& transform(const RigidTransform& motion);
+  /// Where the mesh is: the map from the frame it was prepared in to where it is now.
+  const RigidTransform& pose() const noexcept { return pose_; }
+  /// The inverse of pose(): from world coordinates into the prepared frame.
+  const RigidTransform& inversePose() const noexcept { return inversePose_; }
+  /// Whether a transform has been applied (the pose is not the identity).
+  bool moved() const noexcept { return moved_; }
+
   /// The number of triangles.
   std::size_t size() const noexcept;
-  /// The flattened triangles in the mesh's order.
+  /// The flattened triangles in the mesh's order, in the frame the mesh was prepared in (apply
+  /// pose() for where they are now).
   const TriangleSoA& triangles() const noexcept;
   const Topology& topology() const noexcept;
   /// Closed and consistently oriented: signed distances and inside tests are defined.
   bool closed() const noexcept;
-  /// The box of all vertices.
+  /// The box of all vertices, in the prepared frame.
   const Aabb& bounds() const noexcept;
   /// Bytes held on the heap (triangles twice: in mesh order and in tree order; tree boxes;
   /// pseudonormals of closed meshes).
@@ -55,6 +73,9 @@ class QueryMesh {
 
  private:
   std::shared_ptr<const detail::QueryMeshData> data_;
+  RigidTransform pose_;
+  RigidTransform inversePose_;
+  bool moved_ = false;
 };
 
 }  // namespace delta

@@ -1,0 +1,130 @@
+#include "delta/query/query_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/io/mesh_io.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/contacts.h"
+#include "delta/query/minimum_distance.h"
+#include "delta/query/point_distance.h"
+
+namespace delta::contactdetection {
+namespace {
+
+double unit(std::mt19937_64& random) {
+  return static_cast<double>(random() >> 11) * 0x1p-53;
+}
+
+std::vector<Vec3> pointsAround(const Aabb& box, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  const Vec3 lower = box.lower - box.extent() * 0.2, size = box.extent() * 1.4;
+  std::vector<Vec3> points(count);
+  for (Vec3& p : points)
+    p = lower + Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)};
+  return points;
+}
+
+const RigidTransform kFirstMotion{Quaternion::fromAxisAngle({1, 2, 3}, 0.9), {1e3, -20, 7}};
+const RigidTransform kSecondMotion{Quaternion::fromAxisAngle({0, -1, 1}, 2.5), {3, 1e-3, -2}};
+
+TEST(QueryMesh, MovingItIsMovingTheMesh) {
+  const Mesh mesh = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
+  const QueryMesh prepared(mesh);
+  QueryMesh moved = prepared;
+  moved.transform(kFirstMotion).transform(kSecondMotion);  // two moves compose
+  EXPECT_TRUE(moved.moved());
+  EXPECT_FALSE(prepared.moved());  // a copy has its own pose
+  Mesh movedMesh = mesh;
+  movedMesh.transform(kFirstMotion).transform(kSecondMotion);
+  const QueryMesh rebuilt(movedMesh);
+  const std::vector<Vec3> points = pointsAround(rebuilt.bounds(), 3000, 3);
+  const std::vector<PointDistance> a = distances(moved, points, {.signedDistance = true});
+  const std::vector<PointDistance> b = distances(rebuilt, points, {.signedDistance = true});
+  const double size = movedMesh.bounds().diagonal();
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ASSERT_NEAR(a[i].distance, b[i].distance, 1e-12 * size) << i;
+    // The closest point itself may differ where two triangles tie (rounding picks either).
+    ASSERT_NEAR(distance(points[i], a[i].closest), a[i].distance, 1e-12 * size) << i;
+    ASSERT_TRUE(b[i].distance <= 1e-9 * size || a[i].inside == b[i].inside) << i;
+    inside += b[i].inside;
+  }
+  EXPECT_GT(inside, 0u);
+  // Moving back restores the prepared frame (to rounding).
+  QueryMesh back = moved;
+  back.transform(moved.pose().inverse());
+  const PointDistance home = distance(back, points[0]), original = distance(prepared, points[0]);
+  EXPECT_NEAR(home.distance, original.distance, 1e-12 * size);
+  EXPECT_EQ(home.triangle, original.triangle);
+}
+
+TEST(QueryMesh, MovedMeshesGiveTheContactsOfTheMovedMeshes) {
+  const Mesh shape = primitives::granulate(11, {1, 0.7, 0.5}, 120);
+  QueryMesh a(shape), b(shape);  // one shape, two particles
+  const RigidTransform placeA{Quaternion::fromAxisAngle({1, 1, 0}, 0.3), {10, 20, 30}};
+  const RigidTransform placeB{Quaternion::fromAxisAngle({0, 1, 1}, 1.7), {11.2, 20.1, 30.05}};
+  a.transform(placeA);
+  b.transform(placeB);
+  const QueryMesh a2(Mesh(shape).transform(placeA)), b2(Mesh(shape).transform(placeB));
+  const double epsilon = 0.02;
+  const std::vector<ContactPoint> moved = contacts(a, b, epsilon);
+  const std::vector<ContactPoint> rebuilt = contacts(a2, b2, epsilon);
+  ASSERT_GT(rebuilt.size(), 3u);
+  // A pair within rounding of 2ε could fall either way; none does here (the counts would differ).
+  ASSERT_EQ(moved.size(), rebuilt.size());
+  for (std::size_t k = 0; k < moved.size(); ++k) {
+    EXPECT_EQ(moved[k].first, rebuilt[k].first);
+    EXPECT_EQ(moved[k].second, rebuilt[k].second);
+    EXPECT_NEAR(distance(moved[k].x, rebuilt[k].x), 0.0, 1e-12 * 40);
+    EXPECT_NEAR(moved[k].distance, rebuilt[k].distance, 1e-12 * 40);
+    EXPECT_NEAR(distance(moved[k].direction, rebuilt[k].direction), 0.0, 1e-9);
+    EXPECT_EQ(moved[k].overlap, rebuilt[k].overlap);
+  }
+  const MinimumDistance m1 = minimumDistance(a, b), m2 = minimumDistance(a2, b2);
+  EXPECT_NEAR(m1.distance, m2.distance, 1e-12 * 40);
+  EXPECT_NEAR(distance(m1.p, m2.p), 0.0, 1e-11 * 40);
+  b.transform(RigidTransform::translationBy({3, 0, 0}));  // apart now
+  EXPECT_TRUE(contacts(a, b, epsilon).empty());
+  EXPECT_GT(minimumDistance(a, b).distance, 1.0);
+}
+
+TEST(QueryMesh, RejectsNonFiniteMotionsAndEmptyMeshes) {
+  QueryMesh box(primitives::box());
+  EXPECT_THROW(box.transform(RigidTransform::translationBy({0, NAN, 0})), Error);
+  EXPECT_THROW(box.transform({Quaternion{0, 0, 0, 0}, {}}), Error);
+  EXPECT_FALSE(box.moved());
+  EXPECT_THROW(QueryMesh(Mesh({}, {})), Error);
+}
+
+TEST(QueryMesh, ManyThreadsQueryCopiesWithTheirOwnPoses) {
+  const QueryMesh shape(primitives::icosphere(3));
+  const std::vector<Vec3> points = pointsAround(shape.bounds(), 2000, 9);
+  std::vector<std::vector<PointDistance>> answers(4);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < answers.size(); ++t)
+    threads.emplace_back([&, t] {
+      QueryMesh particle = shape;  // shares the prepared data
+      particle.transform(RigidTransform::translationBy({double(t), 0, 0}));
+      std::vector<Vec3> shifted = points;
+      for (Vec3& p : shifted)
+        p.x += double(t);
+      answers[t] = distances(particle, shifted, {.signedDistance = true});
+    });
+  for (std::thread& thread : threads)
+    thread.join();
+  for (std::size_t t = 1; t < answers.size(); ++t)
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      // Shifted points round differently, so a tie may go to another triangle: distances only.
+      ASSERT_NEAR(answers[t][i].distance, answers[0][i].distance, 1e-14) << t << " " << i;
+      ASSERT_EQ(answers[t][i].inside, answers[0][i].inside) << t << " " << i;
+    }
+}
+
+}  // namespace
+}  // namespace delta::contactdetection
