@@ -12,6 +12,7 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev
   libcgal-demo assimp-testmodels
   libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
+  libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
 )
 missing=()
 for package in "${packages[@]}"; do

@@ -22,13 +22,6 @@ constexpr std::size_t kMaxTriangles = std::size_t{1} << 32;
 /// Tasks (one triangle against one block, at most kBlock kernel pairs, a few µs) per parallel
 /// chunk: enough to amortise the chunk's scratch and scheduling, few enough to balance.
 constexpr std::size_t kTaskGrain = 2;
-/// Leaf pairs (at most 8 × 8 kernel pairs) per parallel chunk in the prepared meshes' search.
-constexpr std::size_t kLeafGrain = 8;
-
-/// A triangle moved rigidly, each vertex as Mesh::transform moves it.
-Triangle transformed(const Triangle& t, const RigidTransform& motion) noexcept {
-  return {motion.apply(t.a), motion.apply(t.b), motion.apply(t.c)};
-}
 
 /// The boxes of consecutive blocks of kBlock triangles.
 std::vector<Aabb> blockBoxes(const TriangleSoA& mesh) {
@@ -163,47 +156,67 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const std::vector<std::vector<Aabb>> secondLevels =
-      moved ? detail::movedLevels(b.levels, secondToFirst) : std::vector<std::vector<Aabb>>{};
+      moved ? detail::movedLevels(b.levels, motion) : std::vector<std::vector<Aabb>>{};
   const double reach = 2.0 * epsilon;
   const std::vector<detail::LeafPair> leafPairs =
       detail::leafPairsWithin(a.levels, moved ? secondLevels : b.levels, reach);
 
-  std::vector<std::vector<ContactPoint>> perChunk((leafPairs.size() + kLeafGrain - 1) / kLeafGrain);
-  parallelFor(0, leafPairs.size(), kLeafGrain, [&](std::size_t begin, std::size_t end) {
-    kernels::PairResults results(detail::kFanout);
-    TriangleSoA movedLeaf;
-    Triangle leafTriangles[detail::kFanout];
-    std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
-    for (std::size_t p = begin; p < end; ++p) {
-      const detail::LeafPair pair = leafPairs[p];
-      const std::size_t secondBegin = std::size_t{pair.second} * detail::kFanout;
-      const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
-      const Aabb& secondBox = (moved ? secondLevels : b.levels)[0][pair.second];
-      const TriangleSoA* leaf = &b.sorted;
-      std::size_t from = secondBegin, to = secondEnd;
-      if (moved) {
-        for (std::size_t k = secondBegin; k < secondEnd; ++k)
-          leafTriangles[k - secondBegin] = transformed(b.sorted.triangle(k), secondToFirst);
-        movedLeaf.assign(std::span(leafTriangles, secondEnd - secondBegin));
-        leaf = &movedLeaf, from = 0, to = secondEnd - secondBegin;
-      }
-      const std::size_t firstBegin = std::size_t{pair.first} * detail::kFanout;
+  // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
+  // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
+  std::vector<detail::LeafPair> pairs = leafPairs;
+  std::sort(pairs.begin(), pairs.end(), [](const detail::LeafPair& x, const detail::LeafPair& y) {
+    return x.first != y.first ? x.first < y.first : x.second < y.second;
+  });
+  std::vector<std::size_t> groups;  // where each first leaf's run of pairs starts
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    if (p == 0 || pairs[p].first != pairs[p - 1].first) groups.push_back(p);
+  groups.push_back(pairs.size());
+
+  std::vector<std::vector<ContactPoint>> perGroup(groups.size() - 1);
+  parallelFor(0, groups.size() - 1, 1, [&](std::size_t begin, std::size_t end) {
+    kernels::PairResults results(kBlock);
+    TriangleSoA batch;
+    std::vector<Triangle> candidates;
+    std::vector<std::uint32_t> candidateIds;
+    for (std::size_t g = begin; g < end; ++g) {
+      std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
+      const std::uint32_t firstLeaf = pairs[groups[g]].first;
+      const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
       const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
       for (std::size_t i = firstBegin; i < firstEnd; ++i) {
         const Triangle one = a.sorted.triangle(i);
-        if (apart(one.bounds(), secondBox, reach)) continue;
-        kernels::distances(solver, one, *leaf, from, to, results);
+        const Aabb box = one.bounds();
+        candidates.clear();
+        candidateIds.clear();
+        for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {
+          const std::uint32_t secondLeaf = pairs[p].second;
+          if (apart(box, (moved ? secondLevels : b.levels)[0][secondLeaf], reach)) continue;
+          const std::size_t from = std::size_t{secondLeaf} * detail::kFanout;
+          const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
+          for (std::size_t k = from; k < to; ++k) {
+            const Triangle other =
+                moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+            if (apart(box, other.bounds(), reach)) continue;  // most leaf neighbours are
+            candidates.push_back(other);
+            candidateIds.push_back(b.order[k]);
+          }
+        }
+        if (candidates.empty()) continue;
+        batch.assign(candidates);
+        results.reserve(batch.size());  // the kernels fill at most the capacity
+        kernels::distances(solver, one, batch, 0, batch.size(), results);
         for (std::size_t k = 0; k < results.size(); ++k)
           if (results.distanceSquared(k) < reach * reach)
-            out.push_back(contactPoint(one, leaf->triangle(from + k), results.p(k), results.q(k),
-                                       results.intersect(k), a.order[i], b.order[secondBegin + k]));
+            out.push_back(contactPoint(one, candidates[k], results.p(k), results.q(k),
+                                       results.intersect(k), a.order[i], candidateIds[k]));
       }
+      perGroup[g] = std::move(out);
     }
-    perChunk[begin / kLeafGrain] = std::move(out);
   });
   std::vector<ContactPoint> found;
-  for (const std::vector<ContactPoint>& some : perChunk)
+  for (const std::vector<ContactPoint>& some : perGroup)
     found.insert(found.end(), some.begin(), some.end());
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
@@ -212,7 +225,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   if (first.closed() && second.closed()) {
     // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
     const double limit = 4.0 * epsilon * epsilon;
-    const RigidTransform firstToSecond = secondToFirst.inverse();
+    const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
     const auto inside = [limit](const detail::QueryMeshData& mesh, const Vec3& x) {
       const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
       return nearest.found() && detail::insideAt(mesh, x, nearest);

@@ -305,9 +305,9 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   // carried there. Serial: the search is short and its answer must not depend on threads.
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
   const std::vector<std::vector<Aabb>> movedLevels =
-      moved ? detail::movedLevels(b.levels, secondToFirst) : std::vector<std::vector<Aabb>>{};
+      moved ? detail::movedLevels(b.levels, motion) : std::vector<std::vector<Aabb>>{};
   const std::vector<std::vector<Aabb>>& secondLevels = moved ? movedLevels : b.levels;
 
   struct Entry {
@@ -357,9 +357,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     std::size_t from = secondBegin, to = secondEnd;
     if (moved) {
       for (std::size_t k = secondBegin; k < secondEnd; ++k) {
-        const Triangle t = b.sorted.triangle(k);
-        leafTriangles[k - secondBegin] = {secondToFirst.apply(t.a), secondToFirst.apply(t.b),
-                                          secondToFirst.apply(t.c)};
+        leafTriangles[k - secondBegin] = motion.apply(b.sorted.triangle(k));
       }
       movedLeaf.assign(std::span(leafTriangles, secondEnd - secondBegin));
       leaf = &movedLeaf, from = 0, to = secondEnd - secondBegin;

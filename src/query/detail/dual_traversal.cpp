@@ -17,9 +17,14 @@ struct NodePair {
 
 }  // namespace
 
+MatrixMotion matrixMotion(const RigidTransform& motion) {
+  const Quaternion& q = motion.rotation;
+  return {Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix(), motion.translation};
+}
+
 std::vector<std::vector<Aabb>> movedLevels(const std::vector<std::vector<Aabb>>& levels,
-                                           const RigidTransform& motion) {
-  const Mat3 rotation = motion.rotation.matrix();
+                                           const MatrixMotion& motion) {
+  const Mat3& rotation = motion.rotation;
   Mat3 magnitude = rotation;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
