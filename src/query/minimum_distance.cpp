@@ -326,7 +326,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   double bestSquared = std::numeric_limits<double>::infinity();
   bool found = false;
   kernels::PairResults results(detail::kFanout);
-  TriangleSoA movedLeaf;
+  TriangleSoA batch;
   Triangle leafTriangles[detail::kFanout];
   while (!open.empty()) {
     const Entry entry = open.top();
@@ -350,28 +350,34 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
              static_cast<std::uint32_t>(c));
       continue;
     }
-    // Two leaves: each triangle of the first against the second's (at most) eight.
+    // Two leaves: each triangle of the first against those of the second's (at most) eight
+    // whose boxes (grown by the slack: rounding never drops a tie) are not farther than the best.
     const std::size_t secondBegin = std::size_t{entry.secondNode} * detail::kFanout;
     const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
-    const TriangleSoA* leaf = &b.sorted;
-    std::size_t from = secondBegin, to = secondEnd;
-    if (moved) {
-      for (std::size_t k = secondBegin; k < secondEnd; ++k) {
-        leafTriangles[k - secondBegin] = motion.apply(b.sorted.triangle(k));
-      }
-      movedLeaf.assign(std::span(leafTriangles, secondEnd - secondBegin));
-      leaf = &movedLeaf, from = 0, to = secondEnd - secondBegin;
-    }
+    std::size_t count = 0;
+    for (std::size_t k = secondBegin; k < secondEnd; ++k)
+      leafTriangles[count++] = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
     const Aabb& secondBox = secondLevels[0][entry.secondNode];
     const std::size_t firstBegin = std::size_t{entry.firstNode} * detail::kFanout;
     const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
     for (std::size_t i = firstBegin; i < firstEnd; ++i) {
       const Triangle one = a.sorted.triangle(i);
-      if (distanceSquared(one.bounds(), secondBox) > bestSquared) continue;
-      kernels::distances(solver, one, *leaf, from, to, results);
+      const Aabb box = one.bounds().grown(a.slack);
+      if (distanceSquared(box, secondBox) > bestSquared) continue;
+      Triangle candidates[detail::kFanout];
+      std::uint32_t ids[detail::kFanout];
+      std::size_t kept = 0;
+      for (std::size_t k = 0; k < count; ++k)
+        if (!(distanceSquared(box, leafTriangles[k].bounds()) > bestSquared)) {
+          candidates[kept] = leafTriangles[k];
+          ids[kept++] = b.order[secondBegin + k];
+        }
+      if (kept == 0) continue;
+      batch.assign(std::span(candidates, kept));
+      kernels::distances(solver, one, batch, 0, kept, results);
       for (std::size_t k = 0; k < results.size(); ++k) {
         const double d = results.distanceSquared(k);
-        const std::uint32_t ia = a.order[i], ib = b.order[secondBegin + k];
+        const std::uint32_t ia = a.order[i], ib = ids[k];
         const bool better =
             d < bestSquared || (d == bestSquared && found &&
                                 (ia < best.first || (ia == best.first && ib < best.second)));
