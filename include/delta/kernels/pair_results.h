@@ -15,6 +15,8 @@ namespace delta::kernels {
 /// penaltyDistances, hybridDistances), structure of arrays: one stream per quantity, each
 /// 64-byte aligned. The caller allocates it once (`PairResults results(n)`) and reuses it, so no
 /// solver allocates; a call writes pairs [0, size()) and leaves the rest of the capacity as it was.
+/// The solvers are noexcept and never grow it: a call over more pairs than capacity() computes
+/// only the first capacity() of them (size() says how many) — reserve the batch size first.
 ///
 /// Per pair i: the squared distance, the closest points p (on the first triangle) and q (on the
 /// second), `intersect`, and, for the penalty solver, a certified error bound, the Newton step and
