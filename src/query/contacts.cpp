@@ -160,12 +160,11 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const std::vector<std::vector<Aabb>> secondLevels =
       moved ? detail::movedLevels(b.levels, motion) : std::vector<std::vector<Aabb>>{};
   const double reach = 2.0 * epsilon;
-  const std::vector<detail::LeafPair> leafPairs =
+  std::vector<detail::LeafPair> pairs =
       detail::leafPairsWithin(a.levels, moved ? secondLevels : b.levels, reach);
 
   // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
   // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
-  std::vector<detail::LeafPair> pairs = leafPairs;
   std::sort(pairs.begin(), pairs.end(), [](const detail::LeafPair& x, const detail::LeafPair& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
