@@ -16,6 +16,7 @@
 #include "delta/mesh/mesh.h"
 
 #include "detail/dual_traversal.h"
+#include "detail/morton.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
@@ -76,44 +77,11 @@ void lowerTo(std::atomic<double>& bound, double value) noexcept {
   }
 }
 
-/// The 21 low bits of `x` spread to every third bit of a 63-bit Morton code.
-std::uint64_t spreadBits(std::uint64_t x) noexcept {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-/// The triangle ids of `mesh` in Morton order of their centroids within the mesh's box (ties,
-/// such as repeated triangles, by id): consecutive runs are spatially compact.
+/// The triangle ids of `mesh` in Morton order of their centroids (detail/morton.h): consecutive
+/// runs are spatially compact.
 std::vector<std::uint32_t> mortonOrder(const TriangleSoA& mesh) {
-  std::vector<Vec3> centroids(mesh.size());
-  Aabb box;
-  for (std::size_t i = 0; i < mesh.size(); ++i) {
-    centroids[i] = mesh.triangle(i).centroid();
-    box.extend(centroids[i]);
-  }
-  constexpr double kCells = 2097151.0;  // 2²¹ − 1
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(mesh.size());
-  for (std::size_t i = 0; i < mesh.size(); ++i) {
-    std::uint64_t code = 0;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      const double extent = box.upper[axis] - box.lower[axis];
-      double unit = extent > 0.0 ? (centroids[i][axis] - box.lower[axis]) / extent : 0.0;
-      if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
-      const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
-      code |= spreadBits(cell) << axis;
-    }
-    keys[i] = {code, static_cast<std::uint32_t>(i)};
-  }
-  std::sort(keys.begin(), keys.end());
-  std::vector<std::uint32_t> order(mesh.size());
-  for (std::size_t i = 0; i < mesh.size(); ++i)
-    order[i] = keys[i].second;
-  return order;
+  return detail::mortonOrder(mesh.size(),
+                             [&mesh](std::size_t i) { return mesh.triangle(i).centroid(); });
 }
 
 /// The second mesh cut into spatially compact blocks: its triangles in Morton order, flattened

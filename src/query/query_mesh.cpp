@@ -84,6 +84,33 @@ std::vector<std::vector<Aabb>> buildLevels(const TriangleSoA& sorted, double sla
   return levels;
 }
 
+/// A double rounded to a float no larger (`down`) or no smaller than it.
+float roundedOutward(double value, bool down) noexcept {
+  const float f = static_cast<float>(value);
+  if (down && static_cast<double>(f) > value)
+    return std::nextafter(f, -std::numeric_limits<float>::infinity());
+  if (!down && static_cast<double>(f) < value)
+    return std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// The point queries' copy of the tree (query_mesh_data.h): per inner node its children's
+/// boxes, per leaf its triangles' boxes grown by the slack.
+void buildOctets(detail::QueryMeshData& data) {
+  data.childOctets.resize(data.levels.size() - 1);
+  for (std::size_t l = 0; l + 1 < data.levels.size(); ++l) {
+    data.childOctets[l].resize(data.levels[l + 1].size());
+    for (std::size_t i = 0; i < data.levels[l + 1].size(); ++i)
+      data.childOctets[l][i] = detail::octetOf(data.levels[l], i * detail::kFanout);
+  }
+  std::vector<Aabb> triangleBoxes(data.sorted.size());
+  for (std::size_t k = 0; k < triangleBoxes.size(); ++k)
+    triangleBoxes[k] = data.sorted.triangle(k).bounds().grown(data.slack);
+  data.leafOctets.resize(data.levels[0].size());
+  for (std::size_t i = 0; i < data.leafOctets.size(); ++i)
+    data.leafOctets[i] = detail::octetOf(triangleBoxes, i * detail::kFanout);
+}
+
 /// The angle of a triangle at corner `from`, between the edges to `next` and `previous`.
 double cornerAngle(const Vec3& from, const Vec3& next, const Vec3& previous) noexcept {
   const Vec3 e1 = next - from, e2 = previous - from;
@@ -144,6 +171,26 @@ std::vector<std::array<Vec3, 6>> pseudonormals(const Mesh& mesh,
 
 }  // namespace
 
+namespace detail {
+
+BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first) noexcept {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  BoxOctet octet;
+  for (std::size_t i = 0; i < kFanout; ++i) {
+    const bool present = first + i < boxes.size() && !boxes[first + i].empty();
+    const Aabb box = present ? boxes[first + i] : Aabb{};
+    octet.lowerX[i] = present ? roundedOutward(box.lower.x, true) : kInfinity;
+    octet.lowerY[i] = present ? roundedOutward(box.lower.y, true) : kInfinity;
+    octet.lowerZ[i] = present ? roundedOutward(box.lower.z, true) : kInfinity;
+    octet.upperX[i] = present ? roundedOutward(box.upper.x, false) : -kInfinity;
+    octet.upperY[i] = present ? roundedOutward(box.upper.y, false) : -kInfinity;
+    octet.upperZ[i] = present ? roundedOutward(box.upper.z, false) : -kInfinity;
+  }
+  return octet;
+}
+
+}  // namespace detail
+
 QueryMesh::QueryMesh(const Mesh& mesh) {
   if (mesh.triangleCount() == 0) throw Error("QueryMesh: the mesh has no triangles");
   if (mesh.triangleCount() >= std::numeric_limits<std::uint32_t>::max())
@@ -164,6 +211,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   data->slack = 0x1p-36 * (std::max(maxAbs(data->bounds.lower), maxAbs(data->bounds.upper)) +
                            data->bounds.diagonal());
   data->levels = buildLevels(data->sorted, data->slack);
+  buildOctets(*data);
   data->topology = analyzeTopology(mesh);
   data->closed = data->topology.closed && data->topology.consistentlyOriented;
   if (data->closed) {
@@ -207,6 +255,9 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
                       data_->pseudonormals.capacity() * sizeof(std::array<Vec3, 6>);
   for (const std::vector<Aabb>& level : data_->levels)
     bytes += level.capacity() * sizeof(Aabb);
+  for (const detail::BoxOctets& level : data_->childOctets)
+    bytes += level.capacity() * sizeof(detail::BoxOctet);
+  bytes += data_->leafOctets.capacity() * sizeof(detail::BoxOctet);
   return bytes;
 }
 

@@ -82,7 +82,14 @@ void expectSameAsAllTriangles(const Mesh& mesh, const std::vector<Vec3>& points,
 TEST(PointDistance, SameAsEveryTriangleOnPrimitives) {
   Mesh far = primitives::granulate(5, {1, 0.5, 0.2});
   far.translate({1e6, -1e6, 3e5});
+  // Beyond single precision (the tree's float boxes become infinite) and finer than its spacing
+  // (a float box there is 2⁻⁴ wide around a triangle 10⁻³ across): pruning loosens, answers not.
+  Mesh beyondFloat = primitives::granulate(8, {1, 2, 3});
+  beyondFloat.translate({1e39, -2e39, 0});
+  const Mesh finerThanFloat = primitives::icosphere(2, 1e-3, {1e6 + 0.01, 3e6, -1e6});
   const std::pair<const char*, Mesh> meshes[] = {
+      {"granulate at 1e39", beyondFloat},
+      {"icosphere of radius 1e-3 at 1e6", finerThanFloat},
       {"icosphere", primitives::icosphere(3)},
       {"box (ties on every face)", primitives::box({1, 2, 3})},
       {"cylinder", primitives::cylinder(0.5, 2, 17)},
@@ -97,6 +104,27 @@ TEST(PointDistance, SameAsEveryTriangleOnRealMeshes) {
   for (const char* file : {"fandisk.off", "elephant.off", "cube-meshed.off"}) {
     const Mesh mesh = io::load(kMeshes / file);
     expectSameAsAllTriangles(mesh, probes(mesh, 300, 11), file);
+  }
+}
+
+TEST(PointDistance, BatchOrderDoesNotChangeAnswers) {
+  // Large batches are answered along a Morton curve of their points; every answer must be the
+  // one the point gets alone.
+  const QueryMesh mesh(io::load(kMeshes / "elephant.off"));
+  const Aabb box = mesh.bounds();
+  std::mt19937_64 random(17);
+  std::uniform_real_distribution<double> unit(-0.1, 1.1);
+  std::vector<Vec3> points(5000);
+  const Vec3 size = box.upper - box.lower;
+  for (Vec3& p : points)
+    p = box.lower + Vec3{unit(random) * size.x, unit(random) * size.y, unit(random) * size.z};
+  const std::vector<PointDistance> batch = distances(mesh, points, {.signedDistance = true});
+  for (std::size_t i = 0; i < points.size(); i += 7) {
+    const PointDistance alone = distance(mesh, points[i], {.signedDistance = true});
+    ASSERT_EQ(batch[i].distance, alone.distance) << i;
+    ASSERT_EQ(batch[i].triangle, alone.triangle) << i;
+    ASSERT_EQ(batch[i].closest, alone.closest) << i;
+    ASSERT_EQ(batch[i].inside, alone.inside) << i;
   }
 }
 

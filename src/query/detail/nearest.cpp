@@ -21,31 +21,26 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
          (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
 }
 
-/// The triangles [first, last) of a leaf, nearest box first: most are farther than the best
-/// already found by their own box (grown by the slack), a cheap bound that skips the kernel.
-void visitLeaf(const QueryMeshData& mesh, const Vec3& point, std::size_t first, std::size_t last,
+/// The triangles of leaf `leaf`, nearest box first: most are farther than the best already
+/// found by their own box (grown by the slack), a cheap bound that skips the kernel.
+void visitLeaf(const QueryMeshData& mesh, const Vec3& point, std::size_t leaf,
                Nearest& best) noexcept {
-  struct Candidate {
-    double bound;
-    std::size_t k;
-    Triangle triangle;
-  };
-  Candidate candidates[kFanout];
+  double bounds[kFanout];
+  distancesSquared(mesh.leafOctets[leaf], point, bounds);
+  std::uint32_t candidates[kFanout];
   std::size_t count = 0;
-  for (std::size_t k = first; k < last; ++k) {
-    const Triangle triangle = mesh.sorted.triangle(k);
-    const double bound = distanceSquared(point, triangle.bounds().grown(mesh.slack));
-    if (bound > best.distanceSquared) continue;
-    std::size_t at = count++;  // insertion into ascending order
-    for (; at > 0 && candidates[at - 1].bound > bound; --at)
+  for (std::uint32_t i = 0; i < kFanout; ++i) {
+    if (bounds[i] > best.distanceSquared) continue;  // also the empty slots past the last triangle
+    std::size_t at = count++;                        // insertion into ascending order
+    for (; at > 0 && bounds[candidates[at - 1]] > bounds[i]; --at)
       candidates[at] = candidates[at - 1];
-    candidates[at] = {bound, k, triangle};
+    candidates[at] = i;
   }
   for (std::size_t c = 0; c < count; ++c) {
-    if (candidates[c].bound > best.distanceSquared) break;
+    if (bounds[candidates[c]] > best.distanceSquared) break;
+    const std::size_t k = leaf * kFanout + candidates[c];
     const kernels::PointTriangleResult r =
-        kernels::closestPointOnTriangle(point, candidates[c].triangle);
-    const std::size_t k = candidates[c].k;
+        kernels::closestPointOnTriangle(point, mesh.sorted.triangle(k));
     if (better(r.distanceSquared, mesh.order[k], best)) {
       best.distanceSquared = r.distanceSquared;
       best.triangle = mesh.order[k];
@@ -72,23 +67,22 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
   while (top > 0) {
     const Pending entry = stack[--top];
     if (entry.bound > best.distanceSquared) continue;
-    const std::size_t first = std::size_t{entry.node} * kFanout;
     if (entry.level == 0) {
-      visitLeaf(mesh, point, first, std::min(first + kFanout, mesh.sorted.size()), best);
+      visitLeaf(mesh, point, entry.node, best);
       continue;
     }
-    const std::vector<Aabb>& children = mesh.levels[entry.level - 1];
-    const std::size_t last = std::min(first + kFanout, children.size());
+    double bounds[kFanout];
+    distancesSquared(mesh.childOctets[entry.level - 1][entry.node], point, bounds);
+    const std::uint32_t first = entry.node * static_cast<std::uint32_t>(kFanout);
     Pending near[kFanout];
     std::size_t count = 0;
-    for (std::size_t c = first; c < last; ++c) {
-      const double bound = distanceSquared(point, children[c]);
-      if (bound > best.distanceSquared) continue;
+    for (std::uint32_t i = 0; i < kFanout; ++i) {
+      if (bounds[i] > best.distanceSquared) continue;  // also the empty slots
       // Insertion into descending order, so the nearest child is pushed last.
       std::size_t at = count++;
-      for (; at > 0 && near[at - 1].bound < bound; --at)
+      for (; at > 0 && near[at - 1].bound < bounds[i]; --at)
         near[at] = near[at - 1];
-      near[at] = {bound, entry.level - 1, static_cast<std::uint32_t>(c)};
+      near[at] = {bounds[i], entry.level - 1, first + i};
     }
     for (std::size_t c = 0; c < count; ++c)
       stack[top++] = near[c];

@@ -1,0 +1,27 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "delta/core/vec3.h"
+
+namespace delta::detail {
+
+/// The indices [0, count) in Morton (Z-curve) order of `pointAt(i)` within the points' bounding
+/// box, 21 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
+/// the queries walk their points in this order so that neighbours reuse the tree nodes and
+/// triangles the previous ones brought into the cache. Non-finite coordinates are not allowed.
+std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const void*, std::size_t),
+                                       const void* context);
+
+/// The same for a callable `pointAt(i)`.
+template <typename PointAt>
+std::vector<std::uint32_t> mortonOrder(std::size_t count, const PointAt& pointAt) {
+  return mortonOrder(
+      count,
+      [](const void* context, std::size_t i) { return (*static_cast<const PointAt*>(context))(i); },
+      &pointAt);
+}
+
+}  // namespace delta::detail
