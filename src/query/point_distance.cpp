@@ -1,6 +1,8 @@
 #include "delta/query/point_distance.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <string>
 
 #include "delta/core/error.h"
@@ -66,7 +68,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
                const PointQuery& query, std::span<PointDistance> out) {
   validate(mesh, query);
   validatePoints(count, pointAt);
-  if (count < kCoherentFrom) {
+  if (count < kCoherentFrom || count > std::numeric_limits<std::uint32_t>::max()) {
     parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i)
         out[i] = answer(mesh, pointAt(i), query);

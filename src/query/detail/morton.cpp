@@ -1,21 +1,19 @@
 #include "morton.h"
 
 #include <algorithm>
-#include <utility>
 
 #include "delta/core/aabb.h"
 
 namespace delta::detail {
 namespace {
 
-/// The 21 low bits of `x` spread to every third bit of a 63-bit Morton code.
+/// The 10 low bits of `x` spread to every third bit of a 30-bit Morton code.
 std::uint64_t spreadBits(std::uint64_t x) noexcept {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
+  x &= 0x3ff;
+  x = (x | x << 16) & 0x30000ff;
+  x = (x | x << 8) & 0x300f00f;
+  x = (x | x << 4) & 0x30c30c3;
+  x = (x | x << 2) & 0x9249249;
   return x;
 }
 
@@ -26,8 +24,11 @@ std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const 
   Aabb box;
   for (std::size_t i = 0; i < count; ++i)
     box.extend(pointAt(context, i));
-  constexpr double kCells = 2097151.0;  // 2²¹ − 1
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(count);
+  // Keys: a 30-bit code (1024 cells an axis: finer buys no locality) above the 32-bit index,
+  // sorted by three passes of a 10-bit radix sort, least significant digit first. The index in
+  // the low half makes ties (repeated points, one cell) come out in index order.
+  constexpr double kCells = 1023.0;
+  std::vector<std::uint64_t> keys(count), buffer(count);
   for (std::size_t i = 0; i < count; ++i) {
     const Vec3 point = pointAt(context, i);
     std::uint64_t code = 0;
@@ -38,12 +39,22 @@ std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const 
       const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
       code |= spreadBits(cell) << axis;
     }
-    keys[i] = {code, static_cast<std::uint32_t>(i)};
+    keys[i] = code << 32 | i;
   }
-  std::sort(keys.begin(), keys.end());
+  constexpr std::size_t kDigits = 1024;
+  for (int shift = 32; shift < 62; shift += 10) {
+    std::vector<std::size_t> start(kDigits + 1, 0);
+    for (const std::uint64_t key : keys)
+      ++start[(key >> shift & (kDigits - 1)) + 1];
+    for (std::size_t d = 0; d < kDigits; ++d)
+      start[d + 1] += start[d];
+    for (const std::uint64_t key : keys)
+      buffer[start[key >> shift & (kDigits - 1)]++] = key;
+    keys.swap(buffer);
+  }
   std::vector<std::uint32_t> order(count);
   for (std::size_t i = 0; i < count; ++i)
-    order[i] = keys[i].second;
+    order[i] = static_cast<std::uint32_t>(keys[i]);
   return order;
 }
 

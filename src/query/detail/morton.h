@@ -9,7 +9,7 @@
 namespace delta::detail {
 
 /// The indices [0, count) in Morton (Z-curve) order of `pointAt(i)` within the points' bounding
-/// box, 21 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
+/// box, 10 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
 /// the queries walk their points in this order so that neighbours reuse the tree nodes and
 /// triangles the previous ones brought into the cache. Non-finite coordinates are not allowed.
 std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const void*, std::size_t),
