@@ -157,11 +157,9 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const bool moved = first.moved() || second.moved();
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const std::vector<std::vector<Aabb>> secondLevels =
-      moved ? detail::movedLevels(b.levels, motion) : std::vector<std::vector<Aabb>>{};
+  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
   const double reach = 2.0 * epsilon;
-  std::vector<detail::LeafPair> pairs =
-      detail::leafPairsWithin(a.levels, moved ? secondLevels : b.levels, reach);
+  std::vector<detail::LeafPair> pairs = detail::leafPairsWithin(a.levels, secondTree, reach);
 
   // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
   // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
@@ -179,28 +177,41 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     TriangleSoA batch;
     std::vector<Triangle> candidates;
     std::vector<std::uint32_t> candidateIds;
+    // The group's second triangles, carried into the first's frame once for all eight first
+    // triangles, with their boxes and ids.
+    std::vector<Triangle> partners;
+    std::vector<Aabb> partnerBoxes;
+    std::vector<std::uint32_t> partnerIds;
     for (std::size_t g = begin; g < end; ++g) {
       std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
       const std::uint32_t firstLeaf = pairs[groups[g]].first;
       const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
       const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
-      for (std::size_t i = firstBegin; i < firstEnd; ++i) {
+      const Aabb firstLeafBox = a.levels[0][firstLeaf];
+      partners.clear();
+      partnerBoxes.clear();
+      partnerIds.clear();
+      for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {
+        const std::size_t from = std::size_t{pairs[p].second} * detail::kFanout;
+        const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
+        for (std::size_t k = from; k < to; ++k) {
+          const Triangle other = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+          const Aabb otherBox = other.bounds();
+          if (apart(firstLeafBox, otherBox, reach)) continue;  // most leaf neighbours are
+          partners.push_back(other);
+          partnerBoxes.push_back(otherBox);
+          partnerIds.push_back(b.order[k]);
+        }
+      }
+      for (std::size_t i = firstBegin; i < firstEnd && !partners.empty(); ++i) {
         const Triangle one = a.sorted.triangle(i);
         const Aabb box = one.bounds();
         candidates.clear();
         candidateIds.clear();
-        for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {
-          const std::uint32_t secondLeaf = pairs[p].second;
-          if (apart(box, (moved ? secondLevels : b.levels)[0][secondLeaf], reach)) continue;
-          const std::size_t from = std::size_t{secondLeaf} * detail::kFanout;
-          const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
-          for (std::size_t k = from; k < to; ++k) {
-            const Triangle other =
-                moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
-            if (apart(box, other.bounds(), reach)) continue;  // most leaf neighbours are
-            candidates.push_back(other);
-            candidateIds.push_back(b.order[k]);
-          }
+        for (std::size_t k = 0; k < partners.size(); ++k) {
+          if (apart(box, partnerBoxes[k], reach)) continue;
+          candidates.push_back(partners[k]);
+          candidateIds.push_back(partnerIds[k]);
         }
         if (candidates.empty()) continue;
         batch.assign(candidates);

@@ -274,9 +274,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
   const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
-  const std::vector<std::vector<Aabb>> movedLevels =
-      moved ? detail::movedLevels(b.levels, motion) : std::vector<std::vector<Aabb>>{};
-  const std::vector<std::vector<Aabb>>& secondLevels = moved ? movedLevels : b.levels;
+  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
 
   struct Entry {
     double bound;
@@ -285,10 +283,10 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   };
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
   const auto push = [&](std::uint32_t la, std::uint32_t na, std::uint32_t lb, std::uint32_t nb) {
-    open.push({distanceSquared(a.levels[la][na], secondLevels[lb][nb]), la, na, lb, nb});
+    open.push({distanceSquared(a.levels[la][na], secondTree.box(lb, nb)), la, na, lb, nb});
   };
   push(static_cast<std::uint32_t>(a.levels.size() - 1), 0,
-       static_cast<std::uint32_t>(secondLevels.size() - 1), 0);
+       static_cast<std::uint32_t>(secondTree.levelCount() - 1), 0);
 
   MinimumDistance best;
   double bestSquared = std::numeric_limits<double>::infinity();
@@ -312,7 +310,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     if (entry.secondLevel > 0) {
       const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
       const std::size_t end =
-          std::min(begin + detail::kFanout, secondLevels[entry.secondLevel - 1].size());
+          std::min(begin + detail::kFanout, secondTree.nodeCount(entry.secondLevel - 1));
       for (std::size_t c = begin; c < end; ++c)
         push(entry.firstLevel, entry.firstNode, entry.secondLevel - 1,
              static_cast<std::uint32_t>(c));
@@ -325,7 +323,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     std::size_t count = 0;
     for (std::size_t k = secondBegin; k < secondEnd; ++k)
       leafTriangles[count++] = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
-    const Aabb& secondBox = secondLevels[0][entry.secondNode];
+    const Aabb secondBox = secondTree.box(0, entry.secondNode);
     const std::size_t firstBegin = std::size_t{entry.firstNode} * detail::kFanout;
     const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
     for (std::size_t i = firstBegin; i < firstEnd; ++i) {

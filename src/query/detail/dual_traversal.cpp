@@ -22,39 +22,26 @@ MatrixMotion matrixMotion(const RigidTransform& motion) {
   return {Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix(), motion.translation};
 }
 
-std::vector<std::vector<Aabb>> movedLevels(const std::vector<std::vector<Aabb>>& levels,
-                                           const MatrixMotion& motion) {
-  const Mat3& rotation = motion.rotation;
-  Mat3 magnitude = rotation;
+MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
+                     const MatrixMotion* motion) noexcept
+    : levels_(levels), motion_(motion) {
+  if (!motion) return;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      magnitude(r, c) = std::abs(rotation(r, c));
-  std::vector<std::vector<Aabb>> moved(levels.size());
-  for (std::size_t l = 0; l < levels.size(); ++l) {
-    moved[l].reserve(levels[l].size());
-    for (const Aabb& box : levels[l]) {
-      const Vec3 centre = rotation * box.center() + motion.translation;
-      // Rounding of the moved centre is a few ulps of the coordinates: covered by the boxes'
-      // slack, which is far larger (query_mesh_data.h).
-      const Vec3 half = magnitude * (box.extent() * 0.5);
-      moved[l].push_back({centre - half, centre + half});
-    }
-  }
-  return moved;
+      magnitude_(r, c) = std::abs(motion->rotation(r, c));
 }
 
 std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firstLevels,
-                                      const std::vector<std::vector<Aabb>>& secondLevels,
-                                      double reach) {
+                                      const MovedTree& second, double reach) {
   std::vector<LeafPair> pairs;
   std::vector<NodePair> stack;
   stack.push_back({static_cast<std::uint32_t>(firstLevels.size() - 1), 0,
-                   static_cast<std::uint32_t>(secondLevels.size() - 1), 0});
+                   static_cast<std::uint32_t>(second.levelCount() - 1), 0});
   while (!stack.empty()) {
     const NodePair pair = stack.back();
     stack.pop_back();
     const Aabb& a = firstLevels[pair.firstLevel][pair.first];
-    const Aabb& b = secondLevels[pair.secondLevel][pair.second];
+    const Aabb b = second.box(pair.secondLevel, pair.second);
     if (apart(a, b, reach)) continue;
     if (pair.firstLevel == 0 && pair.secondLevel == 0) {
       pairs.push_back({pair.first, pair.second});
@@ -71,7 +58,7 @@ std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firs
     } else {
       const std::uint32_t level = pair.secondLevel - 1;
       const std::size_t begin = std::size_t{pair.second} * kFanout;
-      const std::size_t end = std::min(begin + kFanout, secondLevels[level].size());
+      const std::size_t end = std::min(begin + kFanout, second.nodeCount(level));
       for (std::size_t c = begin; c < end; ++c)
         stack.push_back({pair.firstLevel, pair.first, level, static_cast<std::uint32_t>(c)});
     }

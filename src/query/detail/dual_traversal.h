@@ -28,17 +28,36 @@ struct MatrixMotion {
 };
 MatrixMotion matrixMotion(const RigidTransform& motion);
 
-/// The boxes of a tree's nodes carried into another frame: each the box of the moved box (centre
-/// moved, half extents through |R|), so it contains every moved point of the original.
-std::vector<std::vector<Aabb>> movedLevels(const std::vector<std::vector<Aabb>>& levels,
-                                           const MatrixMotion& motion);
+/// A tree's node boxes as seen from another frame, moved on demand: a query that visits a few
+/// nodes of a large tree (a particle near a big obstacle) pays for those, not for the whole tree.
+/// A moved box is the box of the moved box (centre moved, half extents through |R|), so it
+/// contains every moved point of the original; the rounding of the moved centre is a few ulps of
+/// the coordinates, covered by the boxes' slack (query_mesh_data.h). Without a motion the boxes
+/// are the tree's own.
+class MovedTree {
+ public:
+  MovedTree(const std::vector<std::vector<Aabb>>& levels, const MatrixMotion* motion) noexcept;
+
+  Aabb box(std::size_t level, std::size_t node) const noexcept {
+    const Aabb& box = levels_[level][node];
+    if (!motion_) return box;
+    const Vec3 centre = motion_->apply(box.center());
+    const Vec3 half = magnitude_ * (box.extent() * 0.5);
+    return {centre - half, centre + half};
+  }
+  std::size_t levelCount() const noexcept { return levels_.size(); }
+  std::size_t nodeCount(std::size_t level) const noexcept { return levels_[level].size(); }
+
+ private:
+  const std::vector<std::vector<Aabb>>& levels_;
+  const MatrixMotion* motion_;
+  Mat3 magnitude_;  ///< |R| entry by entry
+};
 
 /// Every pair of leaves, one of each tree, whose boxes are not `reach` apart along any axis, by a
-/// simultaneous descent of both trees that splits the larger node. `secondLevels` are the second
-/// tree's boxes in the first's frame (its own levels, or movedLevels of them). In no particular
-/// order; each pair once.
+/// simultaneous descent of both trees that splits the larger node. `second` is the second tree
+/// seen from the first's frame. In no particular order; each pair once.
 std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firstLevels,
-                                      const std::vector<std::vector<Aabb>>& secondLevels,
-                                      double reach);
+                                      const MovedTree& second, double reach);
 
 }  // namespace delta::detail
