@@ -11,5 +11,6 @@ void addInfoCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addContactCommand(CLI::App& app);
 void addDistanceCommand(CLI::App& app);
+void addDemCommand(CLI::App& app);
 
 }  // namespace delta::cli

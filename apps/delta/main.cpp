@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
   delta::cli::addBenchCommand(app);
   delta::cli::addContactCommand(app);
   delta::cli::addDistanceCommand(app);
+  delta::cli::addDemCommand(app);
 
   try {
     rejectUnknownCommand(app, argc, argv);

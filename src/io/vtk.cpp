@@ -1,16 +1,37 @@
 #include "delta/io/vtk.h"
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 
 namespace delta::io {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the writer emits little-endian data");
+
+/// `text` as an XML attribute value.
+std::string escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '"')
+      out += "&quot;";
+    else
+      out += c;
+  }
+  return out;
+}
 
 /// The appended-data section: blocks of raw bytes, each preceded by its UInt64 byte count, and
 /// the XML that points at them by offset.
@@ -37,23 +58,6 @@ class AppendedData {
   void append(const void* data, std::size_t size) {
     if (size > 0) bytes_.append(static_cast<const char*>(data), size);
   }
-  static std::string escaped(const std::string& text) {
-    std::string out;
-    for (char c : text) {
-      if (c == '&')
-        out += "&amp;";
-      else if (c == '<')
-        out += "&lt;";
-      else if (c == '>')
-        out += "&gt;";
-      else if (c == '"')
-        out += "&quot;";
-      else
-        out += c;
-    }
-    return out;
-  }
-
   std::string bytes_;
 };
 
@@ -164,6 +168,30 @@ void writeVtp(const VtkPolyData& data, const std::filesystem::path& path) {
       std::filesystem::remove(path, ignored);  // no partial file
       throw Error("writing failed");
     }
+  } catch (const Error& error) {
+    throw Error("cannot write '" + path.string() + "': " + error.what());
+  }
+}
+
+void writePvd(std::span<const VtkSeriesEntry> entries, const std::filesystem::path& path) {
+  try {
+    std::string xml =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\">\n<Collection>\n";
+    for (const VtkSeriesEntry& entry : entries) {
+      if (!std::isfinite(entry.time))
+        throw Error("time " + toString(entry.time) + " of '" + entry.file.string() +
+                    "' is not finite");
+      char time[32];
+      std::snprintf(time, sizeof time, "%.17g", entry.time);
+      xml += std::string("<DataSet timestep=\"") + time + "\" group=\"\" part=\"0\" file=\"" +
+             escaped(entry.file.generic_string()) + "\"/>\n";
+    }
+    xml += "</Collection>\n</VTKFile>\n";
+    std::ofstream file(path, std::ios::binary | std::ios::trunc);
+    if (!file) throw Error("cannot open it for writing");
+    file << xml;
+    if (!file.flush()) throw Error("writing failed");
   } catch (const Error& error) {
     throw Error("cannot write '" + path.string() + "': " + error.what());
   }

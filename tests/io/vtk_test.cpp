@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
@@ -104,6 +107,40 @@ TEST(Vtk, RejectsMismatchedArraysAndWritesNothing) {
   EXPECT_THROW(writeVtp(data, path), Error);
   EXPECT_FALSE(fs::exists(path));
   EXPECT_THROW(writeVtp(VtkPolyData::fromPoints({}), "/nonexistent/dir/x.vtp"), Error);
+}
+
+TEST(Vtk, WritesATimeSeriesCollection) {
+  const fs::path path = tempFile("series.pvd");
+  const std::vector<VtkSeriesEntry> entries = {
+      {0.0, "frames/a_000000.vtp"}, {0.1, "frames/a_000001.vtp"}, {2.5e-7, "b&\"c\".vtp"}};
+  writePvd(entries, path);
+  const std::string file = slurp(path);
+  fs::remove(path);
+  EXPECT_NE(file.find("<VTKFile type=\"Collection\""), std::string::npos) << file;
+  EXPECT_NE(
+      file.find("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"frames/a_000000.vtp\"/>"),
+      std::string::npos)
+      << file;
+  EXPECT_NE(file.find("timestep=\"0.10000000000000001\""), std::string::npos) << file;
+  EXPECT_NE(file.find("file=\"b&amp;&quot;c&quot;.vtp\""), std::string::npos) << file;
+  EXPECT_EQ(file.substr(file.size() - 25), "</Collection>\n</VTKFile>\n");
+  const std::regex dataSet("<DataSet ");
+  EXPECT_EQ(std::distance(std::sregex_iterator(file.begin(), file.end(), dataSet),
+                          std::sregex_iterator()),
+            3);
+
+  writePvd({}, path);  // an empty series still opens
+  EXPECT_NE(slurp(path).find("<Collection>\n</Collection>"), std::string::npos);
+  fs::remove(path);
+}
+
+TEST(Vtk, RejectsANonFiniteTimeOrAnUnwritablePvd) {
+  const fs::path path = tempFile("bad.pvd");
+  const std::vector<VtkSeriesEntry> bad = {{0.0, "a.vtp"}, {std::nan(""), "b.vtp"}};
+  EXPECT_THROW(writePvd(bad, path), Error);
+  EXPECT_FALSE(fs::exists(path));
+  const std::vector<VtkSeriesEntry> good = {{0.0, "a.vtp"}};
+  EXPECT_THROW(writePvd(good, "/nonexistent/dir/x.pvd"), Error);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -43,5 +44,18 @@ struct VtkPolyData {
 /// data, Float64 values, Int64 connectivity). Throws delta::Error naming the path when an array's
 /// size does not match its points or cells, a triangle refers past the points, or writing fails.
 void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
+
+/// One file of a time series: the time it shows and where it is, relative to the .pvd file
+/// (or absolute).
+struct VtkSeriesEntry {
+  double time = 0.0;
+  std::filesystem::path file;
+};
+
+/// Writes a ParaView collection (.pvd) that plays `entries` as a time series, in the order
+/// given (ParaView sorts them by time). Throws delta::Error naming the path when a time is not
+/// finite or writing fails. Write it again after each new file so that a run cut short still
+/// leaves a series that opens.
+void writePvd(std::span<const VtkSeriesEntry> entries, const std::filesystem::path& path);
 
 }  // namespace delta::io

@@ -1,0 +1,389 @@
+// `delta dem [SCENARIO]`: runs a DEM scenario (two-particles, settle, hopper, or one described by a
+// config file), with a progress line, a summary (text or --json) and, with --out, a ParaView
+// series and a CSV log (dem_output.h).
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/dem/scenarios.h"
+
+#include "commands.h"
+#include "dem_output.h"
+#include "dem_settings.h"
+#include "json.h"
+#include "mesh_source.h"
+#include "progress.h"
+#include "stopwatch.h"
+
+namespace delta::cli {
+namespace {
+
+/// The scenarios' defaults where a setting is not given (scenarios.h).
+constexpr double kTwoParticlesRestitution = 0.9;
+constexpr std::size_t kSettleParticles = 100;
+constexpr std::size_t kHopperParticles = 1000;
+constexpr std::uint64_t kSeed = 1;
+
+struct DemOptions {
+  std::string scenario;  ///< SCENARIO: a scenario's name or a config file
+  std::string config;
+  std::map<std::string, std::string> given;  ///< config key → text, from the options
+  std::string out;
+  bool json = false;
+  bool quiet = false;
+};
+
+/// The config file, overridden by the options.
+DemSettings resolve(const DemOptions& options) {
+  DemSettings command;
+  std::string config = options.config;
+  if (!options.scenario.empty()) {
+    if (isDemScenario(options.scenario)) {
+      setDemSetting(command, "scenario", options.scenario, "SCENARIO");
+    } else if (!std::filesystem::is_regular_file(options.scenario)) {
+      throw Error("'" + options.scenario +
+                  "' is neither a scenario (two-particles, settle, hopper) nor a config file");
+    } else if (!config.empty()) {
+      throw Error("two config files: '" + options.scenario + "' and --config '" + config + "'");
+    } else {
+      config = options.scenario;
+    }
+  }
+  for (const auto& [key, text] : options.given) {
+    std::string option = "--" + key;
+    std::replace(option.begin(), option.end(), '_', '-');
+    setDemSetting(command, key, text, option);
+  }
+  DemSettings settings =
+      config.empty() ? command : mergedDemSettings(readDemConfig(config), command);
+  checkDemCombination(settings);
+  return settings;
+}
+
+/// The largest bounding radius and mass of the shapes the world's particles use.
+std::pair<double, double> largestRadiusAndMass(const dem::World& world) {
+  double radius = 0.0, mass = 0.0;
+  for (const dem::Particle& particle : world.particles()) {
+    const dem::ParticleShape& shape = world.shapes()[particle.shape];
+    radius = std::max(radius, shape.boundingRadius());
+    mass = std::max(mass, shape.mass());
+  }
+  return {radius, mass};
+}
+
+/// A closed mesh (file or builtin:) scaled about its centre of mass to bounding radius `radius`.
+dem::ParticleShape particleShape(const std::string& source, double radius, double density,
+                                 const std::string& origin) {
+  try {
+    Mesh mesh = loadMeshSource(source).mesh;
+    const dem::ParticleShape asGiven(mesh, density);
+    mesh.scale(radius / asGiven.boundingRadius(), asGiven.centroid());
+    return dem::ParticleShape(mesh, density);
+  } catch (const Error& error) {
+    throw Error(origin + " '" + source + "': " + error.what());
+  }
+}
+
+/// Moves the two particles of two-particles along x (their line of approach) so that the new
+/// shape starts as far from the other as the spheres did: the scenario's run is timed for that
+/// gap. The shape's extent along ±x is taken in its body frame (the particles start unturned).
+void keepTheGap(std::vector<dem::ParticleState>& states, const dem::World& old,
+                const dem::ParticleShape& shape) {
+  dem::ParticleState& left = states[0];
+  dem::ParticleState& right = states[1];
+  const double sphereRadius = old.shapes()[old.particles()[0].shape].boundingRadius();
+  const double gap = right.position.x - left.position.x - 2.0 * sphereRadius;
+  const double middle = 0.5 * (left.position.x + right.position.x);
+  double ahead = -INFINITY, behind = INFINITY;
+  for (const Vec3& vertex : shape.mesh().vertices()) {
+    ahead = std::max(ahead, vertex.x);
+    behind = std::min(behind, vertex.x);
+  }
+  left.position.x = middle - 0.5 * gap - ahead;
+  right.position.x = middle + 0.5 * gap - behind;
+}
+
+/// The scenario made again with the settings it does not take itself: another restitution or
+/// friction for settle and hopper, another particle shape for any. Particles keep their places
+/// and motion; a new shape gets the stiffness scaled by its mass over the heaviest old one (the
+/// scenarios size k for an impact depth of ε, k ∝ m), and the time step and the number of steps
+/// follow so that the run covers the same simulated time.
+dem::Scenario remade(dem::Scenario scenario, const DemSettings& settings) {
+  const dem::World& old = scenario.world;
+  dem::Parameters parameters = old.parameters();
+  if (settings.restitution) parameters.restitution = *settings.restitution;
+  if (settings.friction) parameters.friction = *settings.friction;
+  std::optional<dem::ParticleShape> shape;
+  if (!settings.particleMesh.empty()) {
+    const auto [largest, heaviest] = largestRadiusAndMass(old);
+    const double radius = settings.particleRadius.value_or(largest);
+    if (radius > largest * (1.0 + 1e-12))
+      throw Error(settings.origins.at("particle_radius") + " '" + toString(radius) +
+                  "' is larger than the scenario's particles (" + toString(largest) +
+                  "): they would overlap at the start");
+    const std::string origin = settings.origins.at("particle_mesh");
+    shape = particleShape(settings.particleMesh, radius, old.shapes().front().density(), origin);
+    parameters.stiffness *= shape->mass() / heaviest;
+  }
+  dem::World world(parameters);
+  if (shape)
+    world.addShape(*shape);
+  else
+    for (const dem::ParticleShape& existing : old.shapes())
+      world.addShape(existing);
+  std::vector<dem::ParticleState> states;
+  for (const dem::Particle& particle : old.particles())
+    states.push_back(
+        {particle.position, particle.orientation, particle.velocity, particle.angularVelocity});
+  if (shape && scenario.name == "two-particles") keepTheGap(states, old, *shape);
+  for (std::size_t p = 0; p < states.size(); ++p)
+    world.addParticle(shape ? 0 : old.particles()[p].shape, states[p]);
+  for (const dem::Obstacle& obstacle : old.obstacles())
+    world.addObstacle(obstacle.mesh, obstacle.motion);
+  if (shape) {
+    const double stretch = parameters.timeStep / world.suggestedTimeStep();
+    world.setTimeStep(world.suggestedTimeStep());
+    const auto scaled = [&](std::size_t steps) {
+      return std::max<std::size_t>(
+          1, static_cast<std::size_t>(std::ceil(static_cast<double>(steps) * stretch)));
+    };
+    scenario.steps = scaled(scenario.steps);
+    scenario.outputInterval = scaled(scenario.outputInterval);
+  }
+  scenario.world = std::move(world);
+  return scenario;
+}
+
+dem::Scenario build(const DemSettings& settings) {
+  const std::string name = settings.scenario.empty() ? "hopper" : settings.scenario;
+  dem::Scenario scenario =
+      name == "two-particles"
+          ? dem::twoParticles(settings.restitution.value_or(kTwoParticlesRestitution),
+                              settings.offset.value_or(0.0), settings.friction.value_or(0.0))
+      : name == "settle" ? dem::settle(settings.particles.value_or(kSettleParticles),
+                                       settings.seed.value_or(kSeed))
+                         : dem::hopper(settings.particles.value_or(kHopperParticles),
+                                       settings.seed.value_or(kSeed));
+  const bool lawChanges = name != "two-particles" && (settings.restitution || settings.friction);
+  if (lawChanges || !settings.particleMesh.empty())
+    scenario = remade(std::move(scenario), settings);
+  return scenario;
+}
+
+/// "1 obstacle", "3 obstacles".
+std::string counted(std::size_t count, const char* noun) {
+  return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
+}
+
+/// What a run measured.
+struct RunSummary {
+  std::size_t steps = 0;
+  std::size_t contacts = 0;  ///< summed over the steps
+  std::size_t contactPairs = 0;
+  std::size_t maxContacts = 0;
+  std::size_t overlappingContacts = 0;
+  double deepestRatio = 0.0;
+  double stepSeconds = 0.0;  ///< Σ StepStatistics::totalSeconds
+  double contactDetectionSeconds = 0.0;
+  double runSeconds = 0.0;  ///< wall clock of the steps alone
+  double writeSeconds = 0.0;
+  double restitution = NAN;
+  double energyChange = NAN;
+};
+
+RunSummary simulate(dem::Scenario& scenario, std::size_t steps, std::size_t outputEvery,
+                    DemOutput* output, bool showLine) {
+  dem::World& world = scenario.world;
+  std::optional<dem::RestitutionMeter> meter;
+  if (scenario.name == "two-particles") meter.emplace(world);
+  const double startEnergy = world.energies().total();
+  RunSummary summary;
+  Stopwatch writing;
+  if (output) {
+    output->begin(world);
+    output->log(world);
+    output->frame(world);
+  }
+  summary.writeSeconds += writing.seconds();
+  Progress progress("dem " + scenario.name, steps, showLine);
+  for (std::size_t step = 1; step <= steps; ++step) {
+    const Stopwatch stepping;
+    world.step();
+    summary.runSeconds += stepping.seconds();
+    const dem::StepStatistics& statistics = world.statistics();
+    summary.steps = step;
+    summary.contacts += world.contacts().size();
+    summary.contactPairs += statistics.pairsInContact;
+    summary.maxContacts = std::max(summary.maxContacts, world.contacts().size());
+    summary.overlappingContacts += statistics.overlappingContacts;
+    summary.deepestRatio = std::max(summary.deepestRatio, statistics.deepestRatio);
+    summary.stepSeconds += statistics.totalSeconds;
+    summary.contactDetectionSeconds += statistics.contactDetectionSeconds;
+    if (meter) meter->observe(world);
+    if (output) {
+      writing.restart();
+      output->log(world);
+      if (step % outputEvery == 0 || step == steps) output->frame(world);
+      summary.writeSeconds += writing.seconds();
+    }
+    progress.update(step);
+  }
+  if (output) output->finish();
+  if (meter) {
+    summary.restitution = meter->restitution();
+    summary.energyChange = (world.energies().total() - startEnergy) / std::fabs(startEnergy);
+  }
+  return summary;
+}
+
+void printJson(const dem::Scenario& scenario, std::size_t triangles, double buildSeconds,
+               const RunSummary& run, const DemOutput* output) {
+  const dem::World& world = scenario.world;
+  const auto perStep = [&](double total) { return total / static_cast<double>(run.steps); };
+  JsonWriter json;
+  json.beginObject()
+      .value("scenario", scenario.name)
+      .value("particles", world.particles().size())
+      .value("triangles", triangles)
+      .value("obstacles", world.obstacles().size())
+      .value("steps", run.steps)
+      .value("time_step", world.parameters().timeStep)
+      .value("time", world.time())
+      .value("steps_per_s", static_cast<double>(run.steps) / run.runSeconds)
+      .value("contacts_per_step", perStep(static_cast<double>(run.contacts)))
+      .value("max_contacts", run.maxContacts)
+      .value("contact_pairs_per_step", perStep(static_cast<double>(run.contactPairs)))
+      .value("overlapping_contacts", run.overlappingContacts)
+      .value("max_depth_ratio", run.deepestRatio)
+      .value("share_contact_detection", run.contactDetectionSeconds / run.stepSeconds)
+      .value("build_s", buildSeconds)
+      .value("run_s", run.runSeconds)
+      .value("write_s", run.writeSeconds)
+      .value("frames", output ? output->frames() : std::size_t{0})
+      .value("threads", omp_get_max_threads());
+  if (scenario.name == "two-particles")
+    json.value("restitution", run.restitution).value("energy_change", run.energyChange);
+  std::printf("%s\n", json.endObject().str().c_str());
+}
+
+void printText(const dem::Scenario& scenario, std::size_t triangles, double buildSeconds,
+               const RunSummary& run, const DemOutput* output) {
+  const dem::World& world = scenario.world;
+  std::printf("%s: %s (%s), %s, time step %.3g s, built in %.3f s\n", scenario.name.c_str(),
+              counted(world.particles().size(), "particle").c_str(),
+              counted(triangles, "triangle").c_str(),
+              counted(world.obstacles().size(), "obstacle").c_str(), world.parameters().timeStep,
+              buildSeconds);
+  std::printf("%s (%.4g s simulated) in %.3f s on %s: %.3g steps/s\n",
+              counted(run.steps, "step").c_str(), world.time(), run.runSeconds,
+              counted(static_cast<std::size_t>(omp_get_max_threads()), "thread").c_str(),
+              static_cast<double>(run.steps) / run.runSeconds);
+  std::printf(
+      "%.1f contact points a step (at most %zu), %.0f%% of the step time in contact "
+      "detection, deepest %.2f of the 2ε shell%s\n",
+      static_cast<double>(run.contacts) / static_cast<double>(run.steps), run.maxContacts,
+      100.0 * run.contactDetectionSeconds / run.stepSeconds, run.deepestRatio,
+      run.overlappingContacts ? ", SURFACES OVERLAPPED" : "");
+  if (scenario.name == "two-particles") {
+    if (std::isnan(run.restitution))
+      std::printf("restitution: not measured (the particles did not collide and part)\n");
+    else
+      std::printf("restitution %.4f (asked %.4g), total energy changed by %.3g%%\n",
+                  run.restitution, world.parameters().restitution, 100.0 * run.energyChange);
+  }
+  if (output)
+    std::printf("%zu frames written to %s in %.3f s\n", output->frames(),
+                output->directory().string().c_str(), run.writeSeconds);
+}
+
+void run(const DemOptions& options) {
+  const DemSettings settings = resolve(options);
+  std::unique_ptr<DemOutput> output;
+  if (!options.out.empty()) output = std::make_unique<DemOutput>(options.out);  // fail early
+  Stopwatch clock;
+  dem::Scenario scenario = build(settings);
+  const double buildSeconds = clock.seconds();
+  const std::size_t steps = settings.steps.value_or(scenario.steps);
+  const std::size_t outputEvery = settings.outputEvery.value_or(scenario.outputInterval);
+  std::size_t triangles = 0;
+  for (const dem::Particle& particle : scenario.world.particles())
+    triangles += scenario.world.shapes()[particle.shape].mesh().triangleCount();
+  const RunSummary summary = simulate(scenario, steps, outputEvery, output.get(),
+                                      showProgress(options.quiet || options.json));
+  if (options.json)
+    printJson(scenario, triangles, buildSeconds, summary, output.get());
+  else
+    printText(scenario, triangles, buildSeconds, summary, output.get());
+}
+
+constexpr const char* kFooter = R"(Threads: delta --threads N dem ... (or OMP_NUM_THREADS).
+
+Config file (SCENARIO or --config FILE): one 'key = value' a line, '#' starts a comment,
+each key at most once; options given on the command line override it.
+  scenario        = hopper        # two-particles, settle or hopper
+  particles       = 1000          # settle (default 100), hopper (default 1000)
+  seed            = 1             # settle, hopper: shapes, turns and placement
+  restitution     = 0.5           # e in [0, 1] (two-particles 0.9, settle and hopper 0.5)
+  friction        = 0.3           # Coulomb mu >= 0 (two-particles 0, settle 0.5, hopper 0.3)
+  offset          = 0             # two-particles: sideways shift / sum of radii, in [0, 1)
+  steps           = 20000         # default: the scenario's own run
+  output_every    = 200           # steps between frames with --out (default: ~100 frames)
+  particle_mesh   = rock.off      # every particle this closed mesh (file relative to the
+                                  # config, or builtin:...) instead of the scenario's shapes
+  particle_radius = 0.01          # its bounding radius in m (default and at most: the
+                                  # scenario's largest particle)
+
+--out DIR writes particles.pvd (particles_NNNNNN.vtp: triangles, particle id, velocity),
+contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, overlap),
+obstacles.vtp and log.csv (energies, contacts and step times, one row per step).)";
+
+}  // namespace
+
+void addDemCommand(CLI::App& app) {
+  auto options = std::make_shared<DemOptions>();
+  CLI::App* dem = app.add_subcommand(
+      "dem", "Run a DEM simulation of triangulated particles: built-in scenario or config file");
+  dem->footer(kFooter);
+  dem->add_option("SCENARIO", options->scenario,
+                  "two-particles, settle or hopper (default), or a config file")
+      ->type_name("SCENARIO|FILE");
+  dem->add_option("--config", options->config, "Read the settings from FILE (format below)")
+      ->type_name("FILE");
+  const auto setting = [&](const char* option, const char* key, const char* type,
+                           const char* help) {
+    dem->add_option_function<std::string>(
+           option, [options, key](const std::string& text) { options->given[key] = text; }, help)
+        ->type_name(type);
+  };
+  setting("--steps", "steps", "N", "Time steps to run (default: the scenario's run)");
+  setting("--particles", "particles", "N", "settle, hopper: how many particles");
+  setting("--seed", "seed", "S", "settle, hopper: random seed of shapes and placement");
+  setting("--restitution", "restitution", "E", "Coefficient of restitution e in [0, 1]");
+  setting("--friction", "friction", "MU", "Coulomb friction coefficient mu >= 0");
+  setting("--offset", "offset", "F",
+          "two-particles: sideways offset as a fraction of the sum of radii, in [0, 1)");
+  setting("--output-every", "output_every", "N", "Steps between frames written with --out");
+  setting("--particle-mesh", "particle_mesh", "MESH",
+          "Every particle this closed mesh (file or builtin:...) instead of the scenario's");
+  setting("--particle-radius", "particle_radius", "R",
+          "Bounding radius (m) the particle mesh is scaled to");
+  dem->add_option("--out", options->out,
+                  "Write a ParaView series and log.csv into folder DIR (made if missing)")
+      ->type_name("DIR");
+  dem->add_flag("--json", options->json, "Print one JSON object instead of text");
+  dem->add_flag("--quiet", options->quiet, "No progress line");
+  dem->callback([options] { run(*options); });
+}
+
+}  // namespace delta::cli

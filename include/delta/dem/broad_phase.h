@@ -1,0 +1,39 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "delta/core/sphere.h"
+
+namespace delta::dem {
+
+/// Two sphere indices, first < second.
+///
+/// Threading: a value type; no shared state.
+struct CandidatePair {
+  std::uint32_t first = 0;
+  std::uint32_t second = 0;
+
+  friend constexpr bool operator==(const CandidatePair&, const CandidatePair&) = default;
+};
+
+/// The DEM broad phase: every pair of spheres whose surfaces are closer than `margin`
+/// (|cᵢ − cⱼ| < rᵢ + rⱼ + margin, strictly), sorted by (first, second), the same for any
+/// thread count.
+///
+/// A cell list rebuilt on every call: cells of edge 2·r_max + margin, so each sphere meets only
+/// the spheres of its own and the 26 neighbouring cells; cells are hashed into a table of about
+/// twice as many buckets as spheres and filled by a counting sort, so the work is O(n) for
+/// spheres of similar size in any packing and the memory O(n) however far apart they are.
+/// Spheres of very different sizes make the cells as large as the largest and the work grow
+/// toward O(n²) in crowded cells.
+///
+/// Throws delta::Error when the margin is negative or not finite, a sphere's centre or radius
+/// is not finite or a radius is negative (naming the sphere), or there are 2³² or more spheres.
+///
+/// Threading: reads its input only; safe to call from any number of threads at once. Runs in
+/// parallel over the spheres itself (core/parallel.h).
+std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double margin);
+
+}  // namespace delta::dem

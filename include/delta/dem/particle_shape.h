@@ -1,0 +1,91 @@
+#pragma once
+
+#include <cstdint>
+
+#include "delta/core/mat3.h"
+#include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
+#include "delta/query/query_mesh.h"
+
+namespace delta::dem {
+
+namespace detail {
+struct PreparedShape;
+}
+
+/// What a particle's contacts are computed against: its triangles, or an exact sphere.
+enum class ParticleKind : std::uint8_t {
+  Mesh,    ///< a closed triangle mesh: mesh–mesh contacts (narrow_phase.h, pairContacts)
+  Sphere,  ///< a ball: analytic sphere–sphere and sphere–triangle contacts
+};
+
+/// The shape of a rigid DEM particle, shared by every particle made from it: a closed triangle
+/// mesh in its body frame, prepared once for contact detection, with the mass properties of the
+/// solid it bounds at a given density.
+///
+/// The body frame has its origin at the centre of mass and the axes of the mesh as given (not
+/// the principal axes: the full inertia tensor is kept). `centroid()` says where the centre of
+/// mass was in the mesh's own coordinates, so a particle placed at `centroid()` with the identity
+/// orientation sits exactly where the mesh was.
+///
+/// Throws delta::Error when the mesh is not closed and consistently oriented (it must bound a
+/// solid: a particle needs a mass and an inside), is inside-out or flat, or when the density is
+/// not finite and positive.
+///
+/// A sphere shape (ParticleShape::sphere) is an exact ball for contacts and mass properties:
+/// mass 4/3·π·r³·ρ, inertia 2/5·m·r²·I, bounding radius r. Its mesh() is an icosphere of radius r
+/// for output only (ParaView frames, triangle counts); no contact is computed with it.
+///
+/// Threading: immutable once built; copies share the prepared mesh (QueryMesh), and any number
+/// of threads may read one at once.
+class ParticleShape {
+ public:
+  ParticleShape(const Mesh& mesh, double density);
+
+  /// A ball of `radius` about the origin (the centre of mass); `displaySubdivisions` (0 to 6)
+  /// sets the icosphere that mesh() shows it as (20·4^s triangles). Throws delta::Error when the
+  /// radius or the density is not finite and positive, or the subdivisions are out of range.
+  static ParticleShape sphere(double radius, double density, int displaySubdivisions = 2);
+
+  ParticleKind kind() const noexcept { return kind_; }
+  bool isSphere() const noexcept { return kind_ == ParticleKind::Sphere; }
+
+  /// The surface in the body frame (centre of mass at the origin); for a sphere, the display
+  /// icosphere.
+  const Mesh& mesh() const noexcept { return mesh_; }
+  /// The surface prepared for queries, in the body frame; copy it and transform the copy by a
+  /// particle's pose (O(1)) to compare it where the particle is.
+  const QueryMesh& queryMesh() const noexcept { return queryMesh_; }
+  double density() const noexcept { return density_; }
+  double volume() const noexcept { return volume_; }
+  double mass() const noexcept { return mass_; }
+  /// The inertia tensor about the centre of mass, body frame.
+  const Mat3& inertia() const noexcept { return inertia_; }
+  /// Its inverse; the world frame's is R·I⁻¹·Rᵀ for orientation R.
+  const Mat3& inverseInertia() const noexcept { return inverseInertia_; }
+  /// The largest distance from the centre of mass to a vertex: the broad phase's sphere. For a
+  /// sphere shape, its radius.
+  double boundingRadius() const noexcept { return boundingRadius_; }
+  /// The centre of mass in the coordinates of the mesh that was given.
+  const Vec3& centroid() const noexcept { return centroid_; }
+
+ private:
+  explicit ParticleShape(const detail::PreparedShape& prepared);
+
+  Mesh mesh_;
+  QueryMesh queryMesh_;
+  double density_;
+  double volume_;
+  double mass_;
+  Mat3 inertia_;
+  Mat3 inverseInertia_;
+  double boundingRadius_;
+  Vec3 centroid_;
+  ParticleKind kind_;
+};
+
+/// The inverse of a 3×3 matrix by cofactors. The caller guarantees it is invertible (an
+/// inertia tensor of a solid is symmetric positive definite).
+Mat3 inverse(const Mat3& m) noexcept;
+
+}  // namespace delta::dem

@@ -1,0 +1,267 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "delta/core/aabb.h"
+#include "delta/core/contact_point.h"
+#include "delta/core/rotation.h"
+#include "delta/core/sphere.h"
+#include "delta/core/vec3.h"
+#include "delta/dem/contact_model.h"
+#include "delta/dem/particle_shape.h"
+#include "delta/mesh/mesh.h"
+#include "delta/query/query_mesh.h"
+
+namespace delta::dem {
+
+/// What a World simulates with. Lengths, masses and times in any consistent units (the
+/// scenarios use SI). Every field is checked when a World is made or changed (delta::Error
+/// naming the field and its value); the zeros below must be set.
+///
+/// Threading: a value type; no shared state.
+struct Parameters {
+  double timeStep = 0.0;        ///< dt > 0; see World::suggestedTimeStep
+  double epsilon = 0.0;         ///< ε > 0: surfaces closer than 2ε are in contact
+  double filterDistance = 0.0;  ///< h > 0: contact points of a pair closer than h are merged
+  double stiffness = 0.0;       ///< k > 0, the normal spring of a pair (contact_model.h)
+  double restitution = 0.5;     ///< e in [0, 1], normal coefficient of restitution
+  double friction = 0.0;        ///< μ ≥ 0, Coulomb coefficient; 0 is frictionless
+  double tangentialStiffnessRatio = 2.0 / 7.0;  ///< k_t / k > 0, used when μ > 0
+  Vec3 gravity{0.0, 0.0, -9.81};                ///< acceleration, finite
+};
+
+/// How a particle starts.
+///
+/// Threading: a value type; no shared state.
+struct ParticleState {
+  Vec3 position;           ///< of the centre of mass, world frame
+  Quaternion orientation;  ///< body frame to world (renormalised on entry)
+  Vec3 velocity;           ///< of the centre of mass
+  Vec3 angularVelocity;    ///< world frame
+};
+
+/// A rigid particle as the World moves it. The angular momentum (world frame, about the centre
+/// of mass) is the integrated state; the angular velocity follows from it, ω = R·I⁻¹·Rᵀ·L.
+/// `force` and `torque` are the contact forces (gravity excluded) at the current state, the
+/// torque about the centre of mass.
+///
+/// Threading: a value type; no shared state.
+struct Particle {
+  std::uint32_t shape = 0;  ///< index into World::shapes()
+  Vec3 position;
+  Quaternion orientation;
+  Vec3 velocity;
+  Vec3 angularVelocity;
+  Vec3 angularMomentum;
+  Vec3 force;
+  Vec3 torque;
+
+  /// Body frame to world: where the shape's mesh is now.
+  RigidTransform pose() const noexcept { return {orientation, position}; }
+};
+
+/// A prescribed rigid motion of an obstacle: its `pivot` (a point moving with the obstacle,
+/// given where it is at the start) moves at `velocity` and the obstacle turns about it at
+/// `angularVelocity` (world frame). All zero: a static obstacle.
+///
+/// Threading: a value type; no shared state.
+struct ObstacleMotion {
+  Vec3 velocity;
+  Vec3 angularVelocity;
+  Vec3 pivot;
+};
+
+/// A wall, floor, container or funnel: a triangle mesh (open or closed) that pushes particles
+/// and is not pushed back. The normal sense of an open mesh does not matter: a contact's
+/// direction comes from the gap (from the wall toward the particle).
+///
+/// Threading: a value type whose QueryMesh shares its prepared data; read-only use from any
+/// number of threads.
+struct Obstacle {
+  Mesh mesh;            ///< where it was given (time 0)
+  QueryMesh queryMesh;  ///< prepared from `mesh`, pose identity
+  RigidTransform pose;  ///< from where it was given to where it is now
+  ObstacleMotion motion;
+
+  /// The velocity of the obstacle's material point now at `x`.
+  Vec3 velocityAt(const Vec3& x) const noexcept {
+    return motion.velocity + cross(motion.angularVelocity, x - pose.apply(motion.pivot));
+  }
+};
+
+/// A contact point of the last force evaluation with the force acting there, for output.
+///
+/// Threading: a value type; no shared state.
+struct Contact {
+  ContactPoint point;        ///< world frame; `first`/`second`: triangle ids (0 for a sphere)
+  std::uint32_t first = 0;   ///< particle
+  std::uint32_t second = 0;  ///< particle, or obstacle when `withObstacle`
+  bool withObstacle = false;
+  double depth = 0.0;  ///< δ into the ε-shell
+  Vec3 force;          ///< on particle `first`; particle `second` gets −force
+};
+
+/// What the last step did and how long each phase took (wall-clock seconds).
+///
+/// Threading: a value type; no shared state.
+struct StepStatistics {
+  std::size_t particlePairsTested = 0;  ///< particle pairs whose bounding spheres come within 2ε
+  std::size_t obstaclePairsTested = 0;  ///< particle–obstacle pairs within 2ε of the box
+  std::size_t pairsInContact = 0;       ///< pairs with at least one contact point
+  std::size_t rawContactPoints =
+      0;                          ///< triangle (or sphere) pairs closer than 2ε, before filter(h)
+  std::size_t contactPoints = 0;  ///< after filter(h): the points forces act at
+  std::size_t overlappingContacts = 0;   ///< points where the surfaces interpenetrate
+  double deepestRatio = 0.0;             ///< largest δ / 2ε (above 1: past the shell)
+  double broadPhaseSeconds = 0.0;        ///< placing the meshes, cell list, obstacle boxes
+  double contactDetectionSeconds = 0.0;  ///< contacts() and filter(h) over all pairs
+  double forceSeconds = 0.0;             ///< the contact law and summing the forces
+  double integrationSeconds = 0.0;       ///< moving the particles and obstacles
+  double totalSeconds = 0.0;
+};
+
+/// The energies of the current state.
+///
+/// Threading: a value type; no shared state.
+struct Energies {
+  double translational = 0.0;  ///< Σ ½·m·|v|²
+  double rotational = 0.0;     ///< Σ ½·ω·L
+  double gravitational = 0.0;  ///< Σ −m·g·x (zero at the origin)
+  double elastic = 0.0;        ///< Σ over touching pairs ½·k·δ_max² (the law's spring)
+
+  double kinetic() const noexcept { return translational + rotational; }
+  double total() const noexcept { return translational + rotational + gravitational + elastic; }
+};
+
+/// A DEM simulation: rigid triangulated particles, obstacles, and the contact law of
+/// contact_model.h between them, advanced by explicit time steps.
+///
+/// Each step (velocity Verlet, kick–drift–kick, as LAMMPS integrates granular media):
+///  1. v += dt/2·(F/m + g), L += dt/2·τ                   (forces of the previous evaluation)
+///  2. x += dt·v; q ← rotation(ω·dt)·q, renormalised, with ω = R·I⁻¹·Rᵀ·L at the old q;
+///     obstacles move by their prescribed motion
+///  3. forces at the new positions; the dashpot and friction see the velocities predicted for
+///     that time from the half-step ones and the previous forces (v + dt/2·(F/m + g))
+///  4. v += dt/2·(F/m + g), L += dt/2·τ; ω from L at the new q.
+/// Integrating the world-frame angular momentum L (dL/dt = τ) is Euler's equations with the full
+/// inertia tensor in the world frame; it makes total linear and angular momentum exactly
+/// conserved by the scheme (forces on both bodies act at one point, equal and opposite), so only
+/// round-off changes them in a closed system.
+///
+/// Forces: the broad phase (broad_phase.h) pairs particles whose bounding spheres (centred at
+/// the centre of mass, radius ParticleShape::boundingRadius) come within 2ε, and particles with
+/// obstacles whose surface their bounding sphere comes within 2ε of (the obstacle's box first,
+/// then a nearest-triangle search, query/point_distance.h). The narrow phase, in parallel over
+/// those pairs (delta::parallelFor, each pair into its own slot), runs pairContacts
+/// (narrow_phase.h: contactdetection::contacts on the two placed meshes, the particle first, and
+/// filter(h)), then the contact law. The forces are then summed pair by pair in a fixed order, so
+/// results are bitwise the same for any thread count.
+///
+/// Sphere particles (ParticleShape::sphere) go through the same broad phase, contact law and
+/// integrator; only the narrow phase differs (narrow_phase.h): sphere–sphere pairs analytically
+/// (sphereSphereContacts), sphere–mesh particle pairs with sphereMeshContacts, and sphere–obstacle
+/// pairs with one contactdetection::sphereContacts call per obstacle over all spheres near it
+/// (finishSphereMeshContacts per pair). The gap is always between the sphere's surface and the
+/// other surface, so a sphere and a triangulated particle of the same surface behave alike.
+///
+/// Friction keeps one tangential and one torsion spring per touching pair from one step to the
+/// next (keyed by the pair's indices); a pair that loses contact for a step forgets them.
+///
+/// Throws delta::Error for invalid parameters, shapes, states or indices (naming them), and from
+/// step() when a particle's state stops being finite (a time step too large for the stiffness).
+///
+/// Threading: not thread-safe: one thread at a time may change a World or step it, and no other
+/// may read it meanwhile; const member functions may be called concurrently between steps.
+/// step() runs in parallel itself (OpenMP, through core/parallel.h; OMP_NUM_THREADS).
+class World {
+ public:
+  explicit World(const Parameters& parameters);
+
+  // Building.
+
+  /// Adds a particle shape (see ParticleShape for what is required); returns its index.
+  std::size_t addShape(const Mesh& mesh, double density);
+  /// Adds a shape made before (shares its prepared mesh); returns its index.
+  std::size_t addShape(const ParticleShape& shape);
+  /// Adds a particle of shape `shape`; returns its index.
+  std::size_t addParticle(std::size_t shape, const ParticleState& state);
+  /// Adds an obstacle; returns its index. Throws for a non-finite motion.
+  std::size_t addObstacle(const Mesh& mesh, const ObstacleMotion& motion = {});
+
+  // Changing the state (each makes the next step re-evaluate the forces first).
+
+  void setTimeStep(double timeStep);
+  void setPose(std::size_t particle, const Vec3& position, const Quaternion& orientation);
+  void setVelocity(std::size_t particle, const Vec3& velocity);
+  void setAngularVelocity(std::size_t particle, const Vec3& angularVelocity);
+
+  // Running.
+
+  /// Advances by one time step.
+  void step();
+  /// Advances by `steps` time steps.
+  void run(std::size_t steps);
+
+  // Reading.
+
+  const Parameters& parameters() const noexcept { return parameters_; }
+  const ContactLaw& contactLaw() const noexcept { return law_; }
+  std::span<const ParticleShape> shapes() const noexcept { return shapes_; }
+  std::span<const Particle> particles() const noexcept { return particles_; }
+  std::span<const Obstacle> obstacles() const noexcept { return obstacles_; }
+  /// The contact points of the last force evaluation (after the last step), sorted by pair
+  /// (particle pairs by their indices, then particle–obstacle pairs) and within a pair as found.
+  std::span<const Contact> contacts() const noexcept { return contacts_; }
+  const StepStatistics& statistics() const noexcept { return statistics_; }
+  double time() const noexcept { return time_; }
+  std::size_t stepCount() const noexcept { return stepCount_; }
+
+  Energies energies() const noexcept;
+  /// Σ m·v.
+  Vec3 linearMomentum() const noexcept;
+  /// Σ (x × m·v + L), about the origin.
+  Vec3 angularMomentum() const noexcept;
+  /// suggestedTimeStep(k, smallest particle mass) (contact_model.h); 0 without particles.
+  double suggestedTimeStep() const noexcept;
+
+ private:
+  struct Interaction;
+  struct PairOutcome;
+
+  void evaluateForces(bool halfStepVelocities);
+  std::vector<Interaction> findPairs();
+  /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
+  /// other pairs), viewing sphereObstacleFound_.
+  std::vector<std::span<const ContactPoint>> sphereObstacleContacts(
+      const std::vector<Interaction>& pairs);
+  Sphere boundingSphere(const Particle& particle) const noexcept;
+  void halfKick();
+  void drift();
+  Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation) const noexcept;
+  Particle& particleAt(std::size_t index, const char* operation);
+
+  Parameters parameters_;
+  ContactLaw law_;
+  std::vector<ParticleShape> shapes_;
+  std::vector<Particle> particles_;
+  std::vector<Obstacle> obstacles_;
+  std::vector<QueryMesh> placed_;  ///< each particle's shape at its pose, for the narrow phase
+  std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now
+  /// Per obstacle, the sphere particles' contacts with it of this evaluation (scratch).
+  std::vector<std::vector<ContactPoint>> sphereObstacleFound_;
+  std::vector<Contact> contacts_;
+  /// Tangential springs of touching pairs, keyed (first << 32 | second), sorted.
+  std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings_;
+  std::vector<std::pair<std::uint64_t, TangentialSpring>> obstacleSprings_;
+  StepStatistics statistics_;
+  double elasticEnergy_ = 0.0;
+  double time_ = 0.0;
+  std::size_t stepCount_ = 0;
+  bool forcesCurrent_ = false;
+};
+
+}  // namespace delta::dem

@@ -1,0 +1,152 @@
+#include "delta/dem/narrow_phase.h"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "delta/kernels/point_triangle.h"
+#include "delta/kernels/sphere.h"
+#include "delta/query/contacts.h"
+#include "delta/query/filter.h"
+#include "delta/query/point_distance.h"
+#include "delta/query/sphere_contacts.h"
+
+namespace delta::dem {
+namespace {
+
+/// Contacts found with the meshes swapped, turned round: P and Q swap, so x stays and both
+/// the normal and the direction turn.
+std::vector<ContactPoint> turnedRound(std::vector<ContactPoint> contacts) noexcept {
+  for (ContactPoint& contact : contacts) {
+    contact.normal = -contact.normal;
+    contact.direction = -contact.direction;
+    std::swap(contact.first, contact.second);
+  }
+  return contacts;
+}
+
+/// The second mesh's closest point to the contact's P: see pairContacts, step 3.
+void closestToP(ContactPoint& contact, const QueryMesh& second) {
+  if (contact.overlap || !(contact.distance > 0.0)) return;
+  const Vec3 p = contact.x + contact.normal;
+  contactdetection::PointQuery query;
+  query.epsilon = contact.distance * (1.0 + 0x1p-40);  // Q itself is that close
+  const contactdetection::PointDistance onSecond = contactdetection::distance(second, p, query);
+  if (!onSecond.found() || !(onSecond.distance > 0.0) || !(onSecond.distance <= contact.distance))
+    return;
+  contact.x = (p + onSecond.closest) * 0.5;
+  contact.normal = p - contact.x;
+  contact.direction = (p - onSecond.closest) / onSecond.distance;
+  contact.distance = onSecond.distance;
+  contact.second = onSecond.triangle;
+}
+
+/// Rounding allowance of the local-minimum test, in units of the coordinates' magnitude: Q of a
+/// shared edge, computed from either triangle, agrees to a few ulps of the coordinates.
+constexpr double kOnTriangleUlps = 64.0 * std::numeric_limits<double>::epsilon();
+
+double signedGap(const ContactPoint& contact) noexcept {
+  return contact.overlap ? -contact.distance : contact.distance;
+}
+
+/// The triangle's point of a sphere–triangle contact: Q = P − 2·normal (normal = P − x).
+Vec3 pointOnTriangle(const ContactPoint& contact) noexcept {
+  return contact.x - contact.normal;
+}
+
+/// Step 2 of sphereMeshContacts: whether the contact's Q lies on another reported triangle whose
+/// own closest point is strictly closer to the centre (then Q is no local minimum).
+bool dominated(const ContactPoint& contact, std::span<const ContactPoint> found,
+               const TriangleSoA& triangles) noexcept {
+  const Vec3 q = pointOnTriangle(contact);
+  const double gap = signedGap(contact);
+  for (const ContactPoint& other : found) {
+    if (other.second == contact.second) continue;
+    const Triangle triangle = triangles.triangle(other.second);
+    const double scale =
+        maxAbs(q) + std::sqrt(std::fmax(lengthSquared(triangle.b - triangle.a),
+                                        std::fmax(lengthSquared(triangle.c - triangle.b),
+                                                  lengthSquared(triangle.a - triangle.c))));
+    const double tolerance = kOnTriangleUlps * scale;
+    if (!(signedGap(other) < gap - tolerance)) continue;
+    if (kernels::closestPointOnTriangle(q, triangle).distanceSquared <= tolerance * tolerance)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+PairContacts sphereSphereContacts(const Sphere& first, const Sphere& second,
+                                  double epsilon) noexcept {
+  PairContacts result;
+  const kernels::SphereContactResult r = kernels::sphereSphere(first, second);
+  if (!(r.gap < 2.0 * epsilon)) return result;
+  ContactPoint contact;
+  contact.x = (r.p + r.q) * 0.5;
+  contact.normal = r.p - contact.x;
+  contact.direction = r.normal;
+  contact.distance = std::fabs(r.gap);
+  contact.overlap = r.overlap;
+  result.points.push_back(contact);
+  result.trianglePairs = 1;
+  return result;
+}
+
+PairContacts finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
+                                      double filterDistance) {
+  PairContacts result;
+  result.trianglePairs = found.size();
+  if (found.empty()) return result;
+  std::vector<ContactPoint> kept;
+  kept.reserve(found.size());
+  for (const ContactPoint& contact : found)
+    if (found.size() == 1 || !dominated(contact, found, mesh.triangles())) {
+      kept.push_back(contact);
+      kept.back().first = 0;
+    }
+  if (kept.size() > 1) kept = contactdetection::filter(kept, filterDistance);
+  if (mesh.moved()) {
+    const RigidTransform& pose = mesh.pose();
+    for (ContactPoint& contact : kept) {
+      contact.x = pose.apply(contact.x);
+      contact.normal = pose.rotation.rotate(contact.normal);
+      contact.direction = pose.rotation.rotate(contact.direction);
+    }
+  }
+  result.points = std::move(kept);
+  return result;
+}
+
+PairContacts sphereMeshContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
+                                double filterDistance) {
+  const Sphere inMeshFrame{mesh.moved() ? mesh.inversePose().apply(sphere.center) : sphere.center,
+                           sphere.radius};
+  const std::vector<ContactPoint> found =
+      contactdetection::sphereContacts(inMeshFrame, mesh.triangles(), epsilon);
+  return finishSphereMeshContacts(found, mesh, filterDistance);
+}
+
+PairContacts meshSphereContacts(const QueryMesh& mesh, const Sphere& sphere, double epsilon,
+                                double filterDistance) {
+  PairContacts result = sphereMeshContacts(sphere, mesh, epsilon, filterDistance);
+  result.points = turnedRound(std::move(result.points));
+  return result;
+}
+
+PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                          double filterDistance, bool compareInSecondFrame) {
+  PairContacts result;
+  std::vector<ContactPoint> found =
+      compareInSecondFrame ? turnedRound(contactdetection::contacts(second, first, epsilon))
+                           : contactdetection::contacts(first, second, epsilon);
+  result.trianglePairs = found.size();
+  if (found.empty()) return result;
+  std::vector<ContactPoint> kept = contactdetection::filter(found, filterDistance);
+  for (ContactPoint& contact : kept)
+    closestToP(contact, second);
+  result.points = kept.size() > 1 ? contactdetection::filter(kept, filterDistance) : kept;
+  return result;
+}
+
+}  // namespace delta::dem

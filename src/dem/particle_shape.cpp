@@ -1,0 +1,98 @@
+#include "delta/dem/particle_shape.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/mesh/mass_properties.h"
+#include "delta/mesh/primitives.h"
+#include "delta/mesh/topology.h"
+
+namespace delta::dem {
+
+namespace detail {
+/// A particle's mesh, checked and moved to its centre of mass, and its mass properties.
+struct PreparedShape {
+  Mesh body;
+  MassProperties properties;  ///< inertia about the centroid; centroid in the given coordinates
+  double density;
+  double sphereRadius = 0.0;  ///< > 0: a sphere shape of this radius; `body` is for display
+};
+}  // namespace detail
+
+namespace {
+
+void requireDensity(double density) {
+  if (!std::isfinite(density) || !(density > 0.0))
+    throw Error("particle shape: density = " + toString(density) + " must be finite and positive");
+}
+
+detail::PreparedShape prepare(const Mesh& mesh, double density) {
+  requireDensity(density);
+  const Topology topology = analyzeTopology(mesh);
+  if (!topology.closed || !topology.consistentlyOriented)
+    throw Error("particle shape: the mesh must be closed and consistently oriented (" +
+                std::to_string(topology.boundaryEdges) + " boundary, " +
+                std::to_string(topology.nonManifoldEdges) + " non-manifold, " +
+                std::to_string(topology.misorientedEdges) + " misoriented edges of " +
+                std::to_string(topology.edges) + ")");
+  const MassProperties properties = massProperties(mesh, density);
+  Mesh body = mesh;
+  body.translate(-properties.centroid);
+  return {std::move(body), properties, density};
+}
+
+double largestVertexDistance(const Mesh& mesh) noexcept {
+  double largest = 0.0;
+  for (const Vec3& vertex : mesh.vertices())
+    largest = std::max(largest, lengthSquared(vertex));
+  return std::sqrt(largest);
+}
+
+}  // namespace
+
+Mat3 inverse(const Mat3& m) noexcept {
+  const Vec3 r0 = m.row(0), r1 = m.row(1), r2 = m.row(2);
+  // The columns of the inverse are the cross products of the rows over the determinant.
+  const Vec3 c0 = cross(r1, r2), c1 = cross(r2, r0), c2 = cross(r0, r1);
+  const double scale = 1.0 / dot(r0, c0);
+  return Mat3::fromRows(c0, c1, c2).transposed() * scale;
+}
+
+ParticleShape::ParticleShape(const Mesh& mesh, double density)
+    : ParticleShape(prepare(mesh, density)) {}
+
+ParticleShape ParticleShape::sphere(double radius, double density, int displaySubdivisions) {
+  if (!std::isfinite(radius) || !(radius > 0.0))
+    throw Error("particle shape: sphere radius = " + toString(radius) +
+                " must be finite and positive");
+  requireDensity(density);
+  if (displaySubdivisions < 0 || displaySubdivisions > 6)
+    throw Error("particle shape: sphere displaySubdivisions = " +
+                std::to_string(displaySubdivisions) + " must lie in [0, 6]");
+  MassProperties properties;
+  properties.volume = 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
+  properties.mass = density * properties.volume;
+  properties.inertia = Mat3::identity() * (0.4 * properties.mass * radius * radius);
+  return ParticleShape(detail::PreparedShape{primitives::icosphere(displaySubdivisions, radius),
+                                             properties, density, radius});
+}
+
+ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
+    : mesh_(prepared.body),
+      queryMesh_(mesh_),
+      density_(prepared.density),
+      volume_(prepared.properties.volume),
+      mass_(prepared.properties.mass),
+      inertia_(prepared.properties.inertia),
+      inverseInertia_(inverse(prepared.properties.inertia)),
+      boundingRadius_(prepared.sphereRadius > 0.0 ? prepared.sphereRadius
+                                                  : largestVertexDistance(mesh_)),
+      centroid_(prepared.properties.centroid),
+      kind_(prepared.sphereRadius > 0.0 ? ParticleKind::Sphere : ParticleKind::Mesh) {}
+
+}  // namespace delta::dem

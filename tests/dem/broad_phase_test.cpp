@@ -1,0 +1,76 @@
+#include "delta/dem/broad_phase.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "delta/core/error.h"
+
+namespace delta::dem {
+namespace {
+
+std::vector<Sphere> randomSpheres(std::size_t count, double box, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53; };
+  std::vector<Sphere> spheres(count);
+  for (Sphere& sphere : spheres) {
+    sphere.center = {box * uniform(), box * uniform(), box * uniform()};
+    sphere.radius = 0.5 + 0.5 * uniform();
+  }
+  return spheres;
+}
+
+std::vector<CandidatePair> pairsByDefinition(const std::vector<Sphere>& spheres, double margin) {
+  std::vector<CandidatePair> pairs;
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+    for (std::size_t j = i + 1; j < spheres.size(); ++j) {
+      const double reach = spheres[i].radius + spheres[j].radius + margin;
+      if (distanceSquared(spheres[i].center, spheres[j].center) < reach * reach)
+        pairs.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+    }
+  return pairs;
+}
+
+TEST(DemBroadPhase, FindsExactlyThePairsOfTheDefinitionInOrder) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const std::vector<Sphere> spheres = randomSpheres(2000, 30.0, seed);
+    const std::vector<CandidatePair> expected = pairsByDefinition(spheres, 0.1);
+    EXPECT_GT(expected.size(), 1000u);
+    EXPECT_EQ(nearbyPairs(spheres, 0.1), expected) << "seed " << seed;
+  }
+}
+
+TEST(DemBroadPhase, FarApartAndCoincidentSpheres) {
+  std::vector<Sphere> spheres = {
+      {{0, 0, 0}, 1}, {{1e9, 0, 0}, 1}, {{1e9, 1.5, 0}, 1}, {{0, 0, 0}, 1}, {{-1e9, -1e9, 1e9}, 1}};
+  EXPECT_EQ(nearbyPairs(spheres, 0.0), pairsByDefinition(spheres, 0.0));
+  EXPECT_EQ(nearbyPairs(spheres, 0.0).size(), 2u);
+  EXPECT_TRUE(nearbyPairs(std::vector<Sphere>{{{0, 0, 0}, 0}, {{0, 0, 0}, 0}}, 0.0).empty());
+  EXPECT_TRUE(nearbyPairs(std::vector<Sphere>{}, 1.0).empty());
+}
+
+TEST(DemBroadPhase, SameForOneAndTwoThreads) {
+  const std::vector<Sphere> spheres = randomSpheres(3000, 40.0, 7);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::vector<CandidatePair> one = nearbyPairs(spheres, 0.2);
+  omp_set_num_threads(2);
+  const std::vector<CandidatePair> two = nearbyPairs(spheres, 0.2);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one, two);
+}
+
+TEST(DemBroadPhase, RejectsBadInput) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{0, 0, 0}, 1}}, -1.0), Error);
+  EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{0, 0, 0}, 1}}, nan), Error);
+  EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{nan, 0, 0}, 1}}, 0.0), Error);
+  EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{0, 0, 0}, -1}}, 0.0), Error);
+}
+
+}  // namespace
+}  // namespace delta::dem

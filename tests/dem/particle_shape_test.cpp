@@ -1,0 +1,78 @@
+#include "delta/dem/particle_shape.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "delta/core/error.h"
+#include "delta/mesh/primitives.h"
+
+namespace delta::dem {
+namespace {
+
+TEST(DemParticleShape, BoxInItsCentreOfMassFrame) {
+  const ParticleShape shape(primitives::box({2, 4, 6}, {10, 20, 30}), 3.0);
+  EXPECT_NEAR(shape.volume(), 48.0, 1e-12);
+  EXPECT_NEAR(shape.mass(), 144.0, 1e-11);
+  EXPECT_NEAR(distance(shape.centroid(), {10, 20, 30}), 0.0, 1e-12);
+  EXPECT_NEAR(distance(shape.mesh().bounds().center(), {}), 0.0, 1e-12);
+  // A box's moments: m(b² + c²)/12 and the other two likewise.
+  EXPECT_NEAR(shape.inertia()(0, 0), 144.0 * (16 + 36) / 12, 1e-9);
+  EXPECT_NEAR(shape.inertia()(1, 1), 144.0 * (4 + 36) / 12, 1e-9);
+  EXPECT_NEAR(shape.inertia()(2, 2), 144.0 * (4 + 16) / 12, 1e-9);
+  EXPECT_NEAR(shape.boundingRadius(), std::sqrt(1.0 + 4.0 + 9.0), 1e-12);
+}
+
+TEST(DemParticleShape, InverseInertiaOfATurnedGranulate) {
+  Mesh grain = primitives::granulate(3, {1.0, 0.7, 0.5});
+  grain.rotate(Vec3{1, 2, 3}, 0.8);  // products of inertia off the diagonal
+  const ParticleShape shape(grain, 2.0);
+  const Mat3 product = shape.inertia() * shape.inverseInertia();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(product(r, c), r == c ? 1.0 : 0.0, 1e-12);
+  EXPECT_GT(std::fabs(shape.inertia()(0, 1)), 1e-3);
+}
+
+TEST(DemParticleShape, RejectsOpenMeshesAndBadDensities) {
+  EXPECT_THROW(ParticleShape(primitives::quad(), 1.0), Error);
+  EXPECT_THROW(ParticleShape(primitives::icosphere(1), 0.0), Error);
+  EXPECT_THROW(ParticleShape(primitives::icosphere(1), -2.0), Error);
+  EXPECT_THROW(ParticleShape(primitives::icosphere(1), std::numeric_limits<double>::quiet_NaN()),
+               Error);
+}
+
+TEST(DemParticleShape, SphereHasExactMassProperties) {
+  const double r = 0.02, density = 2500.0;
+  const ParticleShape shape = ParticleShape::sphere(r, density);
+  const double mass = density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  EXPECT_TRUE(shape.isSphere());
+  EXPECT_EQ(shape.kind(), ParticleKind::Sphere);
+  EXPECT_NEAR(shape.mass() / mass, 1.0, 1e-15);
+  EXPECT_EQ(shape.boundingRadius(), r);
+  EXPECT_EQ(shape.centroid(), Vec3{});
+  for (int row = 0; row < 3; ++row)
+    for (int column = 0; column < 3; ++column)
+      EXPECT_NEAR(shape.inertia()(row, column), row == column ? 0.4 * mass * r * r : 0.0,
+                  1e-15 * mass * r * r);
+  EXPECT_NEAR(shape.inverseInertia()(1, 1) * shape.inertia()(1, 1), 1.0, 1e-15);
+  EXPECT_EQ(shape.mesh().triangleCount(), 320u);  // the display icosphere, 2 subdivisions
+  EXPECT_EQ(ParticleShape::sphere(r, density, 1).mesh().triangleCount(), 80u);
+  EXPECT_FALSE(ParticleShape(primitives::icosphere(1), 1.0).isSphere());
+}
+
+TEST(DemParticleShape, SphereRejectsBadRadiiDensitiesAndSubdivisions) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(ParticleShape::sphere(0.0, 1.0), Error);
+  EXPECT_THROW(ParticleShape::sphere(-1.0, 1.0), Error);
+  EXPECT_THROW(ParticleShape::sphere(nan, 1.0), Error);
+  EXPECT_THROW(ParticleShape::sphere(1.0, 0.0), Error);
+  EXPECT_THROW(ParticleShape::sphere(1.0, nan), Error);
+  EXPECT_THROW(ParticleShape::sphere(1.0, 1.0, -1), Error);
+  EXPECT_THROW(ParticleShape::sphere(1.0, 1.0, 7), Error);
+}
+
+}  // namespace
+}  // namespace delta::dem
