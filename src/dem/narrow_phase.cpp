@@ -82,13 +82,7 @@ PairContacts sphereSphereContacts(const Sphere& first, const Sphere& second,
   PairContacts result;
   const kernels::SphereContactResult r = kernels::sphereSphere(first, second);
   if (!(r.gap < 2.0 * epsilon)) return result;
-  ContactPoint contact;
-  contact.x = (r.p + r.q) * 0.5;
-  contact.normal = r.p - contact.x;
-  contact.direction = r.normal;
-  contact.distance = std::fabs(r.gap);
-  contact.overlap = r.overlap;
-  result.points.push_back(contact);
+  result.points.push_back(contactdetection::sphereContactPoint(r, 0, 0));
   result.trianglePairs = 1;
   return result;
 }

@@ -45,7 +45,7 @@ class Random {
   std::mt19937_64 engine_;
 };
 
-/// The parameters every granular scenario shares, its stiffness still to be set.
+/// The parameters every granular scenario shares; granularWorld sets the stiffness and time step.
 Parameters granularParameters(double restitution, double friction) {
   Parameters parameters;
   parameters.epsilon = kGrainRadius / 20.0;
@@ -53,7 +53,7 @@ Parameters granularParameters(double restitution, double friction) {
   parameters.restitution = restitution;
   parameters.friction = friction;
   parameters.gravity = {0.0, 0.0, -kGravity};
-  parameters.stiffness = 1.0;  // placeholders until the shapes' masses are known
+  parameters.stiffness = 1.0;  // valid stand-ins: granularWorld sets both from the masses
   parameters.timeStep = 1.0;
   return parameters;
 }

@@ -60,19 +60,6 @@ void checkSphere(const Sphere& sphere, std::size_t index) {
                 " radius = " + toString(sphere.radius) + " must be finite and positive");
 }
 
-ContactPoint contactPoint(const kernels::SphereContactResult& r, std::size_t sphere,
-                          std::size_t triangle) noexcept {
-  ContactPoint contact;
-  contact.x = (r.p + r.q) * 0.5;
-  contact.normal = r.p - contact.x;
-  contact.direction = r.normal;
-  contact.distance = std::fabs(r.gap);
-  contact.overlap = r.overlap;
-  contact.first = static_cast<std::uint32_t>(sphere);
-  contact.second = static_cast<std::uint32_t>(triangle);
-  return contact;
-}
-
 /// The contacts of one (validated) sphere with every triangle of `mesh`, in id order.
 void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh,
                 const MeshBoxes& boxes, double epsilon, std::vector<ContactPoint>& out) {
@@ -86,7 +73,9 @@ void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh
     const std::size_t end = std::min((block + 1) * kBlock, mesh.size());
     for (std::size_t j = block * kBlock; j < end; ++j) {
       const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, mesh.triangle(j));
-      if (r.gap < reach) out.push_back(contactPoint(r, index, j));
+      if (r.gap < reach)
+        out.push_back(sphereContactPoint(r, static_cast<std::uint32_t>(index),
+                                         static_cast<std::uint32_t>(j)));
     }
   }
 }
@@ -129,6 +118,19 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
   for (const std::vector<ContactPoint>& some : perChunk)
     all.insert(all.end(), some.begin(), some.end());
   return all;
+}
+
+ContactPoint sphereContactPoint(const kernels::SphereContactResult& result, std::uint32_t first,
+                                std::uint32_t second) noexcept {
+  ContactPoint contact;
+  contact.x = (result.p + result.q) * 0.5;
+  contact.normal = result.p - contact.x;
+  contact.direction = result.normal;
+  contact.distance = std::fabs(result.gap);
+  contact.overlap = result.overlap;
+  contact.first = first;
+  contact.second = second;
+  return contact;
 }
 
 }  // namespace delta::contactdetection

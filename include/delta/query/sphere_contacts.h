@@ -5,6 +5,7 @@
 
 #include "delta/core/contact_point.h"
 #include "delta/core/sphere.h"
+#include "delta/kernels/sphere.h"
 #include "delta/mesh/triangle_soa.h"
 
 namespace delta::contactdetection {
@@ -57,5 +58,13 @@ std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA
 /// `first` being its index in `spheres`, sorted by (sphere index, triangle id).
 std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const TriangleSoA& mesh,
                                          double epsilon);
+
+/// A sphere kernel's answer (kernels::sphereSphere or sphereTriangle) as the ContactPoint
+/// conventions above have it: x midway between P and Q, `distance` the gap or, where they
+/// overlap, the depth, `first` and `second` the ids given.
+///
+/// Threading: a pure function.
+ContactPoint sphereContactPoint(const kernels::SphereContactResult& result, std::uint32_t first,
+                                std::uint32_t second) noexcept;
 
 }  // namespace delta::contactdetection
