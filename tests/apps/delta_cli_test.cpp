@@ -15,47 +15,17 @@
 
 #include "delta/core/version.h"
 
+#include "cli_run.h"
+
 namespace {
 
-struct CliRun {
-  int exitCode = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const std::filesystem::path& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
-CliRun runDelta(const std::string& arguments) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("delta_cli_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string command = std::string("'") + DELTA_CLI + "' " + arguments + " >'" +
-                              (dir / "out").string() + "' 2>'" + (dir / "err").string() + "'";
-  const int status = std::system(command.c_str());
-  CliRun run;
-  run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  run.out = slurp(dir / "out");
-  run.err = slurp(dir / "err");
-  std::filesystem::remove_all(dir);
-  return run;
-}
+using delta::test::CliRun;
+using delta::test::expectOneLineError;
+using delta::test::runDelta;
+using delta::test::slurp;
 
 std::string dataPath(const std::string& relative) {
   return std::string(DELTA_DATA_DIR) + "/" + relative;
-}
-
-void expectOneLineError(const CliRun& run, const std::string& needle) {
-  EXPECT_NE(run.exitCode, 0);
-  EXPECT_LT(run.exitCode, 128) << "killed by a signal: " << run.err;
-  EXPECT_TRUE(run.out.empty()) << run.out;
-  ASSERT_FALSE(run.err.empty());
-  EXPECT_EQ(run.err.find('\n'), run.err.size() - 1) << "more than one line: " << run.err;
-  EXPECT_NE(run.err.find(needle), std::string::npos) << run.err;
 }
 
 TEST(DeltaCli, PrintsVersionAndCommit) {

@@ -17,56 +17,17 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exitCode = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string slurp(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
-/// A folder in the temporary folder, named for this process, removed with what is in it.
-struct TemporaryFolder {
-  explicit TemporaryFolder(const std::string& name)
-      : path(fs::temp_directory_path() /
-             ("delta_dem_cli_" + std::to_string(::getpid()) + "_" + name)) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TemporaryFolder() { fs::remove_all(path); }
-  fs::path path;
-};
-
-CliRun runDelta(const std::string& arguments) {
-  const TemporaryFolder streams("streams");
-  const std::string command = std::string("'") + DELTA_CLI + "' " + arguments + " >'" +
-                              (streams.path / "out").string() + "' 2>'" +
-                              (streams.path / "err").string() + "'";
-  const int status = std::system(command.c_str());
-  CliRun run;
-  run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  run.out = slurp(streams.path / "out");
-  run.err = slurp(streams.path / "err");
-  return run;
-}
-
-void expectOneLineError(const CliRun& run, const std::string& needle) {
-  EXPECT_NE(run.exitCode, 0);
-  EXPECT_LT(run.exitCode, 128) << "killed by a signal: " << run.err;
-  EXPECT_TRUE(run.out.empty()) << run.out;
-  ASSERT_FALSE(run.err.empty());
-  EXPECT_EQ(run.err.find('\n'), run.err.size() - 1) << "more than one line: " << run.err;
-  EXPECT_NE(run.err.find(needle), std::string::npos) << run.err;
-}
+using delta::test::CliRun;
+using delta::test::expectOneLineError;
+using delta::test::runDelta;
+using delta::test::slurp;
+using delta::test::TemporaryFolder;
 
 /// The number after "key": in a JSON line; NaN when the key is missing or not a number.
 double jsonNumber(const std::string& json, const std::string& key) {

@@ -16,6 +16,8 @@
 #include "delta/dem/world.h"
 #include "delta/mesh/primitives.h"
 
+#include "centimetre_parameters.h"
+
 namespace delta::dem {
 namespace {
 
@@ -29,24 +31,10 @@ std::string scientific(double value) {
   return text;
 }
 
-/// The scenarios' rules (scenarios.h): ε = r/20, h = r/4, k from the fastest impact.
-Parameters sphereParameters(double mass, double speed, double restitution, double friction,
-                            const Vec3& gravity) {
-  Parameters parameters;
-  parameters.epsilon = kRadius / 20.0;
-  parameters.filterDistance = kRadius / 4.0;
-  parameters.restitution = restitution;
-  parameters.friction = friction;
-  parameters.gravity = gravity;
-  parameters.stiffness = stiffnessForImpact(mass, speed, parameters.epsilon);
-  parameters.timeStep = suggestedTimeStep(parameters.stiffness, mass);
-  return parameters;
-}
-
 /// twoParticles() with exact spheres: head-on at 1 m/s, starting r/10 outside the shells.
 double measuredRestitution(double restitution) {
   const ParticleShape sphere = ParticleShape::sphere(kRadius, kDensity);
-  World world(sphereParameters(0.5 * sphere.mass(), 1.0, restitution, 0.0, {}));
+  World world(test::centimetreParameters(0.5 * sphere.mass(), 1.0, restitution, 0.0, {}));
   world.addShape(sphere);
   const double centres = 2.0 * kRadius + 2.0 * world.parameters().epsilon + 0.1 * kRadius;
   ParticleState left, right;
@@ -76,8 +64,8 @@ TEST(DemSpheres, HeadOnRestitutionMatchesTheCoefficient) {
 
 TEST(DemSpheres, SphereOnAFloorComesToRest) {
   const ParticleShape shape = ParticleShape::sphere(kRadius, kDensity);
-  World world(
-      sphereParameters(shape.mass(), std::sqrt(2 * kGravity * 0.02), 0.5, 0.5, {0, 0, -kGravity}));
+  World world(test::centimetreParameters(shape.mass(), std::sqrt(2 * kGravity * 0.02), 0.5, 0.5,
+                                         {0, 0, -kGravity}));
   world.addShape(shape);
   world.addObstacle(primitives::quad(0.1, 0.1));
   ParticleState state;
@@ -109,7 +97,7 @@ TEST(DemSpheres, ClosedSystemConservesMomentaToRoundOff) {
   std::mt19937_64 random(5);
   const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
   const ParticleShape small = ParticleShape::sphere(0.8 * kRadius, kDensity);
-  World world(sphereParameters(small.mass(), 1.0, 0.7, 0.5, {}));
+  World world(test::centimetreParameters(small.mass(), 1.0, 0.7, 0.5, {}));
   world.addShape(small);
   world.addShape(ParticleShape::sphere(kRadius, kDensity));
   world.addShape(primitives::granulate(3, {kRadius, 0.8 * kRadius, 0.6 * kRadius}), kDensity);
@@ -155,7 +143,8 @@ TEST(DemSpheres, ClosedSystemConservesMomentaToRoundOff) {
 double bounceHeight(const ParticleShape& shape, double stiffnessMass, double restitution) {
   const double height = 0.02;
   const double speed = std::sqrt(2.0 * kGravity * height);
-  World world(sphereParameters(stiffnessMass, speed, restitution, 0.0, {0, 0, -kGravity}));
+  World world(
+      test::centimetreParameters(stiffnessMass, speed, restitution, 0.0, {0, 0, -kGravity}));
   world.addShape(shape);
   world.addObstacle(primitives::quad(0.1, 0.1));
   ParticleState state;

@@ -13,26 +13,14 @@
 #include "delta/dem/scenarios.h"
 #include "delta/mesh/primitives.h"
 
+#include "centimetre_parameters.h"
+
 namespace delta::dem {
 namespace {
 
 constexpr double kRadius = 0.01;
 constexpr double kDensity = 2500.0;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-/// Centimetre granulates as the scenarios make them, stiff enough for `speed`.
-Parameters granularParameters(double mass, double speed, double restitution, double friction,
-                              const Vec3& gravity) {
-  Parameters parameters;
-  parameters.epsilon = kRadius / 20.0;
-  parameters.filterDistance = kRadius / 4.0;
-  parameters.restitution = restitution;
-  parameters.friction = friction;
-  parameters.gravity = gravity;
-  parameters.stiffness = stiffnessForImpact(mass, speed, parameters.epsilon);
-  parameters.timeStep = suggestedTimeStep(parameters.stiffness, mass);
-  return parameters;
-}
 
 /// Six granulates flying at each other off-centre and spinning: no gravity, no walls, friction.
 World closedSystem() {
@@ -42,7 +30,7 @@ World closedSystem() {
   for (std::uint64_t seed = 1; seed <= 3; ++seed)
     shapes.emplace_back(primitives::granulate(seed, {kRadius, 0.8 * kRadius, 0.6 * kRadius}),
                         kDensity);
-  World world(granularParameters(shapes[0].mass(), 1.0, 0.7, 0.5, {}));
+  World world(test::centimetreParameters(shapes[0].mass(), 1.0, 0.7, 0.5, {}));
   for (const ParticleShape& shape : shapes)
     world.addShape(shape);
   const Vec3 directions[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
@@ -103,7 +91,7 @@ TEST(DemWorld, RejectsBadInput) {
 }
 
 TEST(DemWorld, FreeFallIsExactForVelocityVerlet) {
-  World world(granularParameters(1.0, 1.0, 0.5, 0.0, {0, 0, -9.81}));
+  World world(test::centimetreParameters(1.0, 1.0, 0.5, 0.0, {0, 0, -9.81}));
   world.addShape(primitives::icosphere(1, kRadius), kDensity);
   ParticleState state;
   state.position = {1, 2, 3};
@@ -118,7 +106,7 @@ TEST(DemWorld, FreeFallIsExactForVelocityVerlet) {
 }
 
 TEST(DemWorld, TorqueFreeRotationKeepsAngularMomentum) {
-  World world(granularParameters(1.0, 1.0, 0.5, 0.0, {}));
+  World world(test::centimetreParameters(1.0, 1.0, 0.5, 0.0, {}));
   world.addShape(primitives::granulate(5, {kRadius, 0.7 * kRadius, 0.4 * kRadius}), kDensity);
   ParticleState state;
   state.angularVelocity = {30, 20, 10};  // no principal axis: the body tumbles
@@ -164,8 +152,8 @@ TEST(DemWorld, ClosedSystemConservesMomentaToRoundOff) {
 TEST(DemWorld, ParticleOnAFloorComesToRest) {
   const ParticleShape shape(primitives::granulate(7, {kRadius, 0.8 * kRadius, 0.6 * kRadius}),
                             kDensity);
-  World world(
-      granularParameters(shape.mass(), std::sqrt(2 * 9.81 * 0.02), 0.5, 0.5, {0, 0, -9.81}));
+  World world(test::centimetreParameters(shape.mass(), std::sqrt(2 * 9.81 * 0.02), 0.5, 0.5,
+                                         {0, 0, -9.81}));
   world.addShape(shape);
   world.addObstacle(primitives::quad(0.1, 0.1));
   ParticleState state;
@@ -187,7 +175,7 @@ TEST(DemWorld, ParticleOnAFloorComesToRest) {
 }
 
 TEST(DemWorld, ObstaclesMoveAsPrescribed) {
-  World world(granularParameters(1.0, 1.0, 0.5, 0.0, {}));
+  World world(test::centimetreParameters(1.0, 1.0, 0.5, 0.0, {}));
   ObstacleMotion motion;
   motion.velocity = {0, 0, 0.1};
   motion.angularVelocity = {0, 0, 2.0};

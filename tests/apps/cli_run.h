@@ -1,0 +1,72 @@
+// Running the `delta` executable from a test as a user would, and the command-line contract's
+// error rule, for every CLI test file.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace delta::test {
+
+/// What one run of `delta` did.
+struct CliRun {
+  int exitCode = -1;
+  std::string out;
+  std::string err;
+};
+
+/// A file's bytes.
+inline std::string slurp(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+/// A folder in the temporary folder, named for this process, removed with what is in it.
+struct TemporaryFolder {
+  explicit TemporaryFolder(const std::string& name)
+      : path(std::filesystem::temp_directory_path() /
+             ("delta_cli_" + std::to_string(::getpid()) + "_" + name)) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TemporaryFolder() { std::filesystem::remove_all(path); }
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  std::filesystem::path path;
+};
+
+/// Runs `delta ARGUMENTS` (the build's DELTA_CLI) through the shell, capturing both streams;
+/// a death by signal reads as exit code 128 + the signal.
+inline CliRun runDelta(const std::string& arguments) {
+  const TemporaryFolder streams("streams");
+  const std::string command = std::string("'") + DELTA_CLI + "' " + arguments + " >'" +
+                              (streams.path / "out").string() + "' 2>'" +
+                              (streams.path / "err").string() + "'";
+  const int status = std::system(command.c_str());
+  CliRun run;
+  run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  run.out = slurp(streams.path / "out");
+  run.err = slurp(streams.path / "err");
+  return run;
+}
+
+/// The contract for bad input: a non-zero exit (not a crash), nothing on stdout, one line on
+/// stderr that contains `needle`.
+inline void expectOneLineError(const CliRun& run, const std::string& needle) {
+  EXPECT_NE(run.exitCode, 0);
+  EXPECT_LT(run.exitCode, 128) << "killed by a signal: " << run.err;
+  EXPECT_TRUE(run.out.empty()) << run.out;
+  ASSERT_FALSE(run.err.empty());
+  EXPECT_EQ(run.err.find('\n'), run.err.size() - 1) << "more than one line: " << run.err;
+  EXPECT_NE(run.err.find(needle), std::string::npos) << run.err;
+}
+
+}  // namespace delta::test
