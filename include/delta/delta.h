@@ -19,6 +19,7 @@
 #include "delta/dem/particle_shape.h"
 #include "delta/dem/scenarios.h"
 #include "delta/dem/world.h"
+#include "delta/ib/adaptive_grid.h"
 #include "delta/io/mesh_io.h"
 #include "delta/io/points.h"
 #include "delta/io/vtk.h"

@@ -221,13 +221,29 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   data_ = std::move(data);
 }
 
-QueryMesh& QueryMesh::transform(const RigidTransform& motion) {
+namespace {
+
+/// `motion` with its rotation renormalised; delta::Error naming `what` for a translation that is
+/// not finite (Quaternion::fromComponents rejects a bad rotation).
+RigidTransform checkedMotion(const RigidTransform& motion, const char* what) {
   if (!isFinite(motion.translation))
-    throw Error("QueryMesh::transform: translation " + toString(motion.translation) +
-                " is not finite");
+    throw Error(std::string("QueryMesh::") + what + ": translation " +
+                toString(motion.translation) + " is not finite");
   const Quaternion& q = motion.rotation;
-  const RigidTransform unit{Quaternion::fromComponents(q.w, q.x, q.y, q.z), motion.translation};
-  pose_ = unit * pose_;
+  return {Quaternion::fromComponents(q.w, q.x, q.y, q.z), motion.translation};
+}
+
+}  // namespace
+
+QueryMesh& QueryMesh::transform(const RigidTransform& motion) {
+  pose_ = checkedMotion(motion, "transform") * pose_;
+  inversePose_ = pose_.inverse();
+  moved_ = true;
+  return *this;
+}
+
+QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
+  pose_ = checkedMotion(pose, "setPose");
   inversePose_ = pose_.inverse();
   moved_ = true;
   return *this;

@@ -62,6 +62,12 @@ TEST(QueryMesh, MovingItIsMovingTheMesh) {
   const PointDistance home = distance(back, points[0]), original = distance(prepared, points[0]);
   EXPECT_NEAR(home.distance, original.distance, 1e-12 * size);
   EXPECT_EQ(home.triangle, original.triangle);
+  // setPose puts it anywhere at once: where the two moves took it, and back home exactly.
+  QueryMesh placed = prepared;
+  placed.setPose(moved.pose());
+  EXPECT_EQ(distance(placed, points[1]).distance, distance(moved, points[1]).distance);
+  placed.setPose({});
+  EXPECT_EQ(distance(placed, points[1]).distance, distance(prepared, points[1]).distance);
 }
 
 TEST(QueryMesh, MovedMeshesGiveTheContactsOfTheMovedMeshes) {
@@ -98,6 +104,8 @@ TEST(QueryMesh, RejectsNonFiniteMotionsAndEmptyMeshes) {
   QueryMesh box(primitives::box());
   EXPECT_THROW(box.transform(RigidTransform::translationBy({0, NAN, 0})), Error);
   EXPECT_THROW(box.transform({Quaternion{0, 0, 0, 0}, {}}), Error);
+  EXPECT_THROW(box.setPose(RigidTransform::translationBy({INFINITY, 0, 0})), Error);
+  EXPECT_THROW(box.setPose({Quaternion{0, 0, 0, 0}, {}}), Error);
   EXPECT_FALSE(box.moved());
   EXPECT_THROW(QueryMesh(Mesh({}, {})), Error);
 }

@@ -47,6 +47,9 @@ class QueryMesh {
 
   /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose. O(1).
   QueryMesh& transform(const RigidTransform& motion);
+  /// Puts the mesh at `pose` (from the frame it was prepared in; the rotation is renormalised).
+  /// O(1).
+  QueryMesh& setPose(const RigidTransform& pose);
   /// Where the mesh is: the map from the frame it was prepared in to where it is now.
   const RigidTransform& pose() const noexcept { return pose_; }
   /// The inverse of pose(): from world coordinates into the prepared frame.

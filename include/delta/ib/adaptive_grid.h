@@ -1,0 +1,178 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "delta/core/aabb.h"
+#include "delta/core/rotation.h"
+#include "delta/core/vec3.h"
+#include "delta/query/point_distance.h"
+#include "delta/query/query_mesh.h"
+
+/// Immersed boundaries: an adaptive Cartesian grid refined around a boundary mesh, with the
+/// boundary's (signed) distance at every grid vertex.
+namespace delta::ib {
+
+/// How an AdaptiveGrid is made. Checked when a grid is made (delta::Error naming the field).
+///
+/// Threading: a value type; no shared state.
+struct GridOptions {
+  /// The finest level L (the root cell is level 0; a level-l cell is 2^−l of the domain per
+  /// axis). 1 ≤ L ≤ 20.
+  int levels = 7;
+  /// A cell of level l < L is refined while the smallest |distance| at its eight corners is below
+  /// refineFactor × its diagonal. Every point of a cell lies within half a diagonal of a corner,
+  /// so any factor ≥ ½ refines every cell the boundary passes through. > 0, finite.
+  double refineFactor = 1.0;
+  /// Signed distances (negative inside; the boundary must be closed, delta::Error otherwise) or
+  /// unsigned.
+  bool signedDistance = true;
+  /// The domain the root cell covers. Empty (the default): the boundary's box where it is when
+  /// the grid is made, made a cube about its centre and grown by `padding` × its longest side on
+  /// every side. The domain stays where it is when the boundary moves.
+  Aabb domain{};
+  /// See `domain`. ≥ 0, finite.
+  double padding = 0.1;
+  /// After a move, vertices whose |distance| is at most this hold the exact distance to the
+  /// boundary where it is now; further vertices keep their sign (exact) and a distance within
+  /// errorBound() of the exact one, and are queried again only once that bound could bring them
+  /// into the band or change a refinement decision. NaN (the default): the diagonal of a
+  /// level-L cell, so that every corner of every cell the boundary passes through is exact.
+  /// 0: only what refinement needs. +∞: every vertex exact after every move. ≥ 0.
+  double exactBand = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One cell of the grid: a box of the octree, at `level`, whose lower corner is `origin` in
+/// units of the finest cell (so its side is 2^(L − level) units), with its eight corner vertices
+/// in VTK's voxel order (corner c has offset (c & 1, (c >> 1) & 1, (c >> 2) & 1)).
+struct Cell {
+  std::array<std::uint32_t, 3> origin{};
+  std::array<std::uint32_t, 8> corners{};
+  std::uint32_t firstChild = kLeaf;  ///< index of its first child in the next level (8 in a row)
+  std::uint8_t level = 0;
+
+  static constexpr std::uint32_t kLeaf = std::numeric_limits<std::uint32_t>::max();
+  bool leaf() const noexcept { return firstChild == kLeaf; }
+};
+
+/// What one build or move did.
+struct GridStatistics {
+  std::size_t queries = 0;       ///< vertices whose distance was computed
+  std::size_t cellsCreated = 0;  ///< cells made (every cell, at a build)
+  std::size_t cellsRemoved = 0;  ///< cells coarsened away
+  double querySeconds = 0.0;     ///< time inside Δ's distance queries
+  double seconds = 0.0;          ///< the whole build or move
+};
+
+/// An octree Cartesian grid over a fixed box (GridOptions::domain), refined around a boundary
+/// mesh: a cell is refined while its corners come closer to the boundary than refineFactor × its
+/// diagonal, down to level L. Every grid vertex (every corner of every cell; vertices of
+/// neighbouring cells of different levels are shared where they coincide, and a finer cell's
+/// corner on a coarser neighbour's face is a vertex of the finer cell only) holds the boundary's
+/// distance, signed when asked. The grid is built level by level, and each level's new vertices
+/// are answered in one batch by contactdetection::distances (in parallel, nearest-first, exact).
+///
+/// The boundary can move rigidly (moveBoundary / moveBoundaryTo): the grid then refines toward
+/// its new position and coarsens away from the old, and only what could have changed is queried
+/// again. Each vertex remembers the pose the boundary had when it was queried; the motion since
+/// bounds how far its distance can have changed (the largest displacement of the boundary's box,
+/// exact for a rigid motion, which is affine). A vertex is queried again when that bound leaves
+/// a refinement decision in doubt or could bring it into the exact band; new vertices always are.
+/// After every move the cells are exactly those a new grid around the moved boundary would have,
+/// and every distance in the band is the one it would have (bit for bit). The prepared boundary
+/// (its QueryMesh, tree included) is moved in O(1), never rebuilt.
+///
+/// Throws delta::Error for bad options, and for `signedDistance` with a boundary that is not
+/// closed (the message says how it is open and that unsigned distances work).
+///
+/// Threading: building and moving query in parallel (core/parallel.h); one thread may move a
+/// grid while no other uses it; const members may be called from any number of threads.
+class AdaptiveGrid {
+ public:
+  AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options = {});
+
+  /// Moves the boundary by `motion` (its pose becomes motion ∘ pose) and updates the grid.
+  const GridStatistics& moveBoundary(const RigidTransform& motion);
+  /// Puts the boundary at `pose` (from the frame its QueryMesh was prepared in) and updates.
+  const GridStatistics& moveBoundaryTo(const RigidTransform& pose);
+
+  const QueryMesh& boundary() const noexcept { return boundary_; }
+  const GridOptions& options() const noexcept { return options_; }
+  /// The box the root cell covers.
+  const Aabb& domain() const noexcept { return options_.domain; }
+  /// The finest level L.
+  int levels() const noexcept { return options_.levels; }
+
+  /// The cells of level l (0 ≤ l ≤ L), inner cells and leaves.
+  std::span<const Cell> cells(int level) const;
+  /// The number of leaves (the cells a solver computes on) of each level, 0 … L.
+  std::vector<std::size_t> leavesPerLevel() const;
+  /// Leaves of all levels.
+  std::size_t leafCount() const;
+
+  std::size_t vertexCount() const noexcept { return keys_.size(); }
+  /// Where vertex v is.
+  Vec3 position(std::uint32_t v) const noexcept;
+  /// All vertex positions, in vertex order.
+  std::vector<Vec3> positions() const;
+  /// The distance to the boundary at each vertex (signed: negative inside), in vertex order.
+  std::span<const double> distances() const noexcept { return distance_; }
+  /// How far each vertex's distance may be from the exact one for the boundary where it is now
+  /// (0 for vertices queried since the last move, and for all of them after a build).
+  std::vector<double> errorBounds() const;
+  /// The band within which distances are exact after a move (GridOptions::exactBand resolved).
+  double exactBand() const noexcept { return exactBand_; }
+
+  /// The diagonal of a level-l cell.
+  double cellDiagonal(int level) const noexcept;
+  /// What the last build or move did.
+  const GridStatistics& statistics() const noexcept { return statistics_; }
+
+ private:
+  /// Makes the levels anew from the root, reusing the cells and distances that are still valid,
+  /// then brings the band's distances up to date.
+  void refine();
+  /// Queues vertex v for the next query() (once per pass).
+  void queue(std::uint32_t v);
+  /// Computes the distance of the queued vertices, in one batch.
+  void query();
+  /// The vertex at integer position (x, y, z), made (and queued) if new.
+  std::uint32_t vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /// Drops the vertices no cell refers to.
+  void compact();
+  /// The hash-table slot of `key`: where it is, or the empty slot where it would go.
+  std::size_t slotOf(std::uint64_t key) const noexcept;
+  void rebuildTable(std::size_t capacity);
+
+  QueryMesh boundary_;
+  GridOptions options_;
+  double exactBand_ = 0.0;
+  std::uint32_t resolution_ = 0;  ///< 2^L: finest cells per axis
+
+  std::vector<std::vector<Cell>> levels_;
+
+  // Vertices, by index: integer position (packed), distance, and the pose (an index into poses_)
+  // the boundary had when the distance was computed.
+  std::vector<std::uint64_t> keys_;
+  std::vector<double> distance_;
+  std::vector<std::uint32_t> epoch_;
+  std::vector<std::uint32_t> queuedAt_;  ///< the pass that last queued the vertex
+  std::vector<RigidTransform> poses_;    ///< the boundary's poses, one per build or move
+  std::vector<double> slackOfEpoch_;     ///< bound of the motion since each pose
+
+  // Integer position → vertex index: open addressing, linear probing, power-of-two capacity.
+  std::vector<std::uint64_t> tableKeys_;
+  std::vector<std::uint32_t> tableValues_;
+
+  std::uint32_t pass_ = 0;
+  std::vector<std::uint32_t> pending_;
+  std::vector<Vec3> batchPoints_;
+  std::vector<contactdetection::PointDistance> batchAnswers_;
+  GridStatistics statistics_;
+};
+
+}  // namespace delta::ib

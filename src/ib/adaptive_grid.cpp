@@ -1,0 +1,395 @@
+#include "delta/ib/adaptive_grid.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+
+namespace delta::ib {
+namespace {
+
+constexpr int kMaxLevels = 20;
+constexpr std::uint64_t kEmptyKey = ~std::uint64_t{0};
+constexpr std::uint32_t kNotOld = Cell::kLeaf;
+/// Relative rounding allowance of a bound on a distance's change: a little over the rounding of
+/// the distance computation, so that a decision the bound calls certain is the one an exact
+/// recomputation makes.
+constexpr double kRoundingAllowance = 1e-12;
+
+/// A vertex's integer position, 21 bits per axis.
+constexpr std::uint64_t packKey(std::uint32_t x, std::uint32_t y, std::uint32_t z) noexcept {
+  return std::uint64_t{x} | (std::uint64_t{y} << 21) | (std::uint64_t{z} << 42);
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The box of the boundary where it is now.
+Aabb currentBounds(const QueryMesh& boundary) {
+  const Aabb& prepared = boundary.bounds();
+  Aabb box;
+  for (int corner = 0; corner < 8; ++corner)
+    box.extend(boundary.pose().apply({corner & 1 ? prepared.upper.x : prepared.lower.x,
+                                      corner & 2 ? prepared.upper.y : prepared.lower.y,
+                                      corner & 4 ? prepared.upper.z : prepared.lower.z}));
+  return box;
+}
+
+/// The largest displacement of a point of `box` (prepared frame) between poses `from` and `to`.
+/// The displacement (R₁ − R₀)p + t₁ − t₀ is affine in p, so its length is convex and largest at
+/// a corner of the box.
+double largestDisplacement(const Aabb& box, const RigidTransform& from, const RigidTransform& to) {
+  double largest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{corner & 1 ? box.upper.x : box.lower.x, corner & 2 ? box.upper.y : box.lower.y,
+                 corner & 4 ? box.upper.z : box.lower.z};
+    largest = std::max(largest, length(to.apply(p) - from.apply(p)));
+  }
+  return largest;
+}
+
+GridOptions checked(GridOptions options, const QueryMesh& boundary) {
+  if (options.levels < 1 || options.levels > kMaxLevels)
+    throw Error("GridOptions: levels " + std::to_string(options.levels) + " must be 1 to " +
+                std::to_string(kMaxLevels));
+  if (!(std::isfinite(options.refineFactor) && options.refineFactor > 0.0))
+    throw Error("GridOptions: refineFactor " + toString(options.refineFactor) +
+                " must be finite and positive");
+  if (!(std::isfinite(options.padding) && options.padding >= 0.0))
+    throw Error("GridOptions: padding " + toString(options.padding) +
+                " must be finite and not negative");
+  if (!std::isnan(options.exactBand) && !(options.exactBand >= 0.0))
+    throw Error("GridOptions: exactBand " + toString(options.exactBand) + " must not be negative");
+  if (options.domain.empty()) {
+    const Aabb box = currentBounds(boundary);
+    const Vec3 extent = box.extent();
+    const double side = std::max({extent.x, extent.y, extent.z}) * (1.0 + 2.0 * options.padding);
+    const Vec3 half = Vec3{side, side, side} * 0.5;
+    options.domain = {box.center() - half, box.center() + half};
+  }
+  const Vec3 extent = options.domain.extent();
+  if (!isFinite(options.domain.lower) || !isFinite(options.domain.upper) || !(extent.x > 0.0) ||
+      !(extent.y > 0.0) || !(extent.z > 0.0))
+    throw Error("GridOptions: domain " + toString(options.domain.lower) + " to " +
+                toString(options.domain.upper) + " must be finite with a positive extent");
+  if (options.signedDistance && !boundary.closed()) {
+    const Topology& topology = boundary.topology();
+    throw Error("signed distances need a closed boundary, and this one is not (" +
+                std::to_string(topology.boundaryEdges) + " boundary, " +
+                std::to_string(topology.nonManifoldEdges) + " non-manifold and " +
+                std::to_string(topology.misorientedEdges) +
+                " misoriented edges); unsigned distances work");
+  }
+  return options;
+}
+
+}  // namespace
+
+AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options)
+    : boundary_(boundary), options_(checked(options, boundary)) {
+  resolution_ = std::uint32_t{1} << options_.levels;
+  exactBand_ = std::isnan(options_.exactBand) ? cellDiagonal(options_.levels) : options_.exactBand;
+  rebuildTable(1024);
+  poses_.push_back(boundary_.pose());
+  refine();
+}
+
+const GridStatistics& AdaptiveGrid::moveBoundary(const RigidTransform& motion) {
+  QueryMesh moved = boundary_;
+  moved.transform(motion);
+  return moveBoundaryTo(moved.pose());
+}
+
+const GridStatistics& AdaptiveGrid::moveBoundaryTo(const RigidTransform& pose) {
+  boundary_.setPose(pose);
+  poses_.push_back(boundary_.pose());
+  refine();
+  return statistics_;
+}
+
+std::span<const Cell> AdaptiveGrid::cells(int level) const {
+  if (level < 0 || level > options_.levels)
+    throw Error("AdaptiveGrid::cells: level " + std::to_string(level) + " is not 0 to " +
+                std::to_string(options_.levels));
+  return levels_[level];
+}
+
+std::vector<std::size_t> AdaptiveGrid::leavesPerLevel() const {
+  std::vector<std::size_t> leaves;
+  for (const std::vector<Cell>& level : levels_)
+    leaves.push_back(static_cast<std::size_t>(
+        std::count_if(level.begin(), level.end(), [](const Cell& cell) { return cell.leaf(); })));
+  return leaves;
+}
+
+std::size_t AdaptiveGrid::leafCount() const {
+  std::size_t count = 0;
+  for (std::size_t leaves : leavesPerLevel())
+    count += leaves;
+  return count;
+}
+
+Vec3 AdaptiveGrid::position(std::uint32_t v) const noexcept {
+  const std::uint64_t key = keys_[v];
+  const double scale = 1.0 / resolution_;
+  const Vec3& lower = options_.domain.lower;
+  const Vec3 extent = options_.domain.extent();
+  constexpr std::uint64_t mask = (std::uint64_t{1} << 21) - 1;
+  return {lower.x + extent.x * (double(key & mask) * scale),
+          lower.y + extent.y * (double((key >> 21) & mask) * scale),
+          lower.z + extent.z * (double((key >> 42) & mask) * scale)};
+}
+
+std::vector<Vec3> AdaptiveGrid::positions() const {
+  std::vector<Vec3> all(keys_.size());
+  for (std::uint32_t v = 0; v < all.size(); ++v)
+    all[v] = position(v);
+  return all;
+}
+
+std::vector<double> AdaptiveGrid::errorBounds() const {
+  std::vector<double> bounds(epoch_.size());
+  for (std::size_t v = 0; v < bounds.size(); ++v)
+    bounds[v] = slackOfEpoch_[epoch_[v]];
+  return bounds;
+}
+
+double AdaptiveGrid::cellDiagonal(int level) const noexcept {
+  return length(options_.domain.extent()) / double(std::uint64_t{1} << level);
+}
+
+void AdaptiveGrid::refine() {
+  const auto start = std::chrono::steady_clock::now();
+  statistics_ = {};
+  const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
+  // How far each remembered distance may be off now (0 for this pose).
+  const double roundingScale = kRoundingAllowance * length(options_.domain.extent());
+  slackOfEpoch_.resize(poses_.size());
+  for (std::uint32_t epoch = 0; epoch < now; ++epoch)
+    slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
+                               (1.0 + kRoundingAllowance) +
+                           roundingScale;
+  slackOfEpoch_[now] = 0.0;
+
+  std::vector<std::vector<Cell>> old = std::move(levels_);
+  std::size_t oldCells = 0;
+  for (const std::vector<Cell>& level : old)
+    oldCells += level.size();
+  levels_.assign(options_.levels + 1, {});
+  std::vector<std::uint32_t> fromOld, nextFromOld;  // each new cell's index in `old`, if any
+
+  if (old.empty()) {
+    Cell root;
+    for (std::uint32_t c = 0; c < 8; ++c)
+      root.corners[c] =
+          vertexAt(c & 1 ? resolution_ : 0, c & 2 ? resolution_ : 0, c & 4 ? resolution_ : 0);
+    levels_[0].push_back(root);
+    fromOld.push_back(kNotOld);
+  } else {
+    levels_[0].push_back(old[0][0]);
+    fromOld.push_back(0);
+  }
+
+  std::vector<std::uint8_t> decision;  // per cell: 0 keep a leaf, 1 refine, 2 in doubt
+  std::size_t carried = 0;
+  for (int level = 0;; ++level) {
+    std::vector<Cell>& cells = levels_[level];
+    query();  // the new vertices of this level
+    if (level == options_.levels) {
+      for (Cell& cell : cells)
+        cell.firstChild = Cell::kLeaf;
+      break;
+    }
+
+    // Refine where the smallest corner distance is below the threshold: certain from the bounds
+    // of remembered distances, or else from fresh ones.
+    const double threshold = options_.refineFactor * cellDiagonal(level);
+    decision.assign(cells.size(), 0);
+    ++pass_;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      double lowest = std::numeric_limits<double>::infinity();
+      double highest = std::numeric_limits<double>::infinity();
+      for (std::uint32_t v : cells[i].corners) {
+        const double d = std::abs(distance_[v]), slack = slackOfEpoch_[epoch_[v]];
+        lowest = std::min(lowest, d - slack);
+        highest = std::min(highest, d + slack);
+      }
+      if (highest < threshold) {
+        decision[i] = 1;
+      } else if (lowest < threshold) {
+        decision[i] = 2;
+        for (std::uint32_t v : cells[i].corners)
+          if (epoch_[v] != now) queue(v);
+      }
+    }
+    query();
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (decision[i] != 2) continue;
+      double lowest = std::numeric_limits<double>::infinity();
+      for (std::uint32_t v : cells[i].corners)
+        lowest = std::min(lowest, std::abs(distance_[v]));
+      decision[i] = lowest < threshold ? 1 : 0;
+    }
+
+    // The next level: the children of refined cells, carried over where they were refined before.
+    std::vector<Cell>& next = levels_[level + 1];
+    nextFromOld.clear();
+    const std::uint32_t half = (resolution_ >> level) / 2;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      Cell& cell = cells[i];
+      if (decision[i] == 0) {
+        cell.firstChild = Cell::kLeaf;
+        continue;
+      }
+      const std::uint32_t before =
+          fromOld[i] == kNotOld ? Cell::kLeaf : old[level][fromOld[i]].firstChild;
+      cell.firstChild = static_cast<std::uint32_t>(next.size());
+      if (before != Cell::kLeaf) {
+        for (std::uint32_t c = 0; c < 8; ++c) {
+          next.push_back(old[level + 1][before + c]);
+          nextFromOld.push_back(before + c);
+        }
+        carried += 8;
+        continue;
+      }
+      // New children share the 3 × 3 × 3 lattice of vertices of their parent.
+      std::uint32_t lattice[27];
+      for (std::uint32_t k = 0; k < 3; ++k)
+        for (std::uint32_t j = 0; j < 3; ++j)
+          for (std::uint32_t a = 0; a < 3; ++a) {
+            const std::uint32_t at = a + 3 * j + 9 * k;
+            const bool corner = a != 1 && j != 1 && k != 1;
+            lattice[at] = corner ? cell.corners[a / 2 + 2 * (j / 2) + 4 * (k / 2)]
+                                 : vertexAt(cell.origin[0] + a * half, cell.origin[1] + j * half,
+                                            cell.origin[2] + k * half);
+          }
+      for (std::uint32_t c = 0; c < 8; ++c) {
+        Cell child;
+        child.level = static_cast<std::uint8_t>(level + 1);
+        const std::uint32_t cx = c & 1, cy = (c >> 1) & 1, cz = (c >> 2) & 1;
+        child.origin = {cell.origin[0] + cx * half, cell.origin[1] + cy * half,
+                        cell.origin[2] + cz * half};
+        for (std::uint32_t corner = 0; corner < 8; ++corner)
+          child.corners[corner] = lattice[(cx + (corner & 1)) + 3 * (cy + ((corner >> 1) & 1)) +
+                                          9 * (cz + ((corner >> 2) & 1))];
+        next.push_back(child);
+        nextFromOld.push_back(kNotOld);
+      }
+      statistics_.cellsCreated += 8;
+    }
+    std::swap(fromOld, nextFromOld);
+  }
+  if (old.empty()) {
+    statistics_.cellsCreated += 1;  // the root
+  } else {
+    statistics_.cellsRemoved = oldCells - 1 - carried;
+  }
+
+  compact();
+  // The band: every vertex that may be within exactBand gets its exact distance.
+  ++pass_;
+  for (std::uint32_t v = 0; v < keys_.size(); ++v)
+    if (epoch_[v] != now && std::abs(distance_[v]) - slackOfEpoch_[epoch_[v]] <= exactBand_)
+      queue(v);
+  query();
+  statistics_.seconds = secondsSince(start);
+}
+
+void AdaptiveGrid::queue(std::uint32_t v) {
+  if (queuedAt_[v] == pass_) return;
+  queuedAt_[v] = pass_;
+  pending_.push_back(v);
+}
+
+void AdaptiveGrid::query() {
+  if (pending_.empty()) return;
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n = pending_.size();
+  batchPoints_.resize(n);
+  batchAnswers_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    batchPoints_[i] = position(pending_[i]);
+  contactdetection::PointQuery request;
+  request.signedDistance = options_.signedDistance;
+  contactdetection::distances(boundary_, batchPoints_, request, batchAnswers_);
+  const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t v = pending_[i];
+    distance_[v] =
+        options_.signedDistance ? batchAnswers_[i].signedDistance() : batchAnswers_[i].distance;
+    epoch_[v] = now;
+  }
+  pending_.clear();
+  statistics_.queries += n;
+  statistics_.querySeconds += secondsSince(start);
+}
+
+std::size_t AdaptiveGrid::slotOf(std::uint64_t key) const noexcept {
+  const std::size_t mask = tableKeys_.size() - 1;
+  std::size_t slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+  while (tableKeys_[slot] != key && tableKeys_[slot] != kEmptyKey)
+    slot = (slot + 1) & mask;
+  return slot;
+}
+
+void AdaptiveGrid::rebuildTable(std::size_t capacity) {
+  tableKeys_.assign(capacity, kEmptyKey);
+  tableValues_.assign(capacity, 0);
+  for (std::uint32_t v = 0; v < keys_.size(); ++v) {
+    const std::size_t slot = slotOf(keys_[v]);
+    tableKeys_[slot] = keys_[v];
+    tableValues_[slot] = v;
+  }
+}
+
+std::uint32_t AdaptiveGrid::vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  const std::uint64_t key = packKey(x, y, z);
+  std::size_t slot = slotOf(key);
+  if (tableKeys_[slot] == key) return tableValues_[slot];
+  const std::uint32_t v = static_cast<std::uint32_t>(keys_.size());
+  keys_.push_back(key);
+  distance_.push_back(0.0);
+  epoch_.push_back(0);
+  queuedAt_.push_back(pass_);
+  pending_.push_back(v);
+  tableKeys_[slot] = key;
+  tableValues_[slot] = v;
+  if (2 * keys_.size() > tableKeys_.size()) rebuildTable(2 * tableKeys_.size());
+  return v;
+}
+
+void AdaptiveGrid::compact() {
+  std::vector<std::uint32_t> remap(keys_.size(), 0);
+  for (const std::vector<Cell>& level : levels_)
+    for (const Cell& cell : level)
+      for (std::uint32_t v : cell.corners)
+        remap[v] = 1;
+  std::uint32_t kept = 0;
+  for (std::uint32_t v = 0; v < remap.size(); ++v) {
+    if (!remap[v]) continue;
+    keys_[kept] = keys_[v];
+    distance_[kept] = distance_[v];
+    epoch_[kept] = epoch_[v];
+    queuedAt_[kept] = queuedAt_[v];
+    remap[v] = kept++;
+  }
+  if (kept == keys_.size()) return;
+  keys_.resize(kept);
+  distance_.resize(kept);
+  epoch_.resize(kept);
+  queuedAt_.resize(kept);
+  for (std::vector<Cell>& level : levels_)
+    for (Cell& cell : level)
+      for (std::uint32_t& v : cell.corners)
+        v = remap[v];
+  std::size_t capacity = 1024;
+  while (capacity < 2 * kept)
+    capacity *= 2;
+  rebuildTable(capacity);
+}
+
+}  // namespace delta::ib
