@@ -134,7 +134,10 @@ std::size_t AdaptiveGrid::leafCount() const {
 }
 
 Vec3 AdaptiveGrid::position(std::uint32_t v) const noexcept {
-  const std::uint64_t key = keys_[v];
+  return position(keys_[v]);
+}
+
+Vec3 AdaptiveGrid::position(std::uint64_t key) const noexcept {
   const double scale = 1.0 / resolution_;
   const Vec3& lower = options_.domain.lower;
   const Vec3 extent = options_.domain.extent();
@@ -185,8 +188,8 @@ void AdaptiveGrid::refine() {
   if (old.empty()) {
     Cell root;
     for (std::uint32_t c = 0; c < 8; ++c)
-      root.corners[c] =
-          vertexAt(c & 1 ? resolution_ : 0, c & 2 ? resolution_ : 0, c & 4 ? resolution_ : 0);
+      root.corners[c] = vertexAt(c & 1 ? resolution_ : 0, c & 2 ? resolution_ : 0,
+                                 c & 4 ? resolution_ : 0, nullptr);
     levels_[0].push_back(root);
     fromOld.push_back(kNotOld);
   } else {
@@ -223,7 +226,7 @@ void AdaptiveGrid::refine() {
       } else if (lowest < threshold) {
         decision[i] = 2;
         for (std::uint32_t v : cells[i].corners)
-          if (epoch_[v] != now) queue(v);
+          if (epoch_[v] != now) queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
       }
     }
     query();
@@ -265,7 +268,7 @@ void AdaptiveGrid::refine() {
             const bool corner = a != 1 && j != 1 && k != 1;
             lattice[at] = corner ? cell.corners[a / 2 + 2 * (j / 2) + 4 * (k / 2)]
                                  : vertexAt(cell.origin[0] + a * half, cell.origin[1] + j * half,
-                                            cell.origin[2] + k * half);
+                                            cell.origin[2] + k * half, &cell);
           }
       for (std::uint32_t c = 0; c < 8; ++c) {
         Cell child;
@@ -294,15 +297,16 @@ void AdaptiveGrid::refine() {
   ++pass_;
   for (std::uint32_t v = 0; v < keys_.size(); ++v)
     if (epoch_[v] != now && std::abs(distance_[v]) - slackOfEpoch_[epoch_[v]] <= exactBand_)
-      queue(v);
+      queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
   query();
   statistics_.seconds = secondsSince(start);
 }
 
-void AdaptiveGrid::queue(std::uint32_t v) {
+void AdaptiveGrid::queue(std::uint32_t v, double upperBound) {
   if (queuedAt_[v] == pass_) return;
   queuedAt_[v] = pass_;
   pending_.push_back(v);
+  pendingBounds_.push_back(upperBound);
 }
 
 void AdaptiveGrid::query() {
@@ -315,7 +319,7 @@ void AdaptiveGrid::query() {
     batchPoints_[i] = position(pending_[i]);
   contactdetection::PointQuery request;
   request.signedDistance = options_.signedDistance;
-  contactdetection::distances(boundary_, batchPoints_, request, batchAnswers_);
+  contactdetection::distances(boundary_, batchPoints_, pendingBounds_, request, batchAnswers_);
   const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t v = pending_[i];
@@ -324,6 +328,7 @@ void AdaptiveGrid::query() {
     epoch_[v] = now;
   }
   pending_.clear();
+  pendingBounds_.clear();
   statistics_.queries += n;
   statistics_.querySeconds += secondsSince(start);
 }
@@ -346,16 +351,27 @@ void AdaptiveGrid::rebuildTable(std::size_t capacity) {
   }
 }
 
-std::uint32_t AdaptiveGrid::vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+std::uint32_t AdaptiveGrid::vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                                     const Cell* parent) {
   const std::uint64_t key = packKey(x, y, z);
   std::size_t slot = slotOf(key);
   if (tableKeys_[slot] == key) return tableValues_[slot];
   const std::uint32_t v = static_cast<std::uint32_t>(keys_.size());
+  // The distance is 1-Lipschitz: a parent's corner bounds it (what that corner knows, plus how
+  // far it is).
+  double bound = std::numeric_limits<double>::infinity();
+  if (parent != nullptr) {
+    const Vec3 p = position(key);
+    for (std::uint32_t c : parent->corners)
+      bound = std::min(bound, std::abs(distance_[c]) + slackOfEpoch_[epoch_[c]] +
+                                  length(p - position(keys_[c])));
+  }
   keys_.push_back(key);
   distance_.push_back(0.0);
   epoch_.push_back(0);
   queuedAt_.push_back(pass_);
   pending_.push_back(v);
+  pendingBounds_.push_back(bound * (1.0 + kRoundingAllowance));
   tableKeys_[slot] = key;
   tableValues_[slot] = v;
   if (2 * keys_.size() > tableKeys_.size()) rebuildTable(2 * tableKeys_.size());

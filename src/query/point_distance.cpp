@@ -19,6 +19,8 @@ namespace {
 constexpr std::size_t kGrain = 256;
 /// Batches from this size are answered in Morton order of their points.
 constexpr std::size_t kCoherentFrom = 4 * kGrain;
+/// A distance bound's square is searched with this growth (a few ulps of rounding allowed for).
+constexpr double kBoundGrowth = 1.0 + 1e-12;
 
 void validate(const QueryMesh& mesh, const PointQuery& query) {
   if (std::isnan(query.epsilon) || !(query.epsilon > 0.0))
@@ -43,11 +45,21 @@ void validatePoints(std::size_t count, const PointAt& pointAt) {
 
 /// One point's answer. A moved mesh is searched in the frame it was prepared in: the point goes
 /// in by the inverse pose, the closest point comes out by the pose (distances are unchanged).
-PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQuery& query) {
+/// With an upper bound of the distance below ε, the search first prunes with it; a bound that
+/// was too small finds nothing and the search runs again with ε, so the answer is the same.
+PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQuery& query,
+                     double upperBound = std::numeric_limits<double>::infinity()) {
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
-  const detail::Nearest nearest = detail::nearestTriangle(data, point, limit);
+  detail::Nearest nearest;
+  if (upperBound < query.epsilon) {
+    // Strictly above the bound, so that a point exactly at it is found on the first search.
+    nearest = detail::nearestTriangle(data, point, upperBound * upperBound * kBoundGrowth);
+    if (!nearest.found()) nearest = detail::nearestTriangle(data, point, limit);
+  } else {
+    nearest = detail::nearestTriangle(data, point, limit);
+  }
   PointDistance result;
   if (!nearest.found()) {
     if (std::isinf(query.epsilon))
@@ -63,15 +75,20 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   return result;
 }
 
+/// `upperBounds` is empty or one bound per point.
 template <typename PointAt>
 void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
-               const PointQuery& query, std::span<PointDistance> out) {
+               const PointQuery& query, std::span<PointDistance> out,
+               std::span<const double> upperBounds = {}) {
   validate(mesh, query);
   validatePoints(count, pointAt);
+  const auto boundOf = [upperBounds](std::size_t i) {
+    return upperBounds.empty() ? std::numeric_limits<double>::infinity() : upperBounds[i];
+  };
   if (count < kCoherentFrom || count > std::numeric_limits<std::uint32_t>::max()) {
     parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i)
-        out[i] = answer(mesh, pointAt(i), query);
+        out[i] = answer(mesh, pointAt(i), query, boundOf(i));
     });
     return;
   }
@@ -81,7 +98,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   const std::vector<std::uint32_t> order = detail::mortonOrder(count, pointAt);
   parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k)
-      out[order[k]] = answer(mesh, pointAt(order[k]), query);
+      out[order[k]] = answer(mesh, pointAt(order[k]), query, boundOf(order[k]));
   });
 }
 
@@ -94,6 +111,21 @@ void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQ
                 std::to_string(out.size()) + " answers");
   answerAll(
       mesh, points.size(), [points](std::size_t i) { return points[i]; }, query, out);
+}
+
+void distances(const QueryMesh& mesh, std::span<const Vec3> points,
+               std::span<const double> upperBounds, const PointQuery& query,
+               std::span<PointDistance> out) {
+  if (out.size() != points.size() || upperBounds.size() != points.size())
+    throw Error("point distances: " + std::to_string(points.size()) + " points but " +
+                std::to_string(upperBounds.size()) + " bounds and room for " +
+                std::to_string(out.size()) + " answers");
+  for (std::size_t i = 0; i < upperBounds.size(); ++i)
+    if (std::isnan(upperBounds[i]) || upperBounds[i] < 0.0)
+      throw Error("point distances: the upper bound " + toString(upperBounds[i]) + " of point " +
+                  std::to_string(i) + " is negative or NaN");
+  answerAll(
+      mesh, points.size(), [points](std::size_t i) { return points[i]; }, query, out, upperBounds);
 }
 
 std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const Vec3> points,

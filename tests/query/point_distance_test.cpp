@@ -128,6 +128,55 @@ TEST(PointDistance, BatchOrderDoesNotChangeAnswers) {
   }
 }
 
+TEST(PointDistance, UpperBoundsChangeNoAnswer) {
+  // Bounds that are exact, loose, too small (a second search), zero, infinite: the answers are
+  // those without bounds, bit for bit, in small (in order) and large (Morton order) batches. The
+  // box has exact ties on every face, the moved elephant a pose to carry points through.
+  QueryMesh elephant(io::load(kMeshes / "elephant.off"));
+  elephant.transform(
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, 2, 3}, 0.4), {0.1, 0.2, 0.3}));
+  for (const QueryMesh& mesh : {elephant, QueryMesh(primitives::box({1, 2, 3}))}) {
+    const Aabb box = mesh.bounds();
+    for (std::size_t count : {std::size_t{300}, std::size_t{3000}}) {
+      std::mt19937_64 random(23);
+      std::vector<Vec3> points(count);
+      for (Vec3& p : points)
+        p = box.lower - box.extent() * 0.1 +
+            Vec3{box.extent().x * unit(random), box.extent().y * unit(random),
+                 box.extent().z * unit(random)} *
+                1.2;
+      const std::vector<PointDistance> plain = distances(mesh, points, {.signedDistance = true});
+      std::vector<double> bounds(points.size());
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double scale[] = {1.0, 1.5, 0.5, 0.0, INFINITY};
+        bounds[i] = plain[i].distance * scale[i % 5];
+        if (i % 5 == 3) bounds[i] = 0.0;
+      }
+      std::vector<PointDistance> bounded(points.size());
+      distances(mesh, points, bounds, {.signedDistance = true}, bounded);
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        ASSERT_EQ(bounded[i].distance, plain[i].distance) << i;
+        ASSERT_EQ(bounded[i].triangle, plain[i].triangle) << i;
+        ASSERT_EQ(bounded[i].closest, plain[i].closest) << i;
+        ASSERT_EQ(bounded[i].inside, plain[i].inside) << i;
+      }
+      // With ε, a bound beyond ε is ε.
+      std::vector<PointDistance> near(points.size());
+      const double epsilon = 0.05 * box.diagonal();
+      distances(mesh, points, bounds, {.epsilon = epsilon}, near);
+      const std::vector<PointDistance> nearPlain = distances(mesh, points, {.epsilon = epsilon});
+      for (std::size_t i = 0; i < points.size(); ++i)
+        ASSERT_EQ(near[i].distance, nearPlain[i].distance) << i;
+      bounds[7] = -1.0;
+      EXPECT_THROW(distances(mesh, points, bounds, {}, bounded), Error);
+      bounds[7] = NAN;
+      EXPECT_THROW(distances(mesh, points, bounds, {}, bounded), Error);
+      bounds.pop_back();
+      EXPECT_THROW(distances(mesh, points, bounds, {}, bounded), Error);
+    }
+  }
+}
+
 TEST(PointDistance, DegenerateTrianglesAndExactTies) {
   // A zero-area triangle, a needle and a repeated triangle among ordinary ones.
   const Mesh mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {1, 1e-300, 0}, {0.5, 0.5, 1}},

@@ -136,12 +136,15 @@ class AdaptiveGrid {
   /// Makes the levels anew from the root, reusing the cells and distances that are still valid,
   /// then brings the band's distances up to date.
   void refine();
-  /// Queues vertex v for the next query() (once per pass).
-  void queue(std::uint32_t v);
+  /// Queues vertex v for the next query() (once per pass), with an upper bound of its distance.
+  void queue(std::uint32_t v, double upperBound);
   /// Computes the distance of the queued vertices, in one batch.
   void query();
-  /// The vertex at integer position (x, y, z), made (and queued) if new.
-  std::uint32_t vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z);
+  /// The vertex at integer position (x, y, z), made (and queued) if new: a corner of the root, or
+  /// of the children of `parent`, whose corners bound its distance.
+  std::uint32_t vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z, const Cell* parent);
+  /// Where the vertex with this integer position (packed) is.
+  Vec3 position(std::uint64_t key) const noexcept;
   /// Drops the vertices no cell refers to.
   void compact();
   /// The hash-table slot of `key`: where it is, or the empty slot where it would go.
@@ -170,6 +173,7 @@ class AdaptiveGrid {
 
   std::uint32_t pass_ = 0;
   std::vector<std::uint32_t> pending_;
+  std::vector<double> pendingBounds_;
   std::vector<Vec3> batchPoints_;
   std::vector<contactdetection::PointDistance> batchAnswers_;
   GridStatistics statistics_;

@@ -64,6 +64,18 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
 void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQuery& query,
                std::span<PointDistance> out);
 
+/// The same, with an upper bound of each point's distance to the mesh (+∞ where none is known):
+/// the search prunes with it from the start instead of first finding a near triangle. For
+/// points whose distance was known before the mesh moved, |d| plus the largest displacement of
+/// the mesh bounds the new distance (ib::AdaptiveGrid asks this way). The answers are those of
+/// distances() whatever the bounds: a bound below the distance costs a second search, not a
+/// wrong answer.
+///
+/// Throws as distances() does, and for a negative or NaN bound, or spans of different lengths.
+void distances(const QueryMesh& mesh, std::span<const Vec3> points,
+               std::span<const double> upperBounds, const PointQuery& query,
+               std::span<PointDistance> out);
+
 /// One point (serial).
 PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query = {});
 
