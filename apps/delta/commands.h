@@ -12,5 +12,6 @@ void addBenchCommand(CLI::App& app);
 void addContactCommand(CLI::App& app);
 void addDistanceCommand(CLI::App& app);
 void addDemCommand(CLI::App& app);
+void addIbCommand(CLI::App& app);
 
 }  // namespace delta::cli

@@ -1,13 +1,11 @@
 // `delta contact MESH_A MESH_B`: where two meshes come closer than 2ε (contact points), or, without
 // --eps, their minimum distance and the closest triangle pair.
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +21,7 @@
 #include "files.h"
 #include "json.h"
 #include "mesh_source.h"
+#include "motion_options.h"
 #include "stopwatch.h"
 
 namespace delta::cli {
@@ -38,38 +37,11 @@ struct ContactOptions {
   bool json = false;
 };
 
-/// `count` comma-separated finite numbers, e.g. "1,0,0,90".
-std::vector<double> numbers(const std::string& text, std::size_t count, const char* option) {
-  std::vector<double> values;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    double value = 0.0;
-    const char* begin = text.data() + start;
-    const char* end = text.data() + comma;
-    const auto [stop, status] = std::from_chars(begin, end, value);
-    if (status != std::errc() || stop != end || !std::isfinite(value))
-      throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
-                  " finite numbers separated by commas");
-    values.push_back(value);
-    start = comma + 1;
-  }
-  if (values.size() != count)
-    throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
-                " numbers separated by commas");
-  return values;
-}
-
 /// --rotate-b about the centre of B's box, then --translate-b.
 void moveB(Mesh& b, const ContactOptions& options) {
-  if (!options.rotateB.empty()) {
-    const std::vector<double> r = numbers(options.rotateB, 4, "--rotate-b");
-    b.rotate({r[0], r[1], r[2]}, r[3] * std::numbers::pi / 180.0, b.bounds().center());
-  }
-  if (!options.translateB.empty()) {
-    const std::vector<double> t = numbers(options.translateB, 3, "--translate-b");
-    b.translate({t[0], t[1], t[2]});
-  }
+  if (!options.rotateB.empty())
+    b.rotate(parseRotation(options.rotateB, "--rotate-b"), b.bounds().center());
+  if (!options.translateB.empty()) b.translate(parseVector(options.translateB, "--translate-b"));
 }
 
 void validate(const ContactOptions& options) {

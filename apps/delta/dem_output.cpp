@@ -2,19 +2,14 @@
 
 #include <cstdint>
 #include <string>
-#include <system_error>
 #include <utility>
 
 #include "delta/core/error.h"
 
+#include "files.h"
+
 namespace delta::cli {
 namespace {
-
-std::string frameName(const char* series, std::size_t frame) {
-  char name[64];
-  std::snprintf(name, sizeof name, "%s_%06zu.vtp", series, frame);
-  return name;
-}
 
 void append(io::VtkArray& array, const Vec3& v) {
   array.values.insert(array.values.end(), {v.x, v.y, v.z});
@@ -97,13 +92,7 @@ bool moves(const dem::Obstacle& obstacle) {
 }  // namespace
 
 DemOutput::DemOutput(std::filesystem::path directory) : directory_(std::move(directory)) {
-  std::error_code error;
-  if (std::filesystem::exists(directory_, error) &&
-      !std::filesystem::is_directory(directory_, error))
-    throw Error("--out '" + directory_.string() + "' exists and is not a folder");
-  std::filesystem::create_directories(directory_, error);
-  if (error)
-    throw Error("--out '" + directory_.string() + "': cannot make the folder: " + error.message());
+  makeOutputFolder(directory_);
 }
 
 DemOutput::~DemOutput() {
@@ -136,7 +125,7 @@ void DemOutput::frame(const dem::World& world) {
   const std::size_t frame = frames();
   const auto add = [&](std::vector<io::VtkSeriesEntry>& series, const char* name,
                        const io::VtkPolyData& data) {
-    const std::string file = frameName(name, frame);
+    const std::string file = frameFileName(name, frame, ".vtp");
     io::writeVtp(data, directory_ / file);
     series.push_back({world.time(), file});
     io::writePvd(series, directory_ / (std::string(name) + ".pvd"));

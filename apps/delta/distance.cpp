@@ -97,10 +97,7 @@ void run(const DistanceOptions& options) {
   const QueryMesh query(mesh);
   if (options.signedDistance && !query.closed())
     throw Error("--signed: mesh '" + options.mesh + "' is not closed (" +
-                std::to_string(query.topology().boundaryEdges) + " boundary, " +
-                std::to_string(query.topology().nonManifoldEdges) + " non-manifold, " +
-                std::to_string(query.topology().misorientedEdges) +
-                " misoriented edges); unsigned distances work without --signed");
+                describeDefects(query.topology()) + "); unsigned distances work without --signed");
   const double buildSeconds = clock.restart();
 
   contactdetection::PointQuery request;

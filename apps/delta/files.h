@@ -2,8 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstddef>
+#include <cstdio>
 #include <filesystem>
 #include <string>
+#include <system_error>
+
+#include "delta/core/error.h"
 
 namespace delta::cli {
 
@@ -13,6 +18,24 @@ inline std::string extensionOf(const std::string& path) {
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return extension;
+}
+
+/// The file of frame `frame` of a series written into an --out folder: "particles_000012.vtp".
+inline std::string frameFileName(const char* series, std::size_t frame, const char* extension) {
+  char name[128];
+  std::snprintf(name, sizeof name, "%s_%06zu%s", series, frame, extension);
+  return name;
+}
+
+/// Makes the folder given to --out (and its parents) unless it exists. Throws delta::Error naming
+/// it when it is a file or cannot be made.
+inline void makeOutputFolder(const std::filesystem::path& directory) {
+  std::error_code error;
+  if (std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error))
+    throw Error("--out '" + directory.string() + "' exists and is not a folder");
+  std::filesystem::create_directories(directory, error);
+  if (error)
+    throw Error("--out '" + directory.string() + "': cannot make the folder: " + error.message());
 }
 
 }  // namespace delta::cli

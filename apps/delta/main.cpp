@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   delta::cli::addContactCommand(app);
   delta::cli::addDistanceCommand(app);
   delta::cli::addDemCommand(app);
+  delta::cli::addIbCommand(app);
 
   try {
     rejectUnknownCommand(app, argc, argv);

@@ -20,6 +20,7 @@
 #include "delta/dem/scenarios.h"
 #include "delta/dem/world.h"
 #include "delta/ib/adaptive_grid.h"
+#include "delta/ib/grid_vtk.h"
 #include "delta/io/mesh_io.h"
 #include "delta/io/points.h"
 #include "delta/io/vtk.h"

@@ -36,10 +36,7 @@ detail::PreparedShape prepare(const Mesh& mesh, double density) {
   const Topology topology = analyzeTopology(mesh);
   if (!topology.closed || !topology.consistentlyOriented)
     throw Error("particle shape: the mesh must be closed and consistently oriented (" +
-                std::to_string(topology.boundaryEdges) + " boundary, " +
-                std::to_string(topology.nonManifoldEdges) + " non-manifold, " +
-                std::to_string(topology.misorientedEdges) + " misoriented edges of " +
-                std::to_string(topology.edges) + ")");
+                describeDefects(topology) + ")");
   const MassProperties properties = massProperties(mesh, density);
   Mesh body = mesh;
   body.translate(-properties.centroid);

@@ -76,14 +76,10 @@ GridOptions checked(GridOptions options, const QueryMesh& boundary) {
       !(extent.y > 0.0) || !(extent.z > 0.0))
     throw Error("GridOptions: domain " + toString(options.domain.lower) + " to " +
                 toString(options.domain.upper) + " must be finite with a positive extent");
-  if (options.signedDistance && !boundary.closed()) {
-    const Topology& topology = boundary.topology();
+  if (options.signedDistance && !boundary.closed())
     throw Error("signed distances need a closed boundary, and this one is not (" +
-                std::to_string(topology.boundaryEdges) + " boundary, " +
-                std::to_string(topology.nonManifoldEdges) + " non-manifold and " +
-                std::to_string(topology.misorientedEdges) +
-                " misoriented edges); unsigned distances work");
-  }
+                describeDefects(boundary.topology()) +
+                "); unsigned distances work (GridOptions::signedDistance = false)");
   return options;
 }
 

@@ -69,7 +69,7 @@ void checkArrays(const std::vector<VtkArray>& arrays, std::size_t elements, cons
                   " elements of " + std::to_string(array.components) + " components");
 }
 
-/// Connectivity and offsets of the vertex cells or the triangles.
+/// Connectivity and offsets of cells: the vertex cells, the triangles or the voxels.
 struct Cells {
   std::vector<std::int64_t> connectivity;
   std::vector<std::int64_t> offsets;
@@ -84,13 +84,18 @@ Cells vertexCells(std::size_t points) {
   return cells;
 }
 
-Cells triangleCells(const std::vector<TriangleIndices>& triangles, std::size_t points) {
+/// Cells of a fixed number of points each (triangles, voxels), checked against the points.
+template <std::size_t N>
+Cells indexedCells(const std::vector<std::array<std::uint32_t, N>>& elements, std::size_t points,
+                   const char* what) {
   Cells cells;
-  for (const TriangleIndices& triangle : triangles) {
-    for (std::uint32_t index : triangle) {
+  cells.connectivity.reserve(N * elements.size());
+  cells.offsets.reserve(elements.size());
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    for (std::uint32_t index : elements[e]) {
       if (index >= points)
-        throw Error("triangle refers to point " + std::to_string(index) + " of " +
-                    std::to_string(points));
+        throw Error(std::string(what) + " " + std::to_string(e) + " refers to point " +
+                    std::to_string(index) + " of " + std::to_string(points));
       cells.connectivity.push_back(index);
     }
     cells.offsets.push_back(static_cast<std::int64_t>(cells.connectivity.size()));
@@ -106,33 +111,86 @@ std::string dataSection(const char* tag, const std::vector<VtkArray>& arrays,
   return xml + "</" + tag + ">\n";
 }
 
-std::string cellSection(const char* tag, const Cells& cells, AppendedData& appended) {
-  return std::string("<") + tag + ">\n" +
-         appended.add(cells.connectivity, "Int64", "connectivity", 1) +
-         appended.add(cells.offsets, "Int64", "offsets", 1) + "</" + tag + ">\n";
+// Blocks are appended in the order of the elements in the XML: each `+=` below is a statement of
+// its own because the operands of one `+` chain are evaluated in an unspecified order.
+
+/// The connectivity and offsets arrays of `cells` (the content of a Verts, Polys or Cells element).
+std::string cellArrays(const Cells& cells, AppendedData& appended) {
+  std::string xml = appended.add(cells.connectivity, "Int64", "connectivity", 1);
+  xml += appended.add(cells.offsets, "Int64", "offsets", 1);
+  return xml;
 }
 
-std::string document(const VtkPolyData& data, AppendedData& appended) {
-  const Cells verts = vertexCells(data.pointsAsVertices ? data.points.size() : 0);
-  const Cells polys = triangleCells(data.triangles, data.points.size());
-  std::vector<double> coordinates;
-  coordinates.reserve(3 * data.points.size());
-  for (const Vec3& p : data.points)
-    coordinates.insert(coordinates.end(), {p.x, p.y, p.z});
+std::string cellSection(const char* tag, const Cells& cells, AppendedData& appended) {
+  std::string xml = std::string("<") + tag + ">\n";
+  xml += cellArrays(cells, appended);
+  return xml + "</" + tag + ">\n";
+}
 
-  std::ostringstream xml;
-  xml << "<?xml version=\"1.0\"?>\n"
-      << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-         "header_type=\"UInt64\">\n<PolyData>\n"
-      << "<Piece NumberOfPoints=\"" << data.points.size() << "\" NumberOfVerts=\""
-      << verts.offsets.size() << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\""
-      << polys.offsets.size() << "\">\n"
-      << dataSection("PointData", data.pointData, appended)
-      << dataSection("CellData", data.cellData, appended) << "<Points>\n"
-      << appended.add(coordinates, "Float64", "Points", 3) << "</Points>\n"
-      << cellSection("Verts", verts, appended) << cellSection("Polys", polys, appended)
-      << "</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
-  return xml.str();
+std::string pointSection(const std::vector<Vec3>& points, AppendedData& appended) {
+  std::vector<double> coordinates;
+  coordinates.reserve(3 * points.size());
+  for (const Vec3& p : points)
+    coordinates.insert(coordinates.end(), {p.x, p.y, p.z});
+  return "<Points>\n" + appended.add(coordinates, "Float64", "Points", 3) + "</Points>\n";
+}
+
+/// The XML up to and including the start of the appended data, for a file of `type`
+/// (PolyData, UnstructuredGrid) whose Piece has `pieceAttributes` and holds `pieceContent`.
+std::string document(const char* type, const std::string& pieceAttributes,
+                     const std::string& pieceContent) {
+  return std::string("<?xml version=\"1.0\"?>\n<VTKFile type=\"") + type +
+         "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<" + type +
+         ">\n<Piece " + pieceAttributes + ">\n" + pieceContent + "</Piece>\n</" + type +
+         ">\n<AppendedData encoding=\"raw\">\n_";
+}
+
+std::string polyDataDocument(const VtkPolyData& data, AppendedData& appended) {
+  const Cells verts = vertexCells(data.pointsAsVertices ? data.points.size() : 0);
+  const Cells polys = indexedCells(data.triangles, data.points.size(), "triangle");
+  std::ostringstream attributes;
+  attributes << "NumberOfPoints=\"" << data.points.size() << "\" NumberOfVerts=\""
+             << verts.offsets.size()
+             << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\""
+             << polys.offsets.size() << "\"";
+  std::string content = dataSection("PointData", data.pointData, appended);
+  content += dataSection("CellData", data.cellData, appended);
+  content += pointSection(data.points, appended);
+  content += cellSection("Verts", verts, appended);
+  content += cellSection("Polys", polys, appended);
+  return document("PolyData", attributes.str(), content);
+}
+
+std::string unstructuredGridDocument(const VtkVoxelGrid& grid, AppendedData& appended) {
+  constexpr std::uint8_t kVtkVoxel = 11;
+  const Cells voxels = indexedCells(grid.voxels, grid.points.size(), "voxel");
+  const std::vector<std::uint8_t> types(grid.voxels.size(), kVtkVoxel);
+  const std::string attributes = "NumberOfPoints=\"" + std::to_string(grid.points.size()) +
+                                 "\" NumberOfCells=\"" + std::to_string(grid.voxels.size()) + "\"";
+  std::string content = dataSection("PointData", grid.pointData, appended);
+  content += dataSection("CellData", grid.cellData, appended);
+  content += pointSection(grid.points, appended);
+  content += "<Cells>\n";
+  content += cellArrays(voxels, appended);
+  content += appended.add(types, "UInt8", "types", 1);
+  return document("UnstructuredGrid", attributes, content + "</Cells>\n");
+}
+
+/// Writes the XML head, the appended block and the closing tags; a file that could not be
+/// written whole is removed.
+void writeDocument(const std::string& head, const AppendedData& appended,
+                   const std::filesystem::path& path) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw Error("cannot open it for writing");
+  file << head;
+  file.write(appended.bytes().data(), static_cast<std::streamsize>(appended.bytes().size()));
+  file << "\n</AppendedData>\n</VTKFile>\n";
+  if (!file.flush()) {
+    file.close();
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);  // no partial file
+    throw Error("writing failed");
+  }
 }
 
 }  // namespace
@@ -156,18 +214,20 @@ void writeVtp(const VtkPolyData& data, const std::filesystem::path& path) {
     checkArrays(data.pointData, data.points.size(), "point");
     checkArrays(data.cellData, data.cellCount(), "cell");
     AppendedData appended;
-    const std::string head = document(data, appended);
-    std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    if (!file) throw Error("cannot open it for writing");
-    file << head;
-    file.write(appended.bytes().data(), static_cast<std::streamsize>(appended.bytes().size()));
-    file << "\n</AppendedData>\n</VTKFile>\n";
-    if (!file.flush()) {
-      file.close();
-      std::error_code ignored;
-      std::filesystem::remove(path, ignored);  // no partial file
-      throw Error("writing failed");
-    }
+    const std::string head = polyDataDocument(data, appended);
+    writeDocument(head, appended, path);
+  } catch (const Error& error) {
+    throw Error("cannot write '" + path.string() + "': " + error.what());
+  }
+}
+
+void writeVtu(const VtkVoxelGrid& grid, const std::filesystem::path& path) {
+  try {
+    checkArrays(grid.pointData, grid.points.size(), "point");
+    checkArrays(grid.cellData, grid.voxels.size(), "cell");
+    AppendedData appended;
+    const std::string head = unstructuredGridDocument(grid, appended);
+    writeDocument(head, appended, path);
   } catch (const Error& error) {
     throw Error("cannot write '" + path.string() + "': " + error.what());
   }

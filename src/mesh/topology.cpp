@@ -6,6 +6,13 @@
 
 namespace delta {
 
+std::string describeDefects(const Topology& topology) {
+  return std::to_string(topology.boundaryEdges) + " boundary, " +
+         std::to_string(topology.nonManifoldEdges) + " non-manifold and " +
+         std::to_string(topology.misorientedEdges) + " misoriented edges of " +
+         std::to_string(topology.edges);
+}
+
 Topology analyzeTopology(const Mesh& mesh) {
   const std::vector<detail::DirectedEdge> edges = detail::sortedDirectedEdges(mesh);
   Topology topology;

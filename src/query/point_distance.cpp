@@ -25,13 +25,9 @@ constexpr double kBoundGrowth = 1.0 + 1e-12;
 void validate(const QueryMesh& mesh, const PointQuery& query) {
   if (std::isnan(query.epsilon) || !(query.epsilon > 0.0))
     throw Error("point distances: epsilon = " + toString(query.epsilon) + " must be positive");
-  if (query.signedDistance && !mesh.closed()) {
-    const Topology& t = mesh.topology();
+  if (query.signedDistance && !mesh.closed())
     throw Error("signed distance needs a closed, consistently oriented mesh; this one has " +
-                std::to_string(t.boundaryEdges) + " boundary, " +
-                std::to_string(t.nonManifoldEdges) + " non-manifold and " +
-                std::to_string(t.misorientedEdges) + " misoriented edges");
-  }
+                describeDefects(mesh.topology()));
 }
 
 /// Throws for the first point (in index order) with a non-finite coordinate.

@@ -6,11 +6,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace delta::test {
 
@@ -67,6 +70,29 @@ inline void expectOneLineError(const CliRun& run, const std::string& needle) {
   ASSERT_FALSE(run.err.empty());
   EXPECT_EQ(run.err.find('\n'), run.err.size() - 1) << "more than one line: " << run.err;
   EXPECT_NE(run.err.find(needle), std::string::npos) << run.err;
+}
+
+/// The number after "key": in a JSON line; NaN when the key is missing or not a number.
+inline double jsonNumber(const std::string& json, const std::string& key) {
+  const std::string marker = "\"" + key + "\":";
+  const std::size_t at = json.find(marker);
+  if (at == std::string::npos) return NAN;
+  const char* begin = json.c_str() + at + marker.size();
+  char* end = nullptr;
+  const double value = std::strtod(begin, &end);
+  return end == begin ? NAN : value;
+}
+
+/// The `file` attributes of a .pvd's data sets, in order.
+inline std::vector<std::string> seriesFiles(const std::filesystem::path& pvd) {
+  const std::string text = slurp(pvd);
+  const std::regex dataSet(
+      "<DataSet timestep=\"[^\"]+\" group=\"\" part=\"0\" file=\"([^\"]+)\"/>");
+  std::vector<std::string> files;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), dataSet);
+       it != std::sregex_iterator(); ++it)
+    files.push_back((*it)[1]);
+  return files;
 }
 
 }  // namespace delta::test

@@ -25,32 +25,11 @@ namespace fs = std::filesystem;
 
 using delta::test::CliRun;
 using delta::test::expectOneLineError;
+using delta::test::jsonNumber;
 using delta::test::runDelta;
+using delta::test::seriesFiles;
 using delta::test::slurp;
 using delta::test::TemporaryFolder;
-
-/// The number after "key": in a JSON line; NaN when the key is missing or not a number.
-double jsonNumber(const std::string& json, const std::string& key) {
-  const std::string marker = "\"" + key + "\":";
-  const std::size_t at = json.find(marker);
-  if (at == std::string::npos) return NAN;
-  const char* begin = json.c_str() + at + marker.size();
-  char* end = nullptr;
-  const double value = std::strtod(begin, &end);
-  return end == begin ? NAN : value;
-}
-
-/// The `file` attributes of a .pvd's data sets, in order.
-std::vector<std::string> seriesFiles(const fs::path& pvd) {
-  const std::string text = slurp(pvd);
-  const std::regex dataSet(
-      "<DataSet timestep=\"[^\"]+\" group=\"\" part=\"0\" file=\"([^\"]+)\"/>");
-  std::vector<std::string> files;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), dataSet);
-       it != std::sregex_iterator(); ++it)
-    files.push_back((*it)[1]);
-  return files;
-}
 
 /// What a VTK XML PolyData file with raw appended data holds, after checking its structure.
 struct VtpSummary {

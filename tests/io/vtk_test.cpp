@@ -3,11 +3,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <iterator>
 #include <regex>
 #include <string>
@@ -15,6 +14,8 @@
 
 #include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
+
+#include "io/vtk_read.h"
 
 namespace delta::io {
 namespace {
@@ -25,28 +26,8 @@ fs::path tempFile(const std::string& name) {
   return fs::temp_directory_path() / ("delta_vtk_" + std::to_string(::getpid()) + "_" + name);
 }
 
-std::string slurp(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
-
-/// Reads back the appended block of the DataArray named `name` (a minimal reader of what the
-/// writer emits: offset attribute, UInt64 byte count, raw little-endian values).
-template <typename T>
-std::vector<T> readArray(const std::string& file, const std::string& name) {
-  const std::regex element("<DataArray[^>]* Name=\"" + name + "\"[^>]* offset=\"([0-9]+)\"");
-  std::smatch match;
-  EXPECT_TRUE(std::regex_search(file, match, element)) << name;
-  if (match.empty()) return {};
-  const std::string marker = "<AppendedData encoding=\"raw\">\n_";
-  const std::size_t start = file.find(marker) + marker.size();
-  const std::size_t at = start + std::stoull(match[1]);
-  std::uint64_t bytes = 0;
-  std::memcpy(&bytes, file.data() + at, sizeof bytes);
-  std::vector<T> values(bytes / sizeof(T));
-  if (bytes > 0) std::memcpy(values.data(), file.data() + at + sizeof bytes, bytes);
-  return values;
-}
+using test::readFile;
+using test::readVtkArray;
 
 TEST(Vtk, WritesAMeshWithDataThatReadsBack) {
   const Mesh box = primitives::box({1, 2, 3}, {0.5, 0, 0});
@@ -61,24 +42,24 @@ TEST(Vtk, WritesAMeshWithDataThatReadsBack) {
   data.cellData.push_back(id);
   const fs::path path = tempFile("box.vtp");
   writeVtp(data, path);
-  const std::string file = slurp(path);
+  const std::string file = readFile(path);
   fs::remove(path);
   EXPECT_NE(file.find("<VTKFile type=\"PolyData\""), std::string::npos);
   EXPECT_NE(file.find("NumberOfPoints=\"8\" NumberOfVerts=\"0\""), std::string::npos);
   EXPECT_NE(file.find("NumberOfPolys=\"12\""), std::string::npos);
   EXPECT_EQ(file.substr(file.size() - 28), "\n</AppendedData>\n</VTKFile>\n");
-  const std::vector<double> points = readArray<double>(file, "Points");
+  const std::vector<double> points = readVtkArray<double>(file, "Points");
   ASSERT_EQ(points.size(), 24u);
   for (std::size_t i = 0; i < 8; ++i) {
     EXPECT_EQ(points[3 * i], box.vertices()[i].x);
     EXPECT_EQ(points[3 * i + 2], box.vertices()[i].z);
   }
-  EXPECT_EQ(readArray<double>(file, "height"), height.values);
-  EXPECT_EQ(readArray<double>(file, "triangle id"), id.values);
-  const std::vector<std::int64_t> connectivity = readArray<std::int64_t>(file, "connectivity");
+  EXPECT_EQ(readVtkArray<double>(file, "height"), height.values);
+  EXPECT_EQ(readVtkArray<double>(file, "triangle id"), id.values);
+  const std::vector<std::int64_t> connectivity = readVtkArray<std::int64_t>(file, "connectivity");
   // Verts come first (empty here), then Polys: the second "connectivity" is the triangles'.
   EXPECT_TRUE(connectivity.empty());
-  const std::vector<std::int64_t> offsets = readArray<std::int64_t>(file, "offsets");
+  const std::vector<std::int64_t> offsets = readVtkArray<std::int64_t>(file, "offsets");
   EXPECT_TRUE(offsets.empty());
 }
 
@@ -88,13 +69,13 @@ TEST(Vtk, WritesPointsAsVertexCells) {
   data.cellData.push_back({"overlap", 1, {0, 1, 0}});
   const fs::path path = tempFile("points.vtp");
   writeVtp(data, path);
-  const std::string file = slurp(path);
+  const std::string file = readFile(path);
   fs::remove(path);
   EXPECT_NE(file.find("NumberOfPoints=\"3\" NumberOfVerts=\"3\""), std::string::npos);
-  EXPECT_EQ(readArray<std::int64_t>(file, "connectivity"), (std::vector<std::int64_t>{0, 1, 2}));
-  EXPECT_EQ(readArray<std::int64_t>(file, "offsets"), (std::vector<std::int64_t>{1, 2, 3}));
-  EXPECT_EQ(readArray<double>(file, "Points").back(), 1e300);
-  EXPECT_EQ(readArray<double>(file, "normal").size(), 9u);
+  EXPECT_EQ(readVtkArray<std::int64_t>(file, "connectivity"), (std::vector<std::int64_t>{0, 1, 2}));
+  EXPECT_EQ(readVtkArray<std::int64_t>(file, "offsets"), (std::vector<std::int64_t>{1, 2, 3}));
+  EXPECT_EQ(readVtkArray<double>(file, "Points").back(), 1e300);
+  EXPECT_EQ(readVtkArray<double>(file, "normal").size(), 9u);
 }
 
 TEST(Vtk, RejectsMismatchedArraysAndWritesNothing) {
@@ -109,12 +90,99 @@ TEST(Vtk, RejectsMismatchedArraysAndWritesNothing) {
   EXPECT_THROW(writeVtp(VtkPolyData::fromPoints({}), "/nonexistent/dir/x.vtp"), Error);
 }
 
+/// Two unit voxels side by side along x, sharing a face: 12 points on a 3 × 2 × 2 lattice.
+VtkVoxelGrid twoVoxels() {
+  VtkVoxelGrid grid;
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 3; ++x)
+        grid.points.push_back({double(x), double(y), double(z)});
+  const auto at = [](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return x + 3 * y + 6 * z;
+  };
+  for (std::uint32_t left = 0; left < 2; ++left) {
+    std::array<std::uint32_t, 8> corners{};
+    for (std::uint32_t c = 0; c < 8; ++c)
+      corners[c] = at(left + (c & 1), (c >> 1) & 1, (c >> 2) & 1);
+    grid.voxels.push_back(corners);
+  }
+  return grid;
+}
+
+TEST(Vtk, WritesVoxelsThatReadBack) {
+  VtkVoxelGrid grid = twoVoxels();
+  VtkArray height{"height", 1, {}};
+  for (const Vec3& p : grid.points)
+    height.values.push_back(p.z);
+  grid.pointData.push_back(height);
+  grid.pointData.push_back({"gradient", 3, std::vector<double>(3 * grid.points.size(), 0.5)});
+  grid.cellData.push_back({"level", 1, {3, 4}});
+  const fs::path path = tempFile("voxels.vtu");
+  writeVtu(grid, path);
+  const std::string file = readFile(path);
+  fs::remove(path);
+  EXPECT_NE(file.find("<VTKFile type=\"UnstructuredGrid\""), std::string::npos);
+  EXPECT_NE(file.find("<UnstructuredGrid>\n<Piece NumberOfPoints=\"12\" NumberOfCells=\"2\">"),
+            std::string::npos)
+      << file.substr(0, 300);
+  EXPECT_NE(file.find("<DataArray type=\"UInt8\" Name=\"types\""), std::string::npos);
+  EXPECT_EQ(file.substr(file.size() - 28), "\n</AppendedData>\n</VTKFile>\n");
+  const std::vector<double> points = readVtkArray<double>(file, "Points");
+  ASSERT_EQ(points.size(), 36u);
+  for (std::size_t i = 0; i < grid.points.size(); ++i) {
+    EXPECT_EQ(points[3 * i], grid.points[i].x);
+    EXPECT_EQ(points[3 * i + 1], grid.points[i].y);
+    EXPECT_EQ(points[3 * i + 2], grid.points[i].z);
+  }
+  const std::vector<std::int64_t> connectivity = readVtkArray<std::int64_t>(file, "connectivity");
+  ASSERT_EQ(connectivity.size(), 16u);
+  for (std::size_t v = 0; v < 2; ++v)
+    for (std::size_t c = 0; c < 8; ++c)
+      EXPECT_EQ(connectivity[8 * v + c], grid.voxels[v][c]);
+  EXPECT_EQ(readVtkArray<std::int64_t>(file, "offsets"), (std::vector<std::int64_t>{8, 16}));
+  EXPECT_EQ(readVtkArray<std::uint8_t>(file, "types"), (std::vector<std::uint8_t>{11, 11}));
+  EXPECT_EQ(readVtkArray<double>(file, "height"), height.values);
+  EXPECT_EQ(readVtkArray<double>(file, "gradient").size(), 36u);
+  EXPECT_EQ(readVtkArray<double>(file, "level"), (std::vector<double>{3, 4}));
+}
+
+TEST(Vtk, WritesAnEmptyVoxelGrid) {
+  const fs::path path = tempFile("empty.vtu");
+  writeVtu({}, path);
+  const std::string file = readFile(path);
+  fs::remove(path);
+  EXPECT_NE(file.find("NumberOfPoints=\"0\" NumberOfCells=\"0\""), std::string::npos);
+  EXPECT_TRUE(readVtkArray<std::uint8_t>(file, "types").empty());
+}
+
+TEST(Vtk, RejectsBadVoxelGridsAndWritesNothing) {
+  const fs::path path = tempFile("bad.vtu");
+  VtkVoxelGrid grid = twoVoxels();
+  grid.pointData.push_back({"short", 1, {1, 2, 3}});
+  EXPECT_THROW(writeVtu(grid, path), Error);
+  grid.pointData.clear();
+  grid.cellData.push_back({"level", 1, {3, 4, 5}});  // three values for two voxels
+  EXPECT_THROW(writeVtu(grid, path), Error);
+  grid.cellData.clear();
+  grid.voxels[1][7] = 12;  // one past the points
+  try {
+    writeVtu(grid, path);
+    ADD_FAILURE() << "a voxel past the points was written";
+  } catch (const Error& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+    EXPECT_NE(message.find("voxel 1 refers to point 12 of 12"), std::string::npos) << message;
+  }
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_THROW(writeVtu(twoVoxels(), "/nonexistent/dir/x.vtu"), Error);
+}
+
 TEST(Vtk, WritesATimeSeriesCollection) {
   const fs::path path = tempFile("series.pvd");
   const std::vector<VtkSeriesEntry> entries = {
       {0.0, "frames/a_000000.vtp"}, {0.1, "frames/a_000001.vtp"}, {2.5e-7, "b&\"c\".vtp"}};
   writePvd(entries, path);
-  const std::string file = slurp(path);
+  const std::string file = readFile(path);
   fs::remove(path);
   EXPECT_NE(file.find("<VTKFile type=\"Collection\""), std::string::npos) << file;
   EXPECT_NE(
@@ -130,7 +198,7 @@ TEST(Vtk, WritesATimeSeriesCollection) {
             3);
 
   writePvd({}, path);  // an empty series still opens
-  EXPECT_NE(slurp(path).find("<Collection>\n</Collection>"), std::string::npos);
+  EXPECT_NE(readFile(path).find("<Collection>\n</Collection>"), std::string::npos);
   fs::remove(path);
 }
 

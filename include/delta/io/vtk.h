@@ -1,5 +1,7 @@
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -8,7 +10,8 @@
 #include "delta/core/vec3.h"
 #include "delta/mesh/mesh.h"
 
-/// Output that ParaView opens: VTK XML PolyData (.vtp), binary, double precision.
+/// Output that ParaView opens: VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), binary, double
+/// precision, and ParaView collections (.pvd) that play files as a time series.
 namespace delta::io {
 
 /// A named array of values attached to points or cells: `components` values per element
@@ -44,6 +47,23 @@ struct VtkPolyData {
 /// data, Float64 values, Int64 connectivity). Throws delta::Error naming the path when an array's
 /// size does not match its points or cells, a triangle refers past the points, or writing fails.
 void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
+
+/// Axis-aligned hexahedra (VTK_VOXEL, cell type 11): eight point indices each, corner c at offset
+/// (c & 1, (c >> 1) & 1, (c >> 2) & 1) from the lowest corner — VTK's voxel order. The writer does
+/// not check that the points form boxes; ParaView draws what the indices say.
+struct VtkVoxelGrid {
+  std::vector<Vec3> points;
+  std::vector<std::array<std::uint32_t, 8>> voxels;
+  std::vector<VtkArray> pointData;
+  std::vector<VtkArray> cellData;  ///< one element per voxel
+};
+
+/// Writes `grid` as a VTK XML UnstructuredGrid file (.vtu), encoded as writeVtp encodes (format
+/// version 1.0, raw appended little-endian data, Float64 values, Int64 connectivity and offsets,
+/// UInt8 cell types). Throws delta::Error naming the path when an array's size does not match
+/// its points or voxels, a voxel refers past the points (writing nothing), or writing fails
+/// (removing what was written).
+void writeVtu(const VtkVoxelGrid& grid, const std::filesystem::path& path);
 
 /// One file of a time series: the time it shows and where it is, relative to the .pvd file
 /// (or absolute).

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 
 #include "delta/mesh/mesh.h"
 
@@ -18,6 +19,10 @@ struct Topology {
   bool consistentlyOriented =
       false;  ///< manifold, and neighbours traverse each shared edge oppositely
 };
+
+/// What keeps a mesh from being closed and consistently oriented, for error messages:
+/// "4 boundary, 0 non-manifold and 0 misoriented edges of 12".
+std::string describeDefects(const Topology& topology);
 
 /// Edge-based analysis in O(n log n) at worst, O(n) for bounded valence: the directed edges are
 /// bucketed by their smaller vertex index and sorted within each bucket (no map per edge).

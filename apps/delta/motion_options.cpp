@@ -1,0 +1,46 @@
+#include "motion_options.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <system_error>
+
+#include "delta/core/error.h"
+
+namespace delta::cli {
+
+std::vector<double> parseNumbers(const std::string& text, std::size_t count, const char* option) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    double value = 0.0;
+    const char* begin = text.data() + start;
+    const char* end = text.data() + comma;
+    const auto [stop, status] = std::from_chars(begin, end, value);
+    if (status != std::errc() || stop != end || !std::isfinite(value))
+      throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
+                  " finite numbers separated by commas");
+    values.push_back(value);
+    start = comma + 1;
+  }
+  if (values.size() != count)
+    throw Error(std::string(option) + " '" + text + "' must be " + std::to_string(count) +
+                " numbers separated by commas");
+  return values;
+}
+
+Vec3 parseVector(const std::string& text, const char* option) {
+  const std::vector<double> v = parseNumbers(text, 3, option);
+  return {v[0], v[1], v[2]};
+}
+
+Quaternion parseRotation(const std::string& text, const char* option) {
+  const std::vector<double> r = parseNumbers(text, 4, option);
+  if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0)
+    throw Error(std::string(option) + " '" + text + "': the axis AX,AY,AZ must not be zero");
+  return Quaternion::fromAxisAngle({r[0], r[1], r[2]}, r[3] * std::numbers::pi / 180.0);
+}
+
+}  // namespace delta::cli
