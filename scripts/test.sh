@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The whole test suite: set up (scripts/setup.sh); every test built with AddressSanitizer +
 # UndefinedBehaviorSanitizer; the threaded tests built with ThreadSanitizer (clang, LLVM
-# OpenMP); the library installed and the find_package consumer example built against the
-# installed copy; then every test in the Release build (its ctest summary is the closing line CI
-# reads). Fails on the first failure.
+# OpenMP); the library installed and the examples (find_package consumer, immersed boundary)
+# built against the installed copy and run; then every test in the Release build (its ctest
+# summary is the closing line CI reads). Fails on the first failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -22,13 +22,17 @@ CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebIn
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \
   ctest -j"$jobs" -R "Thread|ParallelFor" --no-tests=error --output-on-failure)
 
-echo "== install and build the find_package consumer"
+echo "== install, and build and run the examples against the installed copy"
 scripts/setup.sh build
-rm -rf build/install build/consumer
+rm -rf build/install build/consumer build/examples
 cmake --install build --prefix build/install >/dev/null
-cmake -S examples/find_package -B build/consumer -G Ninja -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
-cmake --build build/consumer
-./build/consumer/consumer
+for example in find_package immersed_boundary; do
+  cmake -S examples/$example -B build/examples/$example -G Ninja \
+    -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
+  cmake --build build/examples/$example
+done
+./build/examples/find_package/consumer
+./build/examples/immersed_boundary/immersed_boundary data/meshes/fandisk.off build/examples/ib
 
 echo "== release build: every test"
 (cd build && ctest -j"$jobs" --output-on-failure)
