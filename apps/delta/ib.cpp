@@ -149,14 +149,6 @@ struct IbSummary {
   double perStep(double total) const { return steps ? total / static_cast<double>(steps) : 0.0; }
 };
 
-void accumulate(ib::GridStatistics& sum, const ib::GridStatistics& step) {
-  sum.queries += step.queries;
-  sum.cellsCreated += step.cellsCreated;
-  sum.cellsRemoved += step.cellsRemoved;
-  sum.querySeconds += step.querySeconds;
-  sum.seconds += step.seconds;
-}
-
 void printJson(const ib::AdaptiveGrid& grid, const IbSummary& run) {
   JsonWriter json;
   json.beginObject()
@@ -233,7 +225,7 @@ void run(const IbOptions& options) {
       mesh.bounds().center()};
   Progress progress("ib", steps, showProgress(options.quiet || options.json));
   for (std::size_t step = 1; step <= steps; ++step) {
-    accumulate(summary.moves, grid.moveBoundary(motion.after(grid.boundary().pose())));
+    summary.moves += grid.moveBoundary(motion.after(grid.boundary().pose()));
     summary.steps = step;
     if (output) {
       clock.restart();

@@ -66,6 +66,16 @@ struct GridStatistics {
   std::size_t cellsRemoved = 0;  ///< cells coarsened away
   double querySeconds = 0.0;     ///< time inside Δ's distance queries
   double seconds = 0.0;          ///< the whole build or move
+
+  /// Adds another build's or move's figures to these (totals over a run).
+  GridStatistics& operator+=(const GridStatistics& other) noexcept {
+    queries += other.queries;
+    cellsCreated += other.cellsCreated;
+    cellsRemoved += other.cellsRemoved;
+    querySeconds += other.querySeconds;
+    seconds += other.seconds;
+    return *this;
+  }
 };
 
 /// An octree Cartesian grid over a fixed box (GridOptions::domain), refined around a boundary
