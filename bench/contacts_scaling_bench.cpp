@@ -28,11 +28,15 @@
 
 #include "delta/delta.h"
 
+#include "omp_threads.h"
+
 namespace {
 
 using delta::Mesh;
 using delta::TriangleSoA;
 namespace cd = delta::contactdetection;
+using delta::bench::OmpThreads;
+using delta::bench::threadCounts;
 
 constexpr double kEpsilon = 0.01;
 constexpr double kOverlap = 0.01;
@@ -92,20 +96,6 @@ const std::vector<MeshPair>& pairs(std::int64_t triangles, std::size_t count,
     set.push_back(makePair(triangles, i, placement));
   return set;
 }
-
-/// Sets the OpenMP thread count for one benchmark and restores the previous one after it.
-class OmpThreads {
- public:
-  explicit OmpThreads(int threads) : previous_(omp_get_max_threads()) {
-    omp_set_num_threads(threads);
-  }
-  ~OmpThreads() { omp_set_num_threads(previous_); }
-  OmpThreads(const OmpThreads&) = delete;
-  OmpThreads& operator=(const OmpThreads&) = delete;
-
- private:
-  int previous_;
-};
 
 /// Whether every mesh of `set` has `triangles` triangles (skips the benchmark when not).
 bool hasSize(benchmark::State& state, const std::vector<MeshPair>& set, std::int64_t triangles) {
@@ -185,15 +175,6 @@ void DemInner(benchmark::State& state) {
   for (std::size_t count : found)
     contacts += count;
   setRates(state, set, contacts);
-}
-
-/// 1, 2, 4, … OpenMP threads, up to the processors this process may use.
-std::vector<std::int64_t> threadCounts() {
-  std::vector<std::int64_t> counts;
-  for (int threads = 1; threads <= omp_get_num_procs(); threads *= 2)
-    counts.push_back(threads);
-  if (counts.size() < 2) counts.push_back(2);
-  return counts;
 }
 
 }  // namespace

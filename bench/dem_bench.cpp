@@ -36,9 +36,13 @@
 
 #include "delta/delta.h"
 
+#include "omp_threads.h"
+
 namespace {
 
 namespace dem = delta::dem;
+using delta::bench::OmpThreads;
+using delta::bench::threadCounts;
 
 /// Free fall is taken in steps this many times the scenario's.
 constexpr double kFreeFallStride = 25.0;
@@ -101,20 +105,6 @@ const FunnelWorld& funnelWorld(std::size_t count, dem::ParticleKind kind,
   return cache.emplace(std::pair{count, kind}, std::move(funnel)).first->second;
 }
 
-/// Sets the OpenMP thread count for one benchmark and restores the previous one after it.
-class OmpThreads {
- public:
-  explicit OmpThreads(int threads) : previous_(omp_get_max_threads()) {
-    omp_set_num_threads(threads);
-  }
-  ~OmpThreads() { omp_set_num_threads(previous_); }
-  OmpThreads(const OmpThreads&) = delete;
-  OmpThreads& operator=(const OmpThreads&) = delete;
-
- private:
-  int previous_;
-};
-
 void Hopper(benchmark::State& state) {
   const auto count = static_cast<std::size_t>(state.range(0));
   const auto kind = state.range(3) ? dem::ParticleKind::Sphere : dem::ParticleKind::Mesh;
@@ -153,15 +143,6 @@ void Hopper(benchmark::State& state) {
   state.counters["time_step_s"] = world.parameters().timeStep;
   state.counters["free_fall_steps"] = static_cast<double>(funnel.freeFallSteps);
   state.counters["settling_steps"] = static_cast<double>(funnel.settlingSteps);
-}
-
-/// 1, 2, 4, … OpenMP threads, up to the processors this process may use.
-std::vector<std::int64_t> threadCounts() {
-  std::vector<std::int64_t> counts;
-  for (int threads = 1; threads <= omp_get_num_procs(); threads *= 2)
-    counts.push_back(threads);
-  if (counts.size() < 2) counts.push_back(2);
-  return counts;
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // Δ side by side with its peers (issue 5): Embree 3 and CGAL's AABB tree for points–mesh
 // distances, FCL for mesh–mesh distance and collision, on the same meshes, points and threads.
 //   build/bench/delta_bench_peers [--mesh PATH]... [--points N] [--threads 1,2]
-//                                 [--workloads W1,W2,W3,W4] [--json]
+//                                 [--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [--json]
 //
 // Workloads (ε and the bands are fractions of the mesh's bounding-box diagonal D):
 //   W1 distance      N points uniform in the box grown by 10% per side (the same points as
@@ -14,15 +14,26 @@
 //                    Δ's minimumDistance): the minimum distance.
 //   W4b contacts     the same copy moved 5% of D further in: Δ's contacts closer than 2ε,
 //                    ε = 10⁻⁶ D, against FCL's intersecting triangle pairs.
+//   W5 grid vertices the vertices of an immersed-boundary grid (ib::AdaptiveGrid, levels L,
+//                    default 7) refined around the mesh: the exact unsigned distance, and Δ's
+//                    signed distance too (a second Δ row) when the mesh is closed. Not in the
+//                    default list: run it with --workloads W5. Its own table, per thread count:
+//                    the grid's build (signed when the mesh is closed; seconds, vertices, queries,
+//                    queries per second inside Δ's distance queries and their share of the build)
+//                    and T moves (default 10) of the boundary, each turned about its box centre
+//                    and moved so that its furthest vertex moves 0.2 h, h the finest cell's
+//                    diagonal (bench/boundary_step.h): the same figures per move, averaged. The
+//                    grid's distances must equal a direct signed query at its vertices, and its
+//                    vertices and distances must not depend on the thread count.
 //
 // Per workload, library and thread count: build seconds (the library's structure), query
 // seconds (the median of 3 runs after a warm-up when a run takes under 2 s, else one run), the
 // ratios peer/Δ of query and of build + query time, bytes per triangle, and the agreement check:
-// every peer answer against Δ's within 10⁻⁹ D (W2: the same points within ε, except points whose
-// distance is within 10⁻⁹ D of ε; W4b: the same intersecting triangle pairs). A disagreement is
-// settled by brute force over all triangles with an exact oracle (CGAL, the first 3 of each
-// row) and printed under the mesh's table ("disagreements" in the JSON). Any disagreement, and Δ
-// answering differently on another thread count, makes the exit code 1 (2: bad options).
+// every peer answer against Δ's within 10⁻⁹ D (W1, W3, W5; W2: the same points within ε, except
+// points whose distance is within 10⁻⁹ D of ε; W4b: the same intersecting triangle pairs). A
+// disagreement is settled by brute force over all triangles with an exact oracle (CGAL, the first 3
+// of each row) and printed under the mesh's table ("disagreements" in the JSON). Any disagreement,
+// and Δ answering differently on another thread count, makes the exit code 1 (2: bad options).
 #include <omp.h>
 
 #include <algorithm>
@@ -46,6 +57,7 @@
 #include <vector>
 
 #include "delta/core/version.h"
+#include "delta/ib/adaptive_grid.h"
 #include "delta/io/mesh_io.h"
 #include "delta/kernels/point_triangle.h"
 #include "delta/query/contacts.h"
@@ -53,6 +65,7 @@
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 
+#include "boundary_step.h"
 #include "peers.h"
 #include "report.h"
 
@@ -79,6 +92,8 @@ constexpr double kContactFraction = 0.01;      // W2's ε and W3's band
 constexpr double kGapFraction = 1e-3;          // W4a's gap
 constexpr double kOverlapFraction = 0.05;      // W4b's overlap
 constexpr double kMeshEpsilonFraction = 1e-6;  // W4b's ε
+constexpr double kStepInCells = 0.2;           // W5's motion a move, in finest-cell diagonals
+constexpr int kMaxLevels = 20;                 // ib::GridOptions::levels
 constexpr double kRepeatBelowSeconds = 2.0;
 constexpr std::size_t kFclMaxContacts = 100'000'000;
 constexpr std::size_t kDisputesShown = 3;  // disagreements settled by brute force, each
@@ -95,19 +110,23 @@ struct Options {
   std::vector<std::string> meshes;
   std::size_t points = 1'000'000;
   std::vector<int> threads{1, 2};
-  std::array<bool, 4> workloads{true, true, true, true};
+  std::array<bool, 5> workloads{true, true, true, true, false};
+  int levels = 7;  // W5
+  int moves = 10;  // W5
   bool json = false;
 };
 
 constexpr const char* kUsage =
     "usage: delta_bench_peers [--mesh PATH]... [--points N] [--threads LIST] "
-    "[--workloads W1,W2,W3,W4] [--json]\n"
+    "[--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [--json]\n"
     "  --mesh PATH      a mesh file (repeatable; default CGAL's armadillo, bunny00 and\n"
     "                   refined_elephant from " DELTA_DATA_DIR
     "/meshes)\n"
     "  --points N       query points for W1-W3 (default 1000000)\n"
     "  --threads LIST   thread counts, comma-separated (default 1,2)\n"
-    "  --workloads LIST any of W1,W2,W3,W4 (default all)\n"
+    "  --workloads LIST any of W1,W2,W3,W4,W5 (default W1,W2,W3,W4)\n"
+    "  --levels L       W5: the grid's finest level, 1 to 20 (default 7)\n"
+    "  --moves T        W5: moves of the boundary (default 10)\n"
     "  --json           print one JSON object on stdout instead of the tables\n";
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -157,13 +176,19 @@ Options parseOptions(int argc, char** argv) {
         options.threads.push_back(static_cast<int>(positiveInteger(item, "--threads")));
       if (options.threads.empty()) usageError("--threads wants a list such as 1,2");
     } else if (argument == "--workloads") {
-      options.workloads = {false, false, false, false};
+      options.workloads = {false, false, false, false, false};
       for (const std::string& item : splitList(value())) {
         if (item.size() != 2 || (item[0] != 'W' && item[0] != 'w') || item[1] < '1' ||
-            item[1] > '4')
-          usageError("unknown workload '" + item + "' (W1, W2, W3 or W4)");
+            item[1] > '5')
+          usageError("unknown workload '" + item + "' (W1, W2, W3, W4 or W5)");
         options.workloads[static_cast<std::size_t>(item[1] - '1')] = true;
       }
+    } else if (argument == "--levels") {
+      const long long levels = positiveInteger(value(), "--levels");
+      if (levels > kMaxLevels) usageError("--levels wants 1 to " + std::to_string(kMaxLevels));
+      options.levels = static_cast<int>(levels);
+    } else if (argument == "--moves") {
+      options.moves = static_cast<int>(positiveInteger(value(), "--moves"));
     } else if (argument == "--json") {
       options.json = true;
     } else {
@@ -357,7 +382,8 @@ std::string settlePoint(const Mesh& mesh, const Vec3& p, double radius, double d
 struct PointWorkload {
   std::string name;
   const std::vector<Vec3>* points;
-  double radius;  // +∞ or ε
+  double radius;            // +∞ or ε
+  bool alsoSigned = false;  // a second Δ row: signed distances (a closed mesh)
 };
 
 std::vector<double> distancesOf(const std::vector<cd::PointDistance>& answers) {
@@ -372,12 +398,55 @@ std::size_t countFinite(const std::vector<double>& distances) {
       std::count_if(distances.begin(), distances.end(), [](double d) { return std::isfinite(d); }));
 }
 
+/// Δ's signed distances for `workload`: timed as the unsigned ones, and checked against them (the
+/// same |distance|, bit for bit) and against the first thread count's (`firstSigned`, set when
+/// empty).
+Row signedRow(const QueryMesh& queryMesh, const PointWorkload& workload, int threads,
+              double buildSeconds, double unsignedSeconds,
+              const std::vector<double>& unsignedAnswers, std::vector<double>& firstSigned) {
+  std::vector<cd::PointDistance> answers;
+  const QueryTime time = timeQuery([&] {
+    answers = cd::distances(queryMesh, *workload.points,
+                            {.epsilon = workload.radius, .signedDistance = true});
+  });
+  std::vector<double> signedDistances(answers.size());
+  std::size_t inside = 0, differing = 0;
+  for (std::size_t i = 0; i < answers.size(); ++i) {
+    signedDistances[i] = answers[i].signedDistance();
+    inside += answers[i].inside ? 1 : 0;
+    differing += answers[i].distance != unsignedAnswers[i] ? 1 : 0;
+  }
+  Row row = makeRow(workload.name, "Δ signed", threads);
+  row.buildSeconds = buildSeconds;
+  row.querySeconds = time.seconds;
+  row.queryRuns = time.runs;
+  row.bytesPerTriangle =
+      static_cast<double>(queryMesh.memoryBytes()) / static_cast<double>(queryMesh.size());
+  row.memoryMethod = "QueryMesh::memoryBytes()";
+  row.agreed = differing == 0;
+  row.agreement =
+      row.agreed ? "|d| = unsigned" : "NO: " + withCommas(differing) + " |d| != unsigned";
+  if (firstSigned.empty()) {
+    firstSigned = signedDistances;
+  } else if (firstSigned != signedDistances) {
+    row.agreed = false;
+    row.agreement += ", NO: differs from the first thread count";
+  } else {
+    row.agreement += ", = 1st thread count";
+  }
+  char note[96];
+  std::snprintf(note, sizeof note, "inside: %s; %.2f× the unsigned query",
+                withCommas(inside).c_str(), time.seconds / unsignedSeconds);
+  row.note = note;
+  return row;
+}
+
 void runPointWorkloads(const Mesh& mesh, const std::vector<PointWorkload>& workloads,
                        const Options& options, MeshReport& report) {
   const double diagonal = report.diagonal, tolerance = kAgreementFraction * diagonal;
   const double triangles = static_cast<double>(mesh.triangleCount());
   // Δ's answers on the first thread count: the others must match them bit for bit.
-  std::vector<std::vector<double>> firstAnswers(workloads.size());
+  std::vector<std::vector<double>> firstAnswers(workloads.size()), firstSigned(workloads.size());
 
   for (const int threads : options.threads) {
     omp_set_num_threads(threads);
@@ -409,7 +478,12 @@ void runPointWorkloads(const Mesh& mesh, const std::vector<PointWorkload>& workl
       }
       if (std::isfinite(workload.radius))
         row.note = "within ε: " + withCommas(countFinite(deltaAnswers[w]));
+      else if (workload.points->size() != options.points)
+        row.note = withCommas(workload.points->size()) + " points";
       report.rows.push_back(row);
+      if (workload.alsoSigned)
+        report.rows.push_back(signedRow(*queryMesh, workload, threads, deltaBuild, row.querySeconds,
+                                        deltaAnswers[w], firstSigned[w]));
     }
 
     // The peers
@@ -689,6 +763,102 @@ void runMeshMeshWorkloads(const Mesh& mesh, const Options& options, MeshReport& 
 #endif
 }
 
+// ---------------------------------------------------------------------------------------------
+// W5
+
+/// Where `grid`'s vertices are and the distances it holds, to compare grids.
+struct GridField {
+  std::vector<Vec3> positions;
+  std::vector<double> distances;
+
+  explicit GridField(const delta::ib::AdaptiveGrid& grid)
+      : positions(grid.positions()), distances(grid.distances().begin(), grid.distances().end()) {}
+  bool operator==(const GridField&) const = default;
+};
+
+/// W5's grid at every thread count (report.grid): its build (the median of three after a warm-up
+/// when it takes under kRepeatBelowSeconds), then options.moves moves of the boundary. The first
+/// thread count's grid is checked against a direct query at its vertices, the others against
+/// it, before and after the moves. Returns the vertices of the built grid.
+std::vector<Vec3> runGridPhases(const Mesh& mesh, const Options& options, MeshReport& report) {
+  const QueryMesh boundary(mesh);
+  bench::GridReport& grid = report.grid;
+  grid.levels = options.levels;
+  grid.signedDistance = boundary.closed();
+  grid.moves = options.moves;
+  const delta::ib::GridOptions gridOptions{.levels = options.levels,
+                                           .signedDistance = grid.signedDistance};
+  std::optional<GridField> firstBuilt, firstMoved;
+  for (const int threads : options.threads) {
+    omp_set_num_threads(threads);
+    std::optional<delta::ib::AdaptiveGrid> built;
+    std::vector<delta::ib::GridStatistics> runs;
+    const auto build = [&] {
+      built.emplace(boundary, gridOptions);
+      runs.push_back(built->statistics());
+    };
+    build();
+    if (runs.front().seconds < kRepeatBelowSeconds) {
+      runs.clear();
+      for (int run = 0; run < 3; ++run)
+        build();
+      std::sort(runs.begin(), runs.end(),
+                [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
+    }
+    const delta::ib::GridStatistics& median = runs[runs.size() / 2];
+    delta::ib::AdaptiveGrid& adaptive = *built;
+    bench::GridPhases phases;
+    phases.threads = threads;
+    phases.vertices = adaptive.vertexCount();
+    phases.leaves = adaptive.leafCount();
+    phases.buildSeconds = median.seconds;
+    phases.buildRuns = static_cast<int>(runs.size());
+    phases.buildQueries = median.queries;
+    phases.buildQuerySeconds = median.querySeconds;
+
+    const GridField field(adaptive);
+    if (!firstBuilt) {
+      const std::vector<cd::PointDistance> direct =
+          cd::distances(boundary, field.positions, {.signedDistance = grid.signedDistance});
+      std::size_t differing = 0;
+      for (std::size_t v = 0; v < direct.size(); ++v) {
+        const double expected =
+            grid.signedDistance ? direct[v].signedDistance() : direct[v].distance;
+        differing += expected != field.distances[v] ? 1 : 0;
+      }
+      phases.agreed = differing == 0;
+      phases.agreement = phases.agreed
+                             ? "built = direct queries"
+                             : "NO: " + withCommas(differing) + " differ from direct queries";
+      firstBuilt = field;
+    } else {
+      phases.agreed = field == *firstBuilt;
+      phases.agreement = phases.agreed ? "built = first thread count"
+                                       : "NO: built differs from the first thread count";
+    }
+
+    grid.cellDiagonal = adaptive.cellDiagonal(options.levels);
+    grid.step = kStepInCells * grid.cellDiagonal;
+    delta::ib::GridStatistics moves;
+    for (int move = 0; move < options.moves; ++move)
+      moves += adaptive.moveBoundary(bench::boundaryStep(adaptive.boundary(), grid.step));
+    phases.moveSeconds = moves.seconds / options.moves;
+    phases.moveQueries = static_cast<double>(moves.queries) / options.moves;
+    phases.moveQuerySeconds = moves.querySeconds / options.moves;
+    const GridField moved(adaptive);
+    if (!firstMoved) {
+      firstMoved = moved;
+    } else if (moved == *firstMoved) {
+      phases.agreement += ", moved = first thread count";
+    } else {
+      phases.agreed = false;
+      phases.agreement += ", NO: moved differs from the first thread count";
+    }
+    grid.rows.push_back(phases);
+  }
+  return firstBuilt->positions;
+}
+
 int run(const Options& options) {
   if (!options.json)
     std::printf("Δ %s (%s) against its peers%s; %d hardware threads\n", delta::version(),
@@ -704,7 +874,7 @@ int run(const Options& options) {
     report.diagonal = mesh.bounds().diagonal();
     report.points = options.points;
     const std::vector<Vec3> uniform = uniformPoints(mesh.bounds(), options.points, kUniformSeed);
-    std::vector<Vec3> nearSurface;
+    std::vector<Vec3> nearSurface, gridVertices;
     std::vector<PointWorkload> workloads;
     if (options.workloads[0]) workloads.push_back({"W1 distance", &uniform, kInfinity});
     if (options.workloads[1])
@@ -714,10 +884,17 @@ int run(const Options& options) {
                                       kNearSurfaceSeed);
       workloads.push_back({"W3 near surface", &nearSurface, kInfinity});
     }
+    if (options.workloads[4]) {
+      gridVertices = runGridPhases(mesh, options, report);
+      workloads.push_back(
+          {"W5 grid vertices", &gridVertices, kInfinity, report.grid.signedDistance});
+    }
     if (!workloads.empty()) runPointWorkloads(mesh, workloads, options, report);
     if (options.workloads[3]) runMeshMeshWorkloads(mesh, options, report);
     for (const Row& row : report.rows)
       agreed = agreed && row.agreed;
+    for (const bench::GridPhases& phases : report.grid.rows)
+      agreed = agreed && phases.agreed;
     if (!options.json) {
       bench::printTable(report);
       std::fflush(stdout);

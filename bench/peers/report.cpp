@@ -37,6 +37,84 @@ std::string jsonNumber(double value) {
   return text;
 }
 
+/// `text` padded with spaces to `width` columns, on the left or the right ("Δ" and "×" take two
+/// bytes and one column: count characters, not bytes).
+std::string padded(const std::string& text, std::size_t width, bool left = true) {
+  std::size_t columns = 0;
+  for (const char c : text)
+    columns += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  const std::string fill(width > columns ? width - columns : 0, ' ');
+  return left ? text + fill : fill + text;
+}
+
+std::string rightAligned(const std::string& text, std::size_t width) {
+  return padded(text, width, false);
+}
+
+/// Millions of queries a second, from a count and the seconds they took.
+double millionsPerSecond(double queries, double seconds) {
+  return seconds > 0.0 ? queries / seconds * 1e-6 : kNotMeasured;
+}
+
+void printGridTable(const GridReport& grid) {
+  if (grid.rows.empty()) return;
+  std::printf(
+      "\nW5 grid: levels %d, %s distances, finest cell diagonal h = %.6g; %d moves of the "
+      "boundary, its furthest vertex %.3g h a move (move columns: means over the moves)\n",
+      grid.levels, grid.signedDistance ? "signed" : "unsigned", grid.cellDiagonal, grid.moves,
+      grid.step / grid.cellDiagonal);
+  std::printf("%3s %9s %9s %9s %4s %9s %s %s | %9s %9s %s %s  %s\n", "thr", "vertices", "leaves",
+              "build s", "runs", "queries", rightAligned("Mq/s in Δ", 10).c_str(),
+              rightAligned("in Δ", 5).c_str(), "move s", "queries",
+              rightAligned("Mq/s in Δ", 10).c_str(), rightAligned("in Δ", 5).c_str(), "agreement");
+  for (const GridPhases& row : grid.rows) {
+    const double buildQueries = static_cast<double>(row.buildQueries);
+    std::printf("%3d %9s %9s %9s %4d %9s %10s %5s | %9s %9s %10s %5s  %s\n", row.threads,
+                withCommas(row.vertices).c_str(), withCommas(row.leaves).c_str(),
+                format("%.4f", row.buildSeconds).c_str(), row.buildRuns,
+                withCommas(row.buildQueries).c_str(),
+                format("%.2f", millionsPerSecond(buildQueries, row.buildQuerySeconds)).c_str(),
+                format("%.0f%%", 100.0 * row.buildQuerySeconds / row.buildSeconds).c_str(),
+                format("%.4f", row.moveSeconds).c_str(),
+                withCommas(static_cast<std::size_t>(std::llround(row.moveQueries))).c_str(),
+                format("%.2f", millionsPerSecond(row.moveQueries, row.moveQuerySeconds)).c_str(),
+                format("%.0f%%", 100.0 * row.moveQuerySeconds / row.moveSeconds).c_str(),
+                row.agreement.c_str());
+  }
+}
+
+void printGridJson(const GridReport& grid) {
+  if (grid.rows.empty()) {
+    std::printf("null");
+    return;
+  }
+  std::printf(
+      "{\"levels\": %d, \"signed\": %s, \"cell_diagonal\": %s, \"moves\": %d, \"step\": %s, "
+      "\"rows\": [",
+      grid.levels, grid.signedDistance ? "true" : "false", jsonNumber(grid.cellDiagonal).c_str(),
+      grid.moves, jsonNumber(grid.step).c_str());
+  for (std::size_t r = 0; r < grid.rows.size(); ++r) {
+    const GridPhases& row = grid.rows[r];
+    const double buildQueries = static_cast<double>(row.buildQueries);
+    std::printf(
+        "%s\n    {\"threads\": %d, \"vertices\": %zu, \"leaves\": %zu, \"build_s\": %s, "
+        "\"build_runs\": %d, \"build_queries\": %zu, \"build_query_s\": %s, "
+        "\"build_queries_per_s_in_delta\": %s, \"build_share_in_delta\": %s, \"move_s\": %s, "
+        "\"move_queries\": %s, \"move_query_s\": %s, \"move_queries_per_s_in_delta\": %s, "
+        "\"move_share_in_delta\": %s, \"agreement\": %s, \"agreed\": %s}",
+        r ? "," : "", row.threads, row.vertices, row.leaves, jsonNumber(row.buildSeconds).c_str(),
+        row.buildRuns, row.buildQueries, jsonNumber(row.buildQuerySeconds).c_str(),
+        jsonNumber(1e6 * millionsPerSecond(buildQueries, row.buildQuerySeconds)).c_str(),
+        jsonNumber(row.buildQuerySeconds / row.buildSeconds).c_str(),
+        jsonNumber(row.moveSeconds).c_str(), jsonNumber(row.moveQueries).c_str(),
+        jsonNumber(row.moveQuerySeconds).c_str(),
+        jsonNumber(1e6 * millionsPerSecond(row.moveQueries, row.moveQuerySeconds)).c_str(),
+        jsonNumber(row.moveQuerySeconds / row.moveSeconds).c_str(),
+        jsonString(row.agreement).c_str(), row.agreed ? "true" : "false");
+  }
+  std::printf("]}");
+}
+
 std::vector<std::string> skippedPeers() {
   std::vector<std::string> skipped;
 #if !defined(DELTA_HAVE_EMBREE)
@@ -99,21 +177,21 @@ void printTable(const MeshReport& report) {
               std::filesystem::path(report.path).filename().c_str(),
               withCommas(report.triangles).c_str(), withCommas(report.vertices).c_str(),
               report.diagonal, withCommas(report.points).c_str());
-  std::printf("%-17s %-7s %3s %9s %9s %4s %8s %8s %8s  %-34s %s\n", "workload", "library", "thr",
+  std::printf("%-17s %-8s %3s %9s %9s %4s %8s %8s %8s  %-34s %s\n", "workload", "library", "thr",
               "build s", "query s", "runs", "peer/Δ", "b+q", "B/tri", "agreement (max |diff|/D)",
               "note");
   for (const Row& row : report.rows) {
     std::string agreement = row.agreement;
     if (!std::isnan(row.maxDifference)) agreement += " (" + format("%.1e", row.maxDifference) + ")";
-    // "Δ" and "×" take two bytes and one column: pad by hand.
-    const std::string library = row.library == "Δ" ? "Δ      " : row.library;
-    std::printf("%-17s %-7s %3d %9s %9s %4d %7s%s %7s%s %8s  %-34s %s\n", row.workload.c_str(),
-                library.c_str(), row.threads, format("%.4f", row.buildSeconds).c_str(),
-                format("%.4f", row.querySeconds).c_str(), row.queryRuns,
-                format("%.2f", row.ratioQuery).c_str(), std::isnan(row.ratioQuery) ? " " : "×",
-                format("%.2f", row.ratioTotal).c_str(), std::isnan(row.ratioTotal) ? " " : "×",
+    std::printf("%-17s %s %3d %9s %9s %4d %7s%s %7s%s %8s  %-34s %s\n", row.workload.c_str(),
+                padded(row.library, 8).c_str(), row.threads,
+                format("%.4f", row.buildSeconds).c_str(), format("%.4f", row.querySeconds).c_str(),
+                row.queryRuns, format("%.2f", row.ratioQuery).c_str(),
+                std::isnan(row.ratioQuery) ? " " : "×", format("%.2f", row.ratioTotal).c_str(),
+                std::isnan(row.ratioTotal) ? " " : "×",
                 format("%.0f", row.bytesPerTriangle).c_str(), agreement.c_str(), row.note.c_str());
   }
+  printGridTable(report.grid);
   for (const std::string& skipped : skippedPeers())
     std::printf("%s\n", skipped.c_str());
   for (const std::string& dispute : report.disputes)
@@ -150,7 +228,9 @@ void printJson(std::size_t points, const std::vector<MeshReport>& reports, bool 
           jsonString(row.agreement).c_str(), row.agreed ? "true" : "false",
           jsonNumber(row.maxDifference).c_str(), jsonString(row.note).c_str());
     }
-    std::printf("],\n   \"disagreements\": [");
+    std::printf("],\n   \"grid\": ");
+    printGridJson(report.grid);
+    std::printf(",\n   \"disagreements\": [");
     for (std::size_t d = 0; d < report.disputes.size(); ++d)
       std::printf("%s%s", d ? ", " : "", jsonString(report.disputes[d]).c_str());
     std::printf("]}");

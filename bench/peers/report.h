@@ -29,6 +29,33 @@ struct Row {
   std::string note;
 };
 
+/// W5's adaptive grid (ib::AdaptiveGrid) at one thread count: its build, and a run of moves of
+/// the boundary. "In Δ" is the time inside Δ's distance queries (GridStatistics::querySeconds).
+struct GridPhases {
+  int threads = 1;
+  std::size_t vertices = 0;
+  std::size_t leaves = 0;
+  double buildSeconds = kNotMeasured;  // the median build (GridStatistics::seconds)
+  int buildRuns = 0;
+  std::size_t buildQueries = 0;
+  double buildQuerySeconds = kNotMeasured;
+  double moveSeconds = kNotMeasured;  // means over the moves
+  double moveQueries = kNotMeasured;
+  double moveQuerySeconds = kNotMeasured;
+  std::string agreement;  // against a direct query and the first thread count
+  bool agreed = true;
+};
+
+/// W5's grid at every thread count, and how it was made and moved.
+struct GridReport {
+  int levels = 0;
+  bool signedDistance = false;
+  double cellDiagonal = kNotMeasured;  // of a finest cell, h
+  int moves = 0;
+  double step = kNotMeasured;  // how far the furthest vertex moves in one move
+  std::vector<GridPhases> rows;
+};
+
 struct MeshReport {
   std::string path;
   std::size_t triangles = 0;
@@ -36,6 +63,7 @@ struct MeshReport {
   double diagonal = 0.0;
   std::size_t points = 0;
   std::vector<Row> rows;
+  GridReport grid;                    // W5 (no rows when W5 was not run)
   std::vector<std::string> disputes;  // brute-force verdicts on disagreements
 };
 
@@ -50,7 +78,8 @@ void setRatios(Row& row, const std::vector<Row>& rows);
 /// ", Embree 3.13.5, CGAL 5.5.1, FCL 0.7.0": the peers this program was built with.
 std::string peerVersions();
 
-/// The mesh's table, the peers it was built without, and the disagreements' verdicts.
+/// The mesh's table, W5's grid table, the peers it was built without, and the disagreements'
+/// verdicts.
 void printTable(const MeshReport& report);
 
 /// One JSON object for the whole run on stdout.

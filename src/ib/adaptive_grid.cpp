@@ -295,7 +295,26 @@ void AdaptiveGrid::refine() {
     if (epoch_[v] != now && std::abs(distance_[v]) - slackOfEpoch_[epoch_[v]] <= exactBand_)
       queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
   query();
+  forgetUnusedPoses();
   statistics_.seconds = secondsSince(start);
+}
+
+void AdaptiveGrid::forgetUnusedPoses() {
+  std::vector<std::uint32_t> renumbered(poses_.size(), 0);
+  for (std::uint32_t epoch : epoch_)
+    renumbered[epoch] = 1;
+  std::uint32_t kept = 0;
+  for (std::uint32_t epoch = 0; epoch < poses_.size(); ++epoch) {
+    if (!renumbered[epoch]) continue;
+    poses_[kept] = poses_[epoch];
+    slackOfEpoch_[kept] = slackOfEpoch_[epoch];
+    renumbered[epoch] = kept++;
+  }
+  if (kept == poses_.size()) return;
+  poses_.resize(kept);
+  slackOfEpoch_.resize(kept);
+  for (std::uint32_t& epoch : epoch_)
+    epoch = renumbered[epoch];
 }
 
 void AdaptiveGrid::queue(std::uint32_t v, double upperBound) {

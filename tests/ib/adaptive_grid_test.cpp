@@ -286,6 +286,18 @@ TEST(AdaptiveGrid, InfiniteBandKeepsEveryDistanceExact) {
   EXPECT_EQ(grid.leafCount(), 1u);
 }
 
+TEST(AdaptiveGrid, LongRunsForgetPosesNoVertexDatesFrom) {
+  const QueryMesh sphere(primitives::icosphere(3, 1.0));
+  AdaptiveGrid grid(sphere, {.levels = 4});
+  EXPECT_EQ(grid.rememberedPoses(), 1u);
+  const RigidTransform step =
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, 1, 0}, 0.02), {0.3, 0, 0});
+  for (int t = 0; t < 60; ++t)
+    grid.moveBoundary(step);
+  EXPECT_LT(grid.rememberedPoses(), 30u);
+  expectSameAsNewGrid(grid);
+}
+
 TEST(AdaptiveGridThreads, AnswersDoNotDependOnTheThreadCount) {
   const QueryMesh fandisk(io::load(kMeshes / "fandisk.off"));
   const int threads = omp_get_max_threads();

@@ -137,6 +137,9 @@ class AdaptiveGrid {
   /// The band within which distances are exact after a move (GridOptions::exactBand resolved).
   double exactBand() const noexcept { return exactBand_; }
 
+  /// How many of the boundary's past poses the vertices' distances date from (1 after a build;
+  /// poses no vertex dates from are forgotten, so a long run does not pile them up).
+  std::size_t rememberedPoses() const noexcept { return poses_.size(); }
   /// The diagonal of a level-l cell.
   double cellDiagonal(int level) const noexcept;
   /// What the last build or move did.
@@ -157,6 +160,8 @@ class AdaptiveGrid {
   Vec3 position(std::uint64_t key) const noexcept;
   /// Drops the vertices no cell refers to.
   void compact();
+  /// Drops the poses no vertex was queried at (so that they do not pile up over a long run).
+  void forgetUnusedPoses();
   /// The hash-table slot of `key`: where it is, or the empty slot where it would go.
   std::size_t slotOf(std::uint64_t key) const noexcept;
   void rebuildTable(std::size_t capacity);
@@ -174,7 +179,7 @@ class AdaptiveGrid {
   std::vector<double> distance_;
   std::vector<std::uint32_t> epoch_;
   std::vector<std::uint32_t> queuedAt_;  ///< the pass that last queued the vertex
-  std::vector<RigidTransform> poses_;    ///< the boundary's poses, one per build or move
+  std::vector<RigidTransform> poses_;    ///< the boundary's poses that some vertex was queried at
   std::vector<double> slackOfEpoch_;     ///< bound of the motion since each pose
 
   // Integer position → vertex index: open addressing, linear probing, power-of-two capacity.
