@@ -130,10 +130,10 @@ std::size_t AdaptiveGrid::leafCount() const {
 }
 
 Vec3 AdaptiveGrid::position(std::uint32_t v) const noexcept {
-  return position(keys_[v]);
+  return positionOfKey(keys_[v]);
 }
 
-Vec3 AdaptiveGrid::position(std::uint64_t key) const noexcept {
+Vec3 AdaptiveGrid::positionOfKey(std::uint64_t key) const noexcept {
   const double scale = 1.0 / resolution_;
   const Vec3& lower = options_.domain.lower;
   const Vec3 extent = options_.domain.extent();
@@ -376,10 +376,10 @@ std::uint32_t AdaptiveGrid::vertexAt(std::uint32_t x, std::uint32_t y, std::uint
   // far it is).
   double bound = std::numeric_limits<double>::infinity();
   if (parent != nullptr) {
-    const Vec3 p = position(key);
+    const Vec3 p = positionOfKey(key);
     for (std::uint32_t c : parent->corners)
       bound = std::min(bound, std::abs(distance_[c]) + slackOfEpoch_[epoch_[c]] +
-                                  length(p - position(keys_[c])));
+                                  length(p - positionOfKey(keys_[c])));
   }
   keys_.push_back(key);
   distance_.push_back(0.0);

@@ -157,7 +157,7 @@ class AdaptiveGrid {
   /// of the children of `parent`, whose corners bound its distance.
   std::uint32_t vertexAt(std::uint32_t x, std::uint32_t y, std::uint32_t z, const Cell* parent);
   /// Where the vertex with this integer position (packed) is.
-  Vec3 position(std::uint64_t key) const noexcept;
+  Vec3 positionOfKey(std::uint64_t key) const noexcept;
   /// Drops the vertices no cell refers to.
   void compact();
   /// Drops the poses no vertex was queried at (so that they do not pile up over a long run).
