@@ -1,5 +1,6 @@
 #include "delta/ib/grid_vtk.h"
 
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -15,6 +16,7 @@ io::VtkVoxelGrid toVtk(const AdaptiveGrid& grid) {
   vtk.pointData.push_back({"error_bound", 1, grid.errorBounds()});
 
   io::VtkArray level{"level", 1, {}};
+  io::VtkArray vertexLevel{"finest_level", 1, std::vector<double>(grid.vertexCount(), 0.0)};
   vtk.voxels.reserve(grid.leafCount());
   level.values.reserve(grid.leafCount());
   for (int l = 0; l <= grid.levels(); ++l)
@@ -22,8 +24,11 @@ io::VtkVoxelGrid toVtk(const AdaptiveGrid& grid) {
       if (!cell.leaf()) continue;
       vtk.voxels.push_back(cell.corners);
       level.values.push_back(cell.level);
+      for (std::uint32_t v : cell.corners)  // levels ascend: the finest leaf is the last
+        vertexLevel.values[v] = cell.level;
     }
   vtk.cellData.push_back(std::move(level));
+  vtk.pointData.push_back(std::move(vertexLevel));
   return vtk;
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -75,6 +76,15 @@ TEST(GridVtk, LeavesAreVoxelsAndVerticesArePoints) {
   }
   EXPECT_EQ(counted, perLevel);
   EXPECT_GT(perLevel.back(), 0u) << "the boundary is refined to the finest level";
+
+  // Each vertex's level is the finest of the leaves it is a corner of.
+  const io::VtkArray* vertexLevel = pointArray(vtk, "finest_level");
+  ASSERT_NE(vertexLevel, nullptr);
+  std::vector<double> finest(grid.vertexCount(), -1.0);
+  for (std::size_t i = 0; i < vtk.voxels.size(); ++i)
+    for (std::uint32_t v : vtk.voxels[i])
+      finest[v] = std::max(finest[v], vtk.cellData[0].values[i]);
+  EXPECT_EQ(vertexLevel->values, finest);
 }
 
 TEST(GridVtk, UnsignedGridsNameTheirDistanceAndMovedGridsKeepTheirBounds) {
