@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The main job on a built-in default: set up and build (scripts/setup.sh), then the DEM case
 # study — two particles colliding (measured restitution) and 27 triangulated granulates falling
-# into a box and settling (a ParaView series in build/dem_settle/) — then describe a real mesh
-# (CGAL's armadillo) and a built-in primitive, find the contacts of two particles
-# (build/contacts.vtp), the signed distances of 100,000 points to the armadillo
+# into a box and settling (a ParaView series in build/dem_settle/) — and the immersed-boundary
+# case study (an adaptive grid around CGAL's fandisk following it as it turns, build/ib_fandisk/),
+# then describe a real mesh (CGAL's armadillo) and a built-in primitive, find the contacts of two
+# particles (build/contacts.vtp), the signed distances of 100,000 points to the armadillo
 # (build/distances.vtp) and time the triangle–triangle solvers.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,6 +12,7 @@ scripts/setup.sh build
 ./build/delta --version
 ./build/delta dem two-particles --restitution 0.5 --quiet
 ./build/delta dem settle --particles 27 --out build/dem_settle
+./build/delta ib data/meshes/fandisk.off --levels 6 --steps 5 --rotate 0,0,1,2 --out build/ib_fandisk
 ./build/delta info data/meshes/armadillo.off
 ./build/delta info builtin:granulate:1
 ./build/delta contact builtin:granulate:3 builtin:granulate:4 --translate-b 1.8,0.2,0.1 --eps 0.05 \
