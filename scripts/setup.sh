@@ -13,6 +13,7 @@ packages=(
   libcgal-demo assimp-testmodels
   libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
   libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
+  python3-dev python3-numpy python3-pytest pybind11-dev  # the Python module delta (python/)
 )
 missing=()
 for package in "${packages[@]}"; do
@@ -38,3 +39,28 @@ build=${1:-build}
 shift || true
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build"
+
+# The Python module: a .pth file in Debian's Python's site-packages points at this build's
+# python/ folder, so that `python3 -c "import delta"` works from anywhere (the last build set up
+# with Python wins; builds without it, such as the sanitized ones, leave the file alone).
+if [ -f "$build/python/delta/__init__.py" ]; then
+  python=$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' "$build/CMakeCache.txt")
+  python=${python:-/usr/bin/python3}
+  site=$("$python" -c 'import site; print(site.getsitepackages()[0])')
+  package_dir=$(cd "$build/python" && pwd)
+  if [ -w "$(dirname "$site")" ] || [ -w "$site" ]; then
+    mkdir -p "$site"
+    if [ "$(cat "$site/delta.pth" 2>/dev/null)" != "$package_dir" ]; then
+      echo "setup: $site/delta.pth -> $package_dir"
+      echo "$package_dir" >"$site/delta.pth"
+    fi
+    (cd / && "$python" -c 'import delta') || { echo "setup: import delta failed" >&2; exit 1; }
+    on_path=$(command -v python3 || true)
+    if [ -n "$on_path" ] && [ "$(realpath "$on_path")" != "$(realpath "$python")" ] &&
+      ! (cd / && python3 -c 'import delta' 2>/dev/null); then
+      echo "setup: note: python3 on PATH ($on_path) is not $python, for which delta is built"
+    fi
+  else
+    echo "setup: cannot write to $site; use PYTHONPATH=$package_dir"
+  fi
+fi

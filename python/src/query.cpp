@@ -1,0 +1,278 @@
+// QueryMesh and the queries: contacts, point_contacts, distance, filter, minimum_distance. Every
+// query prepares and computes without the GIL.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "delta/core/contact_point.h"
+#include "delta/core/error.h"
+#include "delta/kernels/triangle_batch.h"
+#include "delta/query/contacts.h"
+#include "delta/query/filter.h"
+#include "delta/query/minimum_distance.h"
+#include "delta/query/point_distance.h"
+#include "delta/query/query_mesh.h"
+
+#include "arrays.h"
+#include "bindings.h"
+#include "handles.h"
+#include "records.h"
+
+namespace delta::python {
+namespace {
+
+using namespace pybind11::literals;
+namespace cd = contactdetection;
+
+kernels::Solver solverNamed(const std::string& method) {
+  const std::optional<kernels::Solver> solver = kernels::parseSolver(method);
+  if (!solver) throw Error("method '" + method + "': use hybrid, penalty or bruteforce");
+  return *solver;
+}
+
+py::array contactArray(std::vector<ContactPoint>&& contacts) {
+  const auto count = static_cast<py::ssize_t>(contacts.size());
+  return adopt(std::move(contacts), contactDtype(), {count});
+}
+
+/// A structured array with (at least) the fields of contact_dtype, in any layout, as Δ's contact
+/// points (field by field: a sliced, reordered or user-built array works).
+std::vector<ContactPoint> contactsFrom(const ArrayLike& given) {
+  const py::array records = py::array::ensure(given.object);
+  if (!records || !records.dtype().has_fields() || records.ndim() != 1)
+    throw Error("contacts must be a one-dimensional structured array of delta.contact_dtype");
+  const std::size_t count = static_cast<std::size_t>(records.shape(0));
+  const py::object fields = records.dtype().attr("fields");
+  // The field as a C-contiguous array of T with `width` values a record.
+  const auto column = [&]<typename T>(const char* name, std::size_t width, T) {
+    if (!fields.contains(name))
+      throw Error(std::string("contacts have no field '") + name + "' (delta.contact_dtype)");
+    using Column = py::array_t<T, py::array::c_style | py::array::forcecast>;
+    const Column values = Column::ensure(records[name]);
+    if (!values || static_cast<std::size_t>(values.size()) != width * count)
+      throw Error(std::string("contacts: the field '") + name + "' must hold " +
+                  std::to_string(width) + " number(s) a record (delta.contact_dtype)");
+    return values;
+  };
+  const auto x = column("x", 3, 0.0), normal = column("normal", 3, 0.0),
+             direction = column("direction", 3, 0.0), distance = column("distance", 1, 0.0);
+  const auto first = column("triangle_a", 1, std::uint32_t{}),
+             second = column("triangle_b", 1, std::uint32_t{});
+  const auto overlap = column("overlap", 1, false);
+  std::vector<ContactPoint> contacts(count);
+  const std::span<const Vec3> xs = asVec3(x), normals = asVec3(normal),
+                              directions = asVec3(direction);
+  for (std::size_t i = 0; i < count; ++i)
+    contacts[i] = {
+        xs[i],           normals[i],      directions[i], distance.data()[i], overlap.data()[i],
+        first.data()[i], second.data()[i]};
+  return contacts;
+}
+
+/// `out`, checked: it can take the answers of a points query whose result has this shape.
+py::array checkedOutput(const py::array& out, const std::vector<py::ssize_t>& shape) {
+  if (!out.dtype().equal(distanceDtype()))
+    throw Error("out must have dtype delta.distance_dtype, not " +
+                py::str(out.dtype()).cast<std::string>());
+  bool same = out.ndim() == static_cast<py::ssize_t>(shape.size());
+  for (std::size_t axis = 0; same && axis < shape.size(); ++axis)
+    same = out.shape(static_cast<py::ssize_t>(axis)) == shape[axis];
+  if (!same) throw Error("out must have the shape of points without their last axis");
+  if (!(out.flags() & py::array::c_style)) throw Error("out must be C-contiguous");
+  if (!out.writeable()) throw Error("out must be writeable");
+  return out;
+}
+
+py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<double> epsilon,
+                   bool signedDistance, std::optional<py::array> out) {
+  const DoubleArray coordinates = pointArray(points, "points", false);
+  const std::vector<py::ssize_t> shape(coordinates.shape(),
+                                       coordinates.shape() + coordinates.ndim() - 1);
+  py::array answers = out ? checkedOutput(*out, shape) : py::array(distanceDtype(), shape);
+  const std::span<const Vec3> query = asVec3(coordinates);
+  const std::span<cd::PointDistance> written(
+      static_cast<cd::PointDistance*>(answers.mutable_data()), query.size());
+  cd::PointQuery request;
+  if (epsilon) request.epsilon = *epsilon;
+  request.signedDistance = signedDistance;
+  {
+    py::gil_scoped_release release;
+    cd::distances(mesh.prepare(), query, request, written);
+  }
+  return answers;
+}
+
+void bindQueryMesh(py::module_& module) {
+  py::class_<QueryMesh>(module, "QueryMesh", R"(A mesh prepared for queries (O(n log n), once).
+
+QueryMesh(mesh) flattens the triangles, builds a bounding-volume tree and, for a closed mesh, the
+pseudonormals that sign distances. It is a snapshot: transforming the Mesh afterwards does not
+move it. `transform(motion)` and `set_pose(pose)` move it rigidly in O(1) (nothing is rebuilt);
+copies (`copy()`) share the prepared data and each has its own pose. Every query takes a
+QueryMesh or a Mesh (prepared for that call); prepare once when querying repeatedly.
+
+Threading: queries run without the GIL on a copy of the pose taken when they start; any number of
+Python threads may query one QueryMesh at once.)")
+      .def(py::init([](const PyMesh& mesh) {
+             const std::shared_ptr<const Mesh> snapshot = mesh.snapshot();
+             py::gil_scoped_release release;
+             return QueryMesh(*snapshot);
+           }),
+           "mesh"_a, "Prepares `mesh` (a Mesh) for queries, without the GIL.")
+      .def(
+          "transform",
+          [](QueryMesh& mesh, const RigidTransform& motion) -> QueryMesh& {
+            return mesh.transform(motion);
+          },
+          "motion"_a, py::return_value_policy::reference_internal,
+          "Moves the mesh rigidly: its pose becomes motion * pose. O(1). Returns the QueryMesh.")
+      .def(
+          "set_pose",
+          [](QueryMesh& mesh, const RigidTransform& pose) -> QueryMesh& {
+            return mesh.setPose(pose);
+          },
+          "pose"_a, py::return_value_policy::reference_internal,
+          "Puts the mesh at `pose` (from the frame it was prepared in). O(1). Returns the "
+          "QueryMesh.")
+      .def_property_readonly(
+          "pose", [](const QueryMesh& mesh) { return mesh.pose(); },
+          "Where the mesh is: a RigidTransform (a copy) from the frame it was prepared in.")
+      .def_property_readonly("moved", &QueryMesh::moved, "The pose is not the identity.")
+      .def_property_readonly("triangle_count", &QueryMesh::size, "The number of triangles.")
+      .def_property_readonly("closed", &QueryMesh::closed,
+                             "Closed and consistently oriented: signed distances and inside "
+                             "tests are defined.")
+      .def_property_readonly(
+          "bounds",
+          [](const QueryMesh& mesh) {
+            return vec3Array(std::vector<Vec3>{mesh.bounds().lower, mesh.bounds().upper});
+          },
+          "The box of the vertices in the prepared frame, shape (2, 3).")
+      .def_property_readonly("memory_bytes", &QueryMesh::memoryBytes,
+                             "Bytes held on the heap (triangles, tree, pseudonormals).")
+      .def(
+          "copy", [](const QueryMesh& mesh) { return QueryMesh(mesh); },
+          "A copy sharing the prepared data, with its own pose.")
+      .def("__copy__", [](const QueryMesh& mesh) { return QueryMesh(mesh); })
+      .def("__repr__", [](const QueryMesh& mesh) {
+        return "<delta.QueryMesh: " + std::to_string(mesh.size()) + " triangles, " +
+               (mesh.closed() ? "closed" : "open") + (mesh.moved() ? ", moved" : "") + ">";
+      });
+}
+
+void bindQueries(py::module_& module) {
+  module.def(
+      "contacts",
+      [](const Geometry& a, const Geometry& b, double epsilon, const std::string& method) {
+        const kernels::Solver solver = solverNamed(method);
+        std::vector<ContactPoint> found;
+        {
+          py::gil_scoped_release release;
+          found = cd::contacts(a.prepare(), b.prepare(), epsilon, solver);
+        }
+        return contactArray(std::move(found));
+      },
+      "a"_a, "b"_a, "eps"_a, "method"_a = "hybrid",
+      R"(Every pair of triangles, one of `a` and one of `b` (Mesh or QueryMesh), closer than 2*eps.
+
+Returns a structured array of delta.contact_dtype, one record a pair, sorted by (triangle_a,
+triangle_b): `x` (3,) midway between the closest points P on a and Q on b, `normal` (3,) = P - x
+(length distance / 2), `direction` (3,) the unit vector from b toward a (defined also for
+touching and intersecting triangles), `distance` |P - Q|, `overlap` (the triangles intersect, or
+x lies inside both closed meshes), `triangle_a`, `triangle_b` (uint32, the meshes' triangle
+order). `method`: "hybrid" (exact, fastest), "bruteforce" (exact) or "penalty" (approximate).
+The same records as `delta contact A B --eps E --out FILE.csv`. delta.Error when eps is not
+finite and positive.)");
+  module.def(
+      "point_contacts",
+      [](const Geometry& mesh, const ArrayLike& points, double epsilon) {
+        const DoubleArray coordinates = pointArray(points, "points", true);
+        std::vector<ContactPoint> found;
+        {
+          py::gil_scoped_release release;
+          found = cd::contacts(mesh.prepare(), asVec3(coordinates), epsilon);
+        }
+        return contactArray(std::move(found));
+      },
+      "mesh"_a, "points"_a, "eps"_a,
+      "Every point of `points` (n, 3) closer than eps to the mesh, in point order, as records of "
+      "delta.contact_dtype: the point is the first geometry (triangle_a = its index, P = the "
+      "point), the mesh the second (Q = the closest point, triangle_b its triangle); `overlap` = "
+      "inside a closed mesh.");
+  module.def("distance", &distance, "mesh"_a, "points"_a, "eps"_a = py::none(), "signed"_a = false,
+             py::kw_only(), "out"_a = py::none(),
+             R"(The distance from every point to the mesh (a Mesh or a QueryMesh).
+
+`points`: an array of shape (..., 3), used without a copy when it is C-contiguous float64
+(converted otherwise). Returns a structured array of delta.distance_dtype with the points' shape
+less the last axis, written in place by the query: `distance` (unsigned; +inf beyond eps),
+`closest` (3,) the closest point of the mesh, `triangle` (uint32, the smallest id of a tie;
+delta.NO_TRIANGLE beyond eps), `inside` (with signed=True; the mesh must be closed, delta.Error
+otherwise). The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
+delta.signed_distance(r) computes it. `eps`: answer only points closer than eps (faster: the
+search stops near the root for the others). `out`: an array of delta.distance_dtype and that
+shape to write into instead of allocating (returned). Exactly `delta distance MESH --points FILE`.)");
+  module.def(
+      "filter",
+      [](const ArrayLike& contacts, double h) {
+        std::vector<ContactPoint> points = contactsFrom(contacts);
+        {
+          py::gil_scoped_release release;
+          points = cd::filter(points, h);
+        }
+        return contactArray(std::move(points));
+      },
+      "contacts"_a, "h"_a,
+      "The seed's redundancy elimination: walking the contacts by ascending normal length, keep "
+      "one unless a kept one lies closer than h. Returns the kept records in input order "
+      "(delta.contact_dtype). delta.Error when h is not finite and positive.");
+
+  py::class_<cd::MinimumDistance>(module, "MinimumDistance",
+                                  "The closest pair of triangles of two meshes.")
+      .def_readonly("distance", &cd::MinimumDistance::distance, "The minimum distance |p - q|.")
+      .def_readonly("triangle_a", &cd::MinimumDistance::first, "Triangle id in the first mesh.")
+      .def_readonly("triangle_b", &cd::MinimumDistance::second, "Triangle id in the second mesh.")
+      .def_property_readonly(
+          "p", [](const cd::MinimumDistance& m) { return m.p; }, "Closest point on triangle_a.")
+      .def_property_readonly(
+          "q", [](const cd::MinimumDistance& m) { return m.q; }, "Closest point on triangle_b.")
+      .def_readonly("intersect", &cd::MinimumDistance::intersect,
+                    "The meshes touch or intersect there (distance 0).")
+      .def("__repr__", [](const cd::MinimumDistance& m) {
+        return "MinimumDistance(distance=" + py::repr(py::float_(m.distance)).cast<std::string>() +
+               ", triangle_a=" + std::to_string(m.first) +
+               ", triangle_b=" + std::to_string(m.second) +
+               ", intersect=" + (m.intersect ? "True" : "False") + ")";
+      });
+  module.def(
+      "minimum_distance",
+      [](const Geometry& a, const Geometry& b, const std::string& method) {
+        const kernels::Solver solver = solverNamed(method);
+        py::gil_scoped_release release;
+        return cd::minimumDistance(a.prepare(), b.prepare(), solver);
+      },
+      "a"_a, "b"_a, "method"_a = "hybrid",
+      "The minimum distance between two meshes (Mesh or QueryMesh, where they are now) and the "
+      "closest triangle pair, exact with the hybrid or brute-force method; ties go to the "
+      "smallest (triangle_a, triangle_b). As `delta contact A B` without --eps.");
+}
+
+}  // namespace
+
+void bindQuery(py::module_& module) {
+  module.attr("contact_dtype") = contactDtype();
+  module.attr("distance_dtype") = distanceDtype();
+  module.attr("NO_TRIANGLE") = cd::kNoTriangle;
+  bindQueryMesh(module);
+  bindQueries(module);
+}
+
+}  // namespace delta::python
