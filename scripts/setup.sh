@@ -14,6 +14,7 @@ packages=(
   libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
   libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
   python3-dev python3-numpy python3-pytest pybind11-dev  # the Python module delta (python/)
+  doxygen  # the API reference (the docs target) and the test Docs.NoWarnings
 )
 missing=()
 for package in "${packages[@]}"; do

@@ -18,6 +18,8 @@ struct SpatialCacheAccess;
 }  // namespace detail
 
 /// How a SpatialCache is built and refined.
+///
+/// Threading: a value type; no shared state.
 struct CacheOptions {
   std::size_t maxCandidates = 32;  ///< split a cell that may meet the surface while it has more
                                    ///< candidates than this (≥ 1) …
@@ -148,9 +150,13 @@ class SpatialCache {
 
 /// The seed's a priori build: the root refined everywhere to the criterion (refineAll()).
 /// SpatialCache is movable, so it is returned by value. Throws as the constructor.
+///
+/// Threading: reads `triangles` only; safe to call concurrently (and parallel inside).
 SpatialCache buildCache(const TriangleSoA& triangles, const CacheOptions& options = {});
 
 /// The nearest triangle of a point.
+///
+/// Threading: a value type; no shared state.
 struct CachedNearest {
   double distanceSquared = 0.0;
   std::uint32_t triangle = 0;            ///< the smallest id among equally near triangles

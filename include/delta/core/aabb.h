@@ -6,8 +6,10 @@
 
 namespace delta {
 
-/// An axis-aligned bounding box. Default-constructed it is empty (lower > upper), and extending
-/// an empty box by a point gives the point's box.
+/// An axis-aligned bounding box, closed (its faces belong to it). Default-constructed it is empty
+/// (lower = +∞, upper = −∞), and extending an empty box by a point gives the point's box; a box
+/// of one point (lower = upper) is not empty. Coordinates are expected to be finite (a NaN
+/// extends nothing predictably).
 ///
 /// Threading: a value type; no shared state.
 struct Aabb {
@@ -16,31 +18,41 @@ struct Aabb {
   Vec3 upper{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
              -std::numeric_limits<double>::infinity()};
 
+  /// Whether the box holds no point: lower > upper on some axis.
   constexpr bool empty() const noexcept {
     return lower.x > upper.x || lower.y > upper.y || lower.z > upper.z;
   }
+  /// Grows the box to hold `p`.
   constexpr void extend(const Vec3& p) noexcept {
     lower = min(lower, p);
     upper = max(upper, p);
   }
+  /// Grows the box to hold `box`; an empty box adds nothing.
   constexpr void extend(const Aabb& box) noexcept {
     lower = min(lower, box.lower);
     upper = max(upper, box.upper);
   }
+  /// The centre; NaN for an empty box.
   constexpr Vec3 center() const noexcept { return (lower + upper) * 0.5; }
+  /// upper − lower per axis: 0 for a flat axis, −∞ for an empty box.
   constexpr Vec3 extent() const noexcept { return upper - lower; }
+  /// The length of the diagonal; 0 for an empty box and for a box of one point.
   double diagonal() const noexcept { return empty() ? 0.0 : length(upper - lower); }
+  /// Whether `p` lies in the box, faces included; false for an empty box and for NaN.
   constexpr bool contains(const Vec3& p) const noexcept {
     return p.x >= lower.x && p.x <= upper.x && p.y >= lower.y && p.y <= upper.y && p.z >= lower.z &&
            p.z <= upper.z;
   }
-  /// The box grown by `margin` on every side.
+  /// The box grown by `margin` on every side (a negative margin shrinks it, possibly to an
+  /// empty box); an empty box stays empty.
   constexpr Aabb grown(double margin) const noexcept {
     return {lower - Vec3{margin, margin, margin}, upper + Vec3{margin, margin, margin}};
   }
 };
 
-/// The squared distance from a point to a box (0 inside).
+/// The squared distance from a point to a box: 0 inside and on the faces, +∞ for an empty box.
+///
+/// Threading: a pure function.
 constexpr double distanceSquared(const Vec3& p, const Aabb& box) noexcept {
   double sum = 0.0;
   for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -51,8 +63,10 @@ constexpr double distanceSquared(const Vec3& p, const Aabb& box) noexcept {
   return sum;
 }
 
-/// The squared distance between two boxes (0 where they overlap): a lower bound of the squared
-/// distance between any point of one and any point of the other.
+/// The squared distance between two boxes (0 where they overlap or touch): a lower bound of the
+/// squared distance between any point of one and any point of the other; +∞ when either is empty.
+///
+/// Threading: a pure function.
 constexpr double distanceSquared(const Aabb& a, const Aabb& b) noexcept {
   double sum = 0.0;
   for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -64,7 +78,10 @@ constexpr double distanceSquared(const Aabb& a, const Aabb& b) noexcept {
 }
 
 /// Whether two boxes are at least `gap` apart along some axis (then every pair of their points
-/// is at least `gap` apart): the cheapest prune, one comparison per axis and side.
+/// is at least `gap` apart): the cheapest prune, one comparison per axis and side. Touching boxes
+/// are apart by a gap of 0; an empty box is apart from everything (for a finite gap).
+///
+/// Threading: a pure function.
 constexpr bool apart(const Aabb& a, const Aabb& b, double gap) noexcept {
   for (std::size_t axis = 0; axis < 3; ++axis)
     if (a.lower[axis] - b.upper[axis] >= gap || b.lower[axis] - a.upper[axis] >= gap) return true;

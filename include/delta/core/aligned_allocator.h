@@ -24,6 +24,8 @@ struct AlignedAllocator {
   template <typename U>
   AlignedAllocator(const AlignedAllocator<U, Alignment>&) noexcept {}
 
+  /// `n` elements, uninitialised, on an `Alignment`-byte boundary. Throws std::bad_alloc (or
+  /// std::bad_array_new_length when n·sizeof(T) overflows), as `new` does.
   T* allocate(std::size_t n) {
     if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
     return static_cast<T*>(::operator new (n * sizeof(T), std::align_val_t{Alignment}));

@@ -7,8 +7,9 @@
 namespace delta {
 
 /// A 3×3 matrix, row-major: `m(row, column)`. Used for rotations and inertia tensors.
+/// Default-constructed it is zero. Indices are unchecked (0 to 2).
 ///
-/// Threading: a value type; no shared state.
+/// Threading: a value type; no shared state; the operators below are pure functions.
 struct Mat3 {
   std::array<double, 9> entries{};
 
@@ -63,7 +64,10 @@ constexpr Mat3 operator*(const Mat3& a, double s) noexcept {
   return scaled;
 }
 
-/// max |(MᵀM − I)ᵢⱼ|: how far `m` is from orthonormal.
+/// max |(MᵀM − I)ᵢⱼ|: how far `m` is from orthonormal (0 for a rotation or a reflection; NaN
+/// when an entry is NaN).
+///
+/// Threading: a pure function.
 double orthonormalityError(const Mat3& m) noexcept;
 
 }  // namespace delta

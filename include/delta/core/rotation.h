@@ -7,7 +7,9 @@ namespace delta {
 
 /// A unit quaternion w + xi + yj + zk representing a rotation. Rotations compose as quaternions
 /// and are renormalised after every product, so a long chain of them (a DEM particle turned every
-/// time step) stays a rotation: its matrix is orthonormal to 1e-14.
+/// time step) stays a rotation: its matrix is orthonormal to 1e-14. Default-constructed it is the
+/// identity. The factories and the product always give a unit quaternion; one whose components
+/// are set by hand should go through fromComponents (matrix() and rotate() assume unit length).
 ///
 /// Threading: a value type; no shared state.
 struct Quaternion {
@@ -34,36 +36,48 @@ struct Quaternion {
   /// The rotation matrix; orthonormal to round-off for a unit quaternion.
   Mat3 matrix() const noexcept;
 
-  /// Rotates a vector (same as `matrix() * v`).
+  /// Rotates a vector (same as `matrix() * v`, to round-off).
   Vec3 rotate(const Vec3& v) const noexcept;
 
+  /// The inverse rotation (for a unit quaternion).
   Quaternion conjugate() const noexcept { return {w, -x, -y, -z}; }
 };
 
-/// The rotation `a` after `b` (first `b`, then `a`), renormalised.
+/// The rotation `a` after `b` (first `b`, then `a`), renormalised (the identity should the product
+/// come out zero, which unit factors never give).
+///
+/// Threading: a pure function.
 Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept;
 
 /// A rigid motion p ↦ R p + t, with the rotation kept as a unit quaternion. Compose with `*`
-/// (`a * b` applies b first); the inverse undoes it.
+/// (`a * b` applies b first); the inverse undoes it. Default-constructed it is the identity.
+/// Whoever takes one (Mesh::transform, QueryMesh::transform) checks it: a non-finite translation
+/// or a zero or non-finite rotation throws delta::Error there.
 ///
 /// Threading: a value type; no shared state.
 struct RigidTransform {
   Quaternion rotation;
   Vec3 translation;
 
+  /// p ↦ p + t.
   static RigidTransform translationBy(const Vec3& t) noexcept { return {Quaternion{}, t}; }
   /// Rotation about the line through `pivot` (not through the origin).
   static RigidTransform rotationAbout(const Quaternion& q, const Vec3& pivot) noexcept {
     return {q, pivot - q.rotate(pivot)};
   }
 
+  /// R p + t.
   Vec3 apply(const Vec3& p) const noexcept { return rotation.rotate(p) + translation; }
+  /// The motion that undoes this one (exact up to rounding).
   RigidTransform inverse() const noexcept {
     const Quaternion back = rotation.conjugate();
     return {back, -back.rotate(translation)};
   }
 };
 
+/// `a` after `b`: p ↦ a(b(p)).
+///
+/// Threading: a pure function.
 inline RigidTransform operator*(const RigidTransform& a, const RigidTransform& b) noexcept {
   return {a.rotation * b.rotation, a.rotation.rotate(b.translation) + a.translation};
 }

@@ -16,7 +16,9 @@ struct Triangle {
 
   /// (b−a)×(c−a): its length is twice the area; zero for a degenerate triangle.
   constexpr Vec3 areaVector() const noexcept { return cross(b - a, c - a); }
+  /// Half |areaVector()|; 0 for a degenerate triangle (see isDegenerate for the scale-aware test).
   double area() const noexcept { return 0.5 * length(areaVector()); }
+  /// (a + b + c) / 3, a point of the triangle also when it is degenerate.
   constexpr Vec3 centroid() const noexcept { return (a + b + c) / 3.0; }
   /// The box of the three vertices.
   constexpr Aabb bounds() const noexcept { return {min(min(a, b), c), max(max(a, b), c)}; }

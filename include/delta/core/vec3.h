@@ -5,14 +5,17 @@
 
 namespace delta {
 
-/// A point or vector in 3-space, double precision. A plain aggregate: `Vec3{x, y, z}`.
+/// A point or vector in 3-space, double precision. A plain aggregate: `Vec3{x, y, z}`,
+/// default-constructed zero. Nothing here checks for NaN or infinities: Δ validates coordinates
+/// where they enter (Mesh construction, file import, each query), not in this arithmetic.
 ///
-/// Threading: a value type; no shared state.
+/// Threading: a value type; no shared state; the operators and functions below are pure.
 struct Vec3 {
   double x = 0.0;
   double y = 0.0;
   double z = 0.0;
 
+  /// Coordinate `axis`: 0 → x, 1 → y, anything else → z.
   constexpr double& operator[](std::size_t axis) noexcept {
     return axis == 0 ? x : (axis == 1 ? y : z);
   }
@@ -42,6 +45,7 @@ struct Vec3 {
   friend constexpr bool operator==(const Vec3&, const Vec3&) = default;
 };
 
+/// Vector arithmetic, component-wise (a Vec3 divided by 0 gives infinities or NaN, as doubles do).
 constexpr Vec3 operator+(Vec3 a, const Vec3& b) noexcept {
   return a += b;
 }
@@ -61,12 +65,16 @@ constexpr Vec3 operator/(const Vec3& a, double s) noexcept {
   return {a.x / s, a.y / s, a.z / s};
 }
 
+/// The scalar product a·b.
 constexpr double dot(const Vec3& a, const Vec3& b) noexcept {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
+/// The vector product a × b (zero for parallel vectors).
 constexpr Vec3 cross(const Vec3& a, const Vec3& b) noexcept {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
+/// |v|², |v|, |a − b|² and |a − b|, unscaled: overflow to +∞ beyond about 1e154 (kernels that
+/// must work at any scale compute in a local frame instead).
 constexpr double lengthSquared(const Vec3& v) noexcept {
   return dot(v, v);
 }
@@ -93,6 +101,7 @@ inline double maxAbs(const Vec3& v) noexcept {
   return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
 }
 
+/// Whether no coordinate is NaN or infinite.
 inline bool isFinite(const Vec3& v) noexcept {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }

@@ -6,6 +6,7 @@
 #include "delta/core/contact_point.h"
 #include "delta/core/vec3.h"
 
+/// @file
 /// The DEM contact law: the seed's spring–dashpot on the ε-shell, per particle pair.
 ///
 /// Two bodies are in contact where their surfaces come closer than 2ε. Each contact point i
@@ -58,6 +59,7 @@
 /// e = exp(−πζ/√(1−ζ²)), which holds only if the dashpot may pull the bodies together at the end
 /// of the contact (Schwager and Pöschel, Phys. Rev. E 75, 2007): that ζ would give 0.55 instead
 /// of 0.5.
+
 namespace delta::dem {
 
 /// The contact law's constants, resolved from a World's parameters.
@@ -117,7 +119,9 @@ struct PairForces {
 /// contactdetection::contacts with the first body as the first mesh, filtered with filter(h)).
 /// `effectiveMass` is m₁m₂/(m₁+m₂), or m₁ against an obstacle; `previous` is
 /// the pair's springs from the previous step (zero for a new contact) and `timeStep` the time
-/// since. No points give no forces and zero springs. Pure: does not validate (World does, once).
+/// since. No points give no forces and zero springs; points outside the shell (δ ≤ 0) get no
+/// force. Overlapping points are handled as the law above says. Pure: does not validate (World
+/// does, once); the ContactPoints must be finite with unit directions, as the queries give them.
 ///
 /// Threading: a pure function; may be called from any number of threads at once.
 PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
@@ -128,25 +132,38 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
 /// with damping ratio ζ ≥ 0, in closed form: the normal relative speed after a head-on impact
 /// over the speed before: exp(−ζ·t*), t* the (dimensionless) time at which the force k·δ + c·δ'
 /// returns to zero. 1 at ζ = 0, decreasing toward 0 as ζ grows (e⁻² at ζ = 1, ≈ 1/(4ζ²) beyond).
+/// A negative ratio counts as 0.
+///
+/// Threading: a pure function.
 double restitutionOf(double dampingRatio) noexcept;
 
 /// The damping ratio ζ for which restitutionOf(ζ) = e, by bisection to round-off. Throws
 /// delta::Error unless 0 ≤ e ≤ 1; e = 0 gives the largest ratio searched (ζ = 50, e ≈ 1e-4:
 /// the clamped law never reaches 0).
+///
+/// Threading: a pure function.
 double dampingRatio(double restitution);
 
-/// The duration of an undamped contact of a pair with effective mass m: π√(m/k).
+/// The duration of an undamped contact of a pair with effective mass m: π√(m/k). Not
+/// validated: both must be positive (NaN or ±∞ otherwise).
+///
+/// Threading: a pure function.
 double contactDuration(double stiffness, double effectiveMass) noexcept;
 
 /// A time step for the explicit integrator: a thirtieth of the undamped duration of a contact
 /// between two of the lightest particles (effective mass m_min/2), which resolves every contact
 /// in about thirty steps (energy error of velocity Verlet ≈ (ω·dt)²/8 ≈ 0.1%) and leaves room
-/// for the rotational inertia of off-centre contacts.
+/// for the rotational inertia of off-centre contacts. Not validated, as contactDuration.
+///
+/// Threading: a pure function.
 double suggestedTimeStep(double stiffness, double smallestMass) noexcept;
 
 /// The stiffness at which a body of mass m hitting a wall at `speed` stops at depth `depth` in
 /// an undamped contact: k = m·speed²/depth². Scenarios set it from the fastest impact they
-/// expect and a depth below 2ε, so the shell is never crossed.
+/// expect and a depth below 2ε, so the shell is never crossed. Not validated: a depth of 0 gives
+/// +∞, a speed of 0 gives 0 (which World refuses).
+///
+/// Threading: a pure function.
 double stiffnessForImpact(double mass, double speed, double depth) noexcept;
 
 }  // namespace delta::dem

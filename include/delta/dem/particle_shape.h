@@ -14,6 +14,8 @@ struct PreparedShape;
 }
 
 /// What a particle's contacts are computed against: its triangles, or an exact sphere.
+///
+/// Threading: a value type.
 enum class ParticleKind : std::uint8_t {
   Mesh,    ///< a closed triangle mesh: mesh–mesh contacts (narrow_phase.h, pairContacts)
   Sphere,  ///< a ball: analytic sphere–sphere and sphere–triangle contacts
@@ -30,7 +32,9 @@ enum class ParticleKind : std::uint8_t {
 ///
 /// Throws delta::Error when the mesh is not closed and consistently oriented (it must bound a
 /// solid: a particle needs a mass and an inside), is inside-out or flat, or when the density is
-/// not finite and positive.
+/// not finite and positive. Degenerate triangles are accepted (they add no mass and take part in
+/// contacts as the segments they are); a mesh that intersects itself is not detected, and its
+/// mass properties count the overlap twice (delta::massProperties).
 ///
 /// A sphere shape (ParticleShape::sphere) is an exact ball for contacts and mass properties:
 /// mass 4/3·π·r³·ρ, inertia 2/5·m·r²·I, bounding radius r. Its mesh() is an icosphere of radius r
@@ -40,6 +44,7 @@ enum class ParticleKind : std::uint8_t {
 /// of threads may read one at once.
 class ParticleShape {
  public:
+  /// Prepares `mesh` (copied, then moved into the body frame) with `density`; throws as above.
   ParticleShape(const Mesh& mesh, double density);
 
   /// A ball of `radius` about the origin (the centre of mass); `displaySubdivisions` (0 to 6)
@@ -85,7 +90,10 @@ class ParticleShape {
 };
 
 /// The inverse of a 3×3 matrix by cofactors. The caller guarantees it is invertible (an
-/// inertia tensor of a solid is symmetric positive definite).
+/// inertia tensor of a solid is symmetric positive definite); a singular matrix gives infinities
+/// or NaN, unchecked.
+///
+/// Threading: a pure function.
 Mat3 inverse(const Mat3& m) noexcept;
 
 }  // namespace delta::dem

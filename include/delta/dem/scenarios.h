@@ -8,6 +8,7 @@
 #include "delta/dem/world.h"
 #include "delta/mesh/mesh.h"
 
+/// @file
 /// Built-in DEM scenarios, ready to run, in SI units: granulates of about a centimetre
 /// (primitives::granulate, 42 points, 80 triangles, semi-axes r·(1, a, b) with a, b drawn in
 /// [0.6, 1], r = 1 cm), density 2500 kg/m³, ε = r/20, h = r/4.
@@ -19,6 +20,7 @@
 ///
 /// Threading: each function builds a new World from nothing shared; any number of threads may
 /// call them at once.
+
 namespace delta::dem {
 
 /// A World ready to run with what to run it for.
@@ -64,6 +66,7 @@ Scenario hopper(std::size_t count = 1000, std::uint64_t seed = 1,
 
 /// An open-top box: a floor of `width` × `depth` at height `floor`, centred on the z axis, and
 /// four walls `height` high; 10 triangles, normals inward. An obstacle for World::addObstacle.
+/// Throws delta::Error for a size that is not finite and positive or a floor that is not finite.
 Mesh openBox(double width, double depth, double height, double floor = 0.0);
 
 /// A funnel about the z axis: the side of a truncated cone from radius `outletRadius` at height

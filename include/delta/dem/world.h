@@ -16,6 +16,9 @@
 #include "delta/mesh/mesh.h"
 #include "delta/query/query_mesh.h"
 
+/// The Discrete Element Method case study: rigid triangulated (or spherical) particles and
+/// obstacles, the seed's spring–dashpot contact law, and explicit time stepping (World); and its
+/// pieces (broad phase, narrow phase, contact law) for DEM codes that have their own loop.
 namespace delta::dem {
 
 /// What a World simulates with. Lengths, masses and times in any consistent units (the
@@ -179,20 +182,28 @@ struct Energies {
 /// step() runs in parallel itself (OpenMP, through core/parallel.h; OMP_NUM_THREADS).
 class World {
  public:
+  /// An empty world; throws delta::Error naming the first invalid parameter.
   explicit World(const Parameters& parameters);
 
-  // Building.
+  // Building. Each throws delta::Error for what it is given that is invalid (naming it) and
+  // then adds nothing.
 
   /// Adds a particle shape (see ParticleShape for what is required); returns its index.
   std::size_t addShape(const Mesh& mesh, double density);
   /// Adds a shape made before (shares its prepared mesh); returns its index.
   std::size_t addShape(const ParticleShape& shape);
-  /// Adds a particle of shape `shape`; returns its index.
+  /// Adds a particle of shape `shape`; returns its index. Throws for an unknown shape, a state
+  /// that is not finite, or a zero orientation (any other is normalised). Particles placed
+  /// interpenetrating, or within 2ε, are accepted: the first step pushes them apart, with the
+  /// force of the law's overlap rule, so place them apart unless that is meant.
   std::size_t addParticle(std::size_t shape, const ParticleState& state);
-  /// Adds an obstacle; returns its index. Throws for a non-finite motion.
+  /// Adds an obstacle (any valid mesh, open or closed, degenerate triangles included); returns
+  /// its index. Throws for a non-finite motion.
   std::size_t addObstacle(const Mesh& mesh, const ObstacleMotion& motion = {});
 
-  // Changing the state (each makes the next step re-evaluate the forces first).
+  // Changing the state (each makes the next step re-evaluate the forces first). Each throws
+  // delta::Error for a particle index that does not exist or a value that is not finite (a
+  // time step must also be positive; an orientation non-zero).
 
   void setTimeStep(double timeStep);
   void setPose(std::size_t particle, const Vec3& position, const Quaternion& orientation);
@@ -201,9 +212,11 @@ class World {
 
   // Running.
 
-  /// Advances by one time step.
+  /// Advances by one time step. Throws delta::Error when a particle's state stops being finite
+  /// (a time step too large for the stiffness), leaving the state as that step made it. A world
+  /// with no particles only moves its obstacles and its clock.
   void step();
-  /// Advances by `steps` time steps.
+  /// Advances by `steps` time steps (step() `steps` times; 0 does nothing).
   void run(std::size_t steps);
 
   // Reading.

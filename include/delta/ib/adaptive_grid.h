@@ -49,6 +49,8 @@ struct GridOptions {
 /// One cell of the grid: a box of the octree, at `level`, whose lower corner is `origin` in
 /// units of the finest cell (so its side is 2^(L − level) units), with its eight corner vertices
 /// in VTK's voxel order (corner c has offset (c & 1, (c >> 1) & 1, (c >> 2) & 1)).
+///
+/// Threading: a value type; no shared state.
 struct Cell {
   std::array<std::uint32_t, 3> origin{};
   std::array<std::uint32_t, 8> corners{};
@@ -60,6 +62,8 @@ struct Cell {
 };
 
 /// What one build or move did.
+///
+/// Threading: a value type; no shared state.
 struct GridStatistics {
   std::size_t queries = 0;       ///< vertices whose distance was computed
   std::size_t cellsCreated = 0;  ///< cells made (every cell, at a build)
@@ -96,18 +100,27 @@ struct GridStatistics {
 /// and every distance in the band is the one it would have (bit for bit). The prepared boundary
 /// (its QueryMesh, tree included) is moved in O(1), never rebuilt.
 ///
-/// Throws delta::Error for bad options, and for `signedDistance` with a boundary that is not
-/// closed (the message says how it is open and that unsigned distances work).
+/// Throws delta::Error for bad options (naming the field), for a default domain around a
+/// boundary whose vertices all coincide (the domain would have no extent), and for
+/// `signedDistance` with a boundary that is not closed (the message says how it is open and that
+/// unsigned distances work). Degenerate triangles are part of the boundary like any other. Only
+/// the domain is gridded: a boundary that moves (partly) out of it is simply not resolved
+/// there.
 ///
 /// Threading: building and moving query in parallel (core/parallel.h); one thread may move a
 /// grid while no other uses it; const members may be called from any number of threads.
 class AdaptiveGrid {
  public:
+  /// Builds the grid around `boundary` where it is now (the QueryMesh is copied: it shares the
+  /// prepared data, and the caller's copy does not move with the grid's).
   AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options = {});
 
   /// Moves the boundary by `motion` (its pose becomes motion ∘ pose) and updates the grid.
+  /// Throws delta::Error, changing nothing, for a motion QueryMesh::transform refuses. The
+  /// statistics returned are those of statistics(), valid until the next move.
   const GridStatistics& moveBoundary(const RigidTransform& motion);
   /// Puts the boundary at `pose` (from the frame its QueryMesh was prepared in) and updates.
+  /// Throws as moveBoundary.
   const GridStatistics& moveBoundaryTo(const RigidTransform& pose);
 
   const QueryMesh& boundary() const noexcept { return boundary_; }
@@ -117,7 +130,8 @@ class AdaptiveGrid {
   /// The finest level L.
   int levels() const noexcept { return options_.levels; }
 
-  /// The cells of level l (0 ≤ l ≤ L), inner cells and leaves.
+  /// The cells of level l (0 ≤ l ≤ L), inner cells and leaves; delta::Error for another level.
+  /// Valid until the next move.
   std::span<const Cell> cells(int level) const;
   /// The number of leaves (the cells a solver computes on) of each level, 0 … L.
   std::vector<std::size_t> leavesPerLevel() const;

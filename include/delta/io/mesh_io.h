@@ -5,10 +5,15 @@
 
 #include "delta/mesh/mesh.h"
 
+/// @file
 /// Mesh import and export through the Open Asset Import Library (assimp).
+
+/// Files: meshes through assimp, query points from text, VTK output for ParaView.
 namespace delta::io {
 
 /// What an import found beside the triangles it kept.
+///
+/// Threading: a value type; no shared state.
 struct LoadStatistics {
   /// Mesh placements merged into one: a mesh that n nodes place counts n times; placements
   /// without triangles do not count.
@@ -20,6 +25,9 @@ struct LoadStatistics {
   std::size_t linesSkipped = 0;   ///< line primitives
 };
 
+/// A loaded mesh and what its import skipped.
+///
+/// Threading: a value type; no shared state.
 struct LoadedMesh {
   Mesh mesh;
   LoadStatistics statistics;
@@ -35,7 +43,9 @@ struct LoadedMesh {
 ///   texture coordinates (so topology checks see a closed STL as closed); vertices that no
 ///   triangle uses dropped; the others in the file's order;
 /// - points and lines skipped and counted.
-/// Triangle order is the file's order, mesh after mesh in the order of the node tree.
+/// Triangle order is the file's order, mesh after mesh in the order of the node tree. Degenerate
+/// triangles are kept (a triangle whose corners are joined into one vertex keeps its repeated
+/// index), as are overlapping and self-intersecting ones: a file is taken as it is.
 ///
 /// Precision: assimp stores coordinates as its ai_real, a 32-bit float in Debian's build (defs.h
 /// makes it double only with ASSIMP_DOUBLE_PRECISION, which Debian's config.h leaves undefined),
@@ -54,7 +64,7 @@ struct LoadedMesh {
 /// installs no assimp logger).
 LoadedMesh loadWithStatistics(const std::filesystem::path& path);
 
-/// loadWithStatistics(path).mesh.
+/// loadWithStatistics(path).mesh: the same contract, errors and threading.
 Mesh load(const std::filesystem::path& path);
 
 /// Writes the mesh to `path` in the format its extension names, case-insensitive: .stl (binary),
@@ -64,7 +74,8 @@ Mesh load(const std::filesystem::path& path);
 /// with shared vertices.
 ///
 /// Throws delta::Error, naming the path and the reason, for another extension, a coordinate
-/// beyond single precision, or when writing fails.
+/// beyond single precision, or when writing fails. An existing file is replaced. Degenerate
+/// triangles are written as they are.
 ///
 /// Threading: may be called from several threads at once, for different paths.
 void save(const Mesh& mesh, const std::filesystem::path& path);

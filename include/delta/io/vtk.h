@@ -10,12 +10,21 @@
 #include "delta/core/vec3.h"
 #include "delta/mesh/mesh.h"
 
+/// @file
 /// Output that ParaView opens: VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), binary, double
-/// precision, and ParaView collections (.pvd) that play files as a time series.
+/// precision, and ParaView collections (.pvd) that play files as a time series. Each writer
+/// replaces an existing file, writes empty data as a valid empty file, and writes coordinates
+/// and values as they are (NaN included).
+///
+/// Threading: the writers read their arguments only; they may run on several threads at once,
+/// for different paths.
+
 namespace delta::io {
 
 /// A named array of values attached to points or cells: `components` values per element
 /// (1 for a scalar, 3 for a vector), element after element.
+///
+/// Threading: a value type; no shared state.
 struct VtkArray {
   std::string name;
   int components = 1;
@@ -26,6 +35,8 @@ struct VtkArray {
 ///
 /// Cells are, in this order: one vertex cell per point when `pointsAsVertices` (so that a bare
 /// point set shows in ParaView), then the triangles. A cell array has one element per cell.
+///
+/// Threading: a value type; no shared state.
 struct VtkPolyData {
   std::vector<Vec3> points;
   std::vector<TriangleIndices> triangles;
@@ -33,11 +44,12 @@ struct VtkPolyData {
   std::vector<VtkArray> pointData;
   std::vector<VtkArray> cellData;
 
-  /// The mesh's vertices and triangles.
+  /// The mesh's vertices and triangles (degenerate ones included), in its order.
   static VtkPolyData fromMesh(const Mesh& mesh);
   /// A point set, each point a vertex cell.
   static VtkPolyData fromPoints(std::vector<Vec3> points);
 
+  /// Vertex cells (when `pointsAsVertices`) plus triangles.
   std::size_t cellCount() const noexcept {
     return (pointsAsVertices ? points.size() : 0) + triangles.size();
   }
@@ -51,6 +63,8 @@ void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
 /// Axis-aligned hexahedra (VTK_VOXEL, cell type 11): eight point indices each, corner c at offset
 /// (c & 1, (c >> 1) & 1, (c >> 2) & 1) from the lowest corner — VTK's voxel order. The writer does
 /// not check that the points form boxes; ParaView draws what the indices say.
+///
+/// Threading: a value type; no shared state.
 struct VtkVoxelGrid {
   std::vector<Vec3> points;
   std::vector<std::array<std::uint32_t, 8>> voxels;
@@ -67,6 +81,8 @@ void writeVtu(const VtkVoxelGrid& grid, const std::filesystem::path& path);
 
 /// One file of a time series: the time it shows and where it is, relative to the .pvd file
 /// (or absolute).
+///
+/// Threading: a value type; no shared state.
 struct VtkSeriesEntry {
   double time = 0.0;
   std::filesystem::path file;

@@ -51,7 +51,9 @@ inline constexpr int kHybridIterations = 3;
 BatchStatistics hybridDistances(const TriangleSoA& first, const TriangleSoA& second,
                                 PairResults& results, Isa isa = defaultIsa()) noexcept;
 
-/// The same for one triangle against block[begin, end): pair j is (one, block[begin + j]).
+/// The same for one triangle against block[begin, end): pair j is (one, block[begin + j]), for
+/// j < min(end, block.size()) − begin, at most results.capacity() (none when begin ≥ end).
+/// The same contract and threading.
 BatchStatistics hybridDistances(const Triangle& one, const TriangleSoA& block, std::size_t begin,
                                 std::size_t end, PairResults& results,
                                 Isa isa = defaultIsa()) noexcept;

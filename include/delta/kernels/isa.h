@@ -15,18 +15,21 @@ namespace delta::kernels {
 enum class Isa : std::uint8_t { Scalar, Sse2, Avx2, Avx512 };
 
 /// "scalar", "sse2", "avx2", "avx512".
+///
+/// Threading (this function and the ones below, unless they say otherwise): a pure function;
+/// safe from any thread.
 const char* name(Isa isa) noexcept;
 
-/// The inverse of name(); nullopt for anything else.
+/// The inverse of name() (exact, lower case); nullopt for anything else.
 std::optional<Isa> parseIsa(std::string_view text) noexcept;
 
 /// Doubles per register: 1, 2, 4 or 8.
 int laneCount(Isa isa) noexcept;
 
-/// Whether this build has `isa` compiled in and this CPU (and OS) can run it.
+/// Whether this build has `isa` compiled in and this CPU (and OS) can run it. Scalar always is.
 bool isSupported(Isa isa) noexcept;
 
-/// Every supported ISA, narrowest first (always starts with Scalar).
+/// Every supported ISA, narrowest first (always starts with Scalar). Allocates.
 std::vector<Isa> supportedIsas();
 
 /// The ISA the batched kernels use when none is named: the widest supported one, chosen once

@@ -30,11 +30,14 @@ class PairResults {
   PairResults() = default;
   explicit PairResults(std::size_t capacity) { reserve(capacity); }
 
-  /// Makes room for `capacity` pairs (allocates; never shrinks; keeps size()).
+  /// Makes room for `capacity` pairs (allocates, and may throw std::bad_alloc; never shrinks;
+  /// keeps size() and the pairs written).
   void reserve(std::size_t capacity);
   std::size_t capacity() const noexcept { return capacity_; }
   /// The pairs written by the last solver call.
   std::size_t size() const noexcept { return size_; }
+
+  // Per pair i < size(), unchecked.
 
   double distanceSquared(std::size_t i) const noexcept { return stream(kDistanceSquared)[i]; }
   double distance(std::size_t i) const noexcept { return std::sqrt(distanceSquared(i)); }
@@ -80,6 +83,8 @@ class PairResults {
 };
 
 /// What one batched call did.
+///
+/// Threading: a value type; no shared state.
 struct BatchStatistics {
   std::size_t pairs = 0;        ///< pairs computed (= results.size())
   std::size_t rechecked = 0;    ///< hybrid: pairs its first stage left to its exhaustive stage

@@ -7,7 +7,8 @@
 
 namespace delta::kernels {
 
-/// The feature of a triangle (a, b, c) that a closest point lies on.
+/// The feature of a triangle (a, b, c) that a closest point lies on. A closest point at a vertex
+/// is a vertex feature, on an edge between its ends an edge feature, inside the face Face.
 enum class TriangleFeature : std::uint8_t {
   VertexA,
   VertexB,
@@ -19,6 +20,8 @@ enum class TriangleFeature : std::uint8_t {
 };
 
 /// The point of a triangle closest to a query point.
+///
+/// Threading: a value type; no shared state.
 struct PointTriangleResult {
   double distanceSquared = 0.0;
   Vec3 closest;  ///< = a + u·(b − a) + v·(c − a)
@@ -43,6 +46,12 @@ struct PointTriangleResult {
 /// longest edge) is the union of its edges. For a needle of height h the closest point stays
 /// accurate, but (u, v) carry the needle's conditioning, an error of order ε·L/h (the point
 /// a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the needle).
+///
+/// A point on the triangle (within rounding) gets distance 0, or a rounding error's, and itself
+/// as the closest point. Coordinates must be finite; distanceSquared overflows to +∞ for
+/// distances beyond about 1e154.
+///
+/// Threading: a pure function; safe from any thread.
 PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triangle) noexcept;
 
 }  // namespace delta::kernels

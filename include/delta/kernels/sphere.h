@@ -7,6 +7,8 @@
 namespace delta::kernels {
 
 /// Closest points between a sphere's surface and another geometry.
+///
+/// Threading: a value type; no shared state.
 struct SphereContactResult {
   double gap = 0.0;      ///< surface-to-surface distance; negative by the depth when they overlap
   Vec3 p;                ///< on the sphere's surface, toward the other geometry
@@ -16,7 +18,11 @@ struct SphereContactResult {
 };
 
 /// Sphere–sphere. Concentric spheres get the normal +x (any direction is correct). Lengths are
-/// computed with scaling, so centres 1e-300 or 1e300 apart work too.
+/// computed with scaling, so centres 1e-300 or 1e300 apart work too. gap = |c₁ − c₂| − r₁ − r₂:
+/// negative, by the depth, where the balls overlap (one inside the other included). Radii are
+/// not checked: a radius of 0 is a point; the queries that take spheres require positive ones.
+///
+/// Threading: a pure function; safe from any thread.
 SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noexcept;
 
 /// Sphere–triangle (solid triangle). A centre on the triangle gets the face normal (for a
@@ -26,6 +32,9 @@ SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noex
 /// the longest edge), where the direction to the closest point is rounding noise; the face
 /// normal is then (b − a) × (c − a), normalised. Otherwise the normal is the unit vector from
 /// the closest point (`q`) to the centre, gap = |centre − q| − radius. Never NaN for finite input.
+/// A zero-area triangle is its longest edge or its point (closestPointOnTriangle).
+///
+/// Threading: a pure function; safe from any thread.
 SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept;
 
 }  // namespace delta::kernels

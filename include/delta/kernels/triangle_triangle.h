@@ -3,9 +3,14 @@
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 
+/// The geometry kernels: closest points of a point and a triangle, of two segments, of two
+/// triangles (three solvers, batched with SIMD) and of spheres. All noexcept: they take plain
+/// numbers, validate nothing, allocate nothing (but PairResults::reserve) and spawn no threads.
 namespace delta::kernels {
 
 /// The closest points of two solid triangles A = (a, b, c) and B = (a, b, c).
+///
+/// Threading: a value type; no shared state.
 struct TriangleDistanceResult {
   double distanceSquared = 0.0;
   Vec3 p;  ///< on A: A.a + a1·(A.b − A.a) + a2·(A.c − A.a)
@@ -35,6 +40,8 @@ struct TriangleDistanceResult {
 /// stored input, near the origin or far from it (the work is done in the frame of first.a);
 /// p and q lie on their triangles to that accuracy plus the rounding of their own coordinates.
 /// Never NaN for finite input (coordinates below about 1e150).
+///
+/// Threading: a pure function; safe from any thread.
 TriangleDistanceResult triangleDistanceBruteForce(const Triangle& first,
                                                   const Triangle& second) noexcept;
 
@@ -51,6 +58,10 @@ TriangleDistanceResult triangleDistanceBruteForce(const Triangle& first,
 /// τ = 32·ε·R, R the largest coordinate of the six vertices in that frame (about 7e-15 of the
 /// size for nearby triangles): pairs closer than τ count as touching. This is the same decision
 /// as triangleDistanceBruteForce's `intersect`, so it holds exactly when that distance is 0.
+/// Identical, coplanar overlapping and degenerate triangles are decided by the same rules (a
+/// point-like triangle intersects a triangle it lies on).
+///
+/// Threading: a pure function; safe from any thread.
 bool trianglesIntersect(const Triangle& first, const Triangle& second) noexcept;
 
 }  // namespace delta::kernels

@@ -13,12 +13,16 @@ namespace delta {
 /// minimal enclosing sphere's (in practice equal to it to about 1e-9). Expected O(n): Welzl's
 /// minimal ball of the extreme points along 13 directions, grown by the farthest point a few
 /// times. Any point set works: one point (radius 0), duplicates, collinear or coplanar points,
-/// points far from the origin. Throws delta::Error for an empty or non-finite point set.
+/// points far from the origin. Throws delta::Error for an empty or non-finite point set, or
+/// points so far apart that the radius overflows.
 ///
 /// Threading: reads its input only; safe to call concurrently.
 Sphere boundingSphere(std::span<const Vec3> points);
 
-/// The bounding sphere of the mesh's vertices.
+/// The bounding sphere of the mesh's vertices, referenced by a triangle or not (a Mesh always has
+/// some, all finite, so this throws only when the radius overflows).
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 Sphere boundingSphere(const Mesh& mesh);
 
 }  // namespace delta

@@ -7,6 +7,8 @@
 namespace delta {
 
 /// Mass properties of the solid a closed, outward-oriented mesh bounds, with density ρ.
+///
+/// Threading: a value type; no shared state.
 struct MassProperties {
   double volume = 0.0;
   double mass = 0.0;  ///< ρ · volume
@@ -22,11 +24,15 @@ struct MassProperties {
 ///
 /// Throws delta::Error when the mesh is not closed or not consistently oriented
 /// (analyzeTopology), when it is inside-out (negative volume) or has zero volume (|V| ≤ 1e-12·d³,
-/// d the bounding-box diagonal), or when `density` is not finite and positive.
+/// d the bounding-box diagonal), or when `density` is not finite and positive. Degenerate
+/// (zero-area) triangles contribute nothing. A mesh whose parts overlap (two closed shells that
+/// interpenetrate, or a self-intersecting surface) is not checked: the volume they share is
+/// counted twice.
 MassProperties massProperties(const Mesh& mesh, double density = 1.0);
 
-/// The signed volume enclosed (positive for an outward-oriented closed mesh). Meaningful only for
-/// closed meshes; does not check.
+/// The signed volume enclosed (positive for an outward-oriented closed mesh, negative for an
+/// inside-out one, about 0 for a flat one). Meaningful only for closed meshes; does not check
+/// (an open mesh gives a value that depends on where the origin is).
 ///
 /// Threading (both functions): read the mesh only; safe to call concurrently.
 double signedVolume(const Mesh& mesh) noexcept;

@@ -9,6 +9,8 @@ namespace delta {
 
 /// Edge-length statistics over the mesh's distinct edges: the mesh size h that a user passes to
 /// filter(h), and the scale of the mesh's finest detail.
+///
+/// Threading: a value type; no shared state.
 struct EdgeLengths {
   double min = 0.0;
   double mean = 0.0;
@@ -19,19 +21,25 @@ struct EdgeLengths {
 /// L its longest edge (so a triangle whose three vertices coincide is degenerate too). The test
 /// is scale-invariant: it gives the same answer for a triangle scaled by 1e-9 or 1e9 (the edges
 /// are rescaled by a power of two before squaring, so nothing under- or overflows).
+///
+/// Threading (every function here): reads its arguments only; safe to call concurrently.
 bool isDegenerate(const Triangle& triangle) noexcept;
 
-// Threading: every function here reads its arguments only; safe to call concurrently.
-
 /// The number of degenerate triangles (see isDegenerate).
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
 
-/// The sum of the triangles' areas.
+/// The sum of the triangles' areas (degenerate ones add 0; overlapping triangles each count).
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 double surfaceArea(const Mesh& mesh) noexcept;
 
 /// Lengths of the distinct edges (an edge shared by two triangles counts once; triangles with a
 /// repeated index add none, as in analyzeTopology). Zero-length edges count; with no edge at
 /// all every statistic is 0 (never NaN).
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 EdgeLengths edgeLengths(const Mesh& mesh);
 
 }  // namespace delta

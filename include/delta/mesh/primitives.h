@@ -14,16 +14,18 @@
 namespace delta::primitives {
 
 /// A sphere: the icosahedron (20 triangles) subdivided `subdivisions` times (0–8; 20·4ⁿ
-/// triangles), vertices projected onto the sphere.
+/// triangles), vertices projected onto the sphere (so inscribed in it). `radius` > 0.
 Mesh icosphere(int subdivisions = 2, double radius = 1.0, const Vec3& center = {});
 
-/// An axis-aligned box with the given edge lengths: 12 triangles.
+/// An axis-aligned box with the given edge lengths (each > 0): 12 triangles.
 Mesh box(const Vec3& size = {1.0, 1.0, 1.0}, const Vec3& center = {});
 
-/// A cylinder along z with `segments` (≥ 3) around: 4·segments triangles, capped.
+/// A cylinder along z, centred on `center`, with `segments` (≥ 3) around: 4·segments triangles,
+/// capped. `radius` and `height` > 0.
 Mesh cylinder(double radius = 1.0, double height = 1.0, int segments = 32, const Vec3& center = {});
 
 /// A flat rectangle in the plane z = center.z, normal +z, two triangles. Open (a floor or wall).
+/// Sizes > 0.
 Mesh quad(double sizeX = 1.0, double sizeY = 1.0, const Vec3& center = {});
 
 /// A random convex granulate (a DEM particle): the convex hull (qhull, triangulated) of `points`
@@ -31,7 +33,10 @@ Mesh quad(double sizeX = 1.0, double sizeY = 1.0, const Vec3& center = {});
 /// directions uniform on the sphere (Marsaglia's method on std::mt19937_64's raw output, no
 /// standard-library distribution), stretched by the semi-axes. The same seed gives the same mesh
 /// on every machine. Vertices are the hull's points in the order drawn. With all points on the
-/// hull it has 2·points − 4 triangles (the default 42 points: 80 triangles).
+/// hull it has 2·points − 4 triangles (the default 42 points: 80 triangles). Semi-axes > 0.
+/// Duplicate points and points that fall on a face of the hull are dropped, so a particle may
+/// have fewer triangles; a face that qhull merged from coplanar points may be triangulated with
+/// zero-area triangles (detail/convex_hull.h), which every query accepts.
 Mesh granulate(std::uint64_t seed, const Vec3& semiAxes = {1.0, 1.0, 1.0}, int points = 42);
 
 }  // namespace delta::primitives

@@ -9,6 +9,8 @@ namespace delta {
 
 /// How the triangles of a mesh fit together along their edges (vertices are identified by
 /// index: import joins identical vertices, so coincident but unjoined vertices count as distinct).
+///
+/// Threading: a value type; no shared state.
 struct Topology {
   std::size_t edges = 0;             ///< distinct undirected edges
   std::size_t boundaryEdges = 0;     ///< edges with one incident triangle
@@ -22,6 +24,8 @@ struct Topology {
 
 /// What keeps a mesh from being closed and consistently oriented, for error messages:
 /// "4 boundary, 0 non-manifold and 0 misoriented edges of 12".
+///
+/// Threading: a pure function.
 std::string describeDefects(const Topology& topology);
 
 /// Edge-based analysis in O(n log n) at worst, O(n) for bounded valence: the directed edges are
@@ -30,7 +34,9 @@ std::string describeDefects(const Topology& topology);
 /// A triangle with a repeated index contributes no edge: (a, a, b) traverses a→b and then b→a,
 /// a zero-width fold whose two traversals pair with each other. That is what import makes of a
 /// sliver whose two coincident vertices it joins; its neighbours' shared edge stays manifold and
-/// the mesh stays closed. (a, a, a) has no edge at all.
+/// the mesh stays closed. (a, a, a) has no edge at all. Topology only: a closed mesh may still
+/// intersect itself (nothing here compares positions), and two copies of a triangle over the
+/// same vertices, whatever their orientation, make its edges non-manifold or misoriented.
 ///
 /// Threading: reads the mesh only; safe to call concurrently.
 Topology analyzeTopology(const Mesh& mesh);

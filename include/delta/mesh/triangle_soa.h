@@ -16,6 +16,7 @@ class Mesh;
 ///
 /// Layout: nine streams, one per vertex slot v ∈ {0, 1, 2} and axis a ∈ {x, y, z}, each holding
 /// `paddedSize()` doubles; triangle i is
+///
 ///     (x0[i], y0[i], z0[i]), (x1[i], y1[i], z1[i]), (x2[i], y2[i], z2[i])
 /// in the mesh's triangle order and orientation (triangle i of the SoA is triangle i of the
 /// mesh). All streams live in one block; each starts on a 64-byte boundary, and `paddedSize()` is
@@ -33,7 +34,10 @@ class TriangleSoA {
   static constexpr std::size_t kAlignment = 64;
   static constexpr std::size_t kLaneMultiple = kAlignment / sizeof(double);
 
+  /// No triangles (size() and paddedSize() 0): a value to assign() to. Queries refuse it.
   TriangleSoA() = default;
+  /// The mesh's triangles, degenerate ones included, in its order. Allocates 72 bytes a
+  /// triangle, padding included.
   explicit TriangleSoA(const Mesh& mesh);
 
   /// The number of triangles (without padding).
@@ -53,7 +57,9 @@ class TriangleSoA {
   }
 
   /// Fills the streams with `triangles` (in order), reusing the storage when it is large enough:
-  /// scratch for a few triangles moved into another frame, without an allocation per use.
+  /// scratch for a few triangles moved into another frame, without an allocation per use. An
+  /// empty span leaves no triangles. Coordinates are not checked (the kernels assume finite
+  /// ones). Needs exclusive access, like any assignment.
   void assign(std::span<const Triangle> triangles);
 
   /// A copy with every vertex moved by `motion` (rotation, then translation), padding kept NaN:
@@ -74,6 +80,8 @@ class TriangleSoA {
 };
 
 /// The seed's flatten operator: `TriangleSoA(mesh)`.
+///
+/// Threading: reads the mesh only; safe to call concurrently.
 inline TriangleSoA flatten(const Mesh& mesh) {
   return TriangleSoA(mesh);
 }

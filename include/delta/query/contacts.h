@@ -7,6 +7,10 @@
 #include "delta/mesh/triangle_soa.h"
 #include "delta/query/query_mesh.h"
 
+/// The seed's contact-detection API: mesh–mesh contacts and minimum distance, points–mesh
+/// distances and contacts, sphere–mesh contacts, and the redundancy filter. The queries validate
+/// their input (delta::Error) and read their meshes only; those over many triangles or points run
+/// in parallel themselves.
 namespace delta::contactdetection {
 
 /// The seed's mesh–mesh contact detection: every pair of triangles (one of each mesh) closer than
@@ -25,10 +29,18 @@ namespace delta::contactdetection {
 /// hybrid (default) or brute-force solver the contact set is exact; with the penalty solver,
 /// approximate (a pair may be missed or misplaced where its Newton did not converge).
 ///
+/// Degenerate and overlapping input: zero-area triangles take part like any other (as the
+/// segment or point they are); interpenetrating meshes give a contact, marked `overlap`, for
+/// every pair of triangles that intersect or touch, with P = Q a point of both; a mesh against
+/// itself, or an identical copy in the same place, gives such a contact for every triangle
+/// with itself and with each neighbour it shares a vertex or an edge with (and an ordinary one
+/// for every other pair closer than 2ε). Meshes further than 2ε apart give none.
+///
 /// Throws delta::Error when ε is not finite and positive or a mesh has no triangles.
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once, and it runs in
-/// parallel over the first mesh's triangles itself (core/parallel.h).
+/// parallel over the first mesh's triangles itself (core/parallel.h), serially inside an
+/// enclosing OpenMP parallel region.
 std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& second,
                                    double epsilon,
                                    kernels::Solver solver = kernels::Solver::Hybrid);

@@ -15,7 +15,10 @@ namespace delta::contactdetection {
 ///
 /// Returns the kept points in their input order. Exactly the result of that quadratic definition,
 /// computed in O(n log n) with a uniform grid of cells no smaller than h (points closer than h
-/// lie in neighbouring cells). Throws delta::Error when `h` is not finite and positive.
+/// lie in neighbouring cells). Throws delta::Error when `h` is not finite and positive. No
+/// points: none kept. Coincident points (distance 0 < h) keep only the first by that order;
+/// points exactly h apart are both kept. Overlap markers play no part: an overlapping point is
+/// ordered by its normal length like any other.
 ///
 /// Threading: a pure function; may be called from any number of threads at once.
 std::vector<ContactPoint> filter(std::span<const ContactPoint> contacts, double h);

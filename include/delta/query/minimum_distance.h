@@ -10,6 +10,8 @@
 namespace delta::contactdetection {
 
 /// The closest pair of triangles of two meshes and their closest points.
+///
+/// Threading: a value type; no shared state.
 struct MinimumDistance {
   double distance = 0.0;
   std::uint32_t first = 0;   ///< triangle id in the first mesh
@@ -42,9 +44,14 @@ struct MinimumDistance {
 /// rounding it may name another pair than an all-pairs loop batched otherwise; the distance is
 /// the same to that tolerance, and the answer is the same for every thread count.
 ///
+/// Touching or interpenetrating meshes: distance 0, `intersect` true, the intersecting pair with
+/// the smallest ids and p = q a point of both. Degenerate triangles take part as the segments
+/// or points they are.
+///
 /// Throws delta::Error when either mesh has no triangles.
 ///
-/// Threading: reads both meshes only; any number of threads may call it at once.
+/// Threading: reads both meshes only; any number of threads may call it at once (parallel
+/// inside, serial inside an enclosing OpenMP parallel region).
 MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& second,
                                 kernels::Solver solver = kernels::Solver::Hybrid);
 
@@ -54,7 +61,12 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
 /// prepared once and then moved (QueryMesh::transform): the second's boxes and, leaf by leaf,
 /// its triangles are carried into the first's prepared frame, and `p`, `q` come back where the
 /// meshes are. The same exact distance (to the kernels' rounding) and the same tie rule
-/// (smallest (first, second) ids among pairs at exactly the minimum). Runs on the calling thread.
+/// (smallest (first, second) ids among pairs at exactly the minimum), the same answers for
+/// touching, interpenetrating and degenerate input. Cannot fail: a QueryMesh always has
+/// triangles.
+///
+/// Threading: runs on the calling thread; reads both meshes only, so any number of threads may
+/// call it at once on the same QueryMeshes.
 MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
                                 kernels::Solver solver = kernels::Solver::Hybrid);
 

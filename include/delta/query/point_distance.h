@@ -15,6 +15,8 @@ namespace delta::contactdetection {
 inline constexpr std::uint32_t kNoTriangle = std::numeric_limits<std::uint32_t>::max();
 
 /// A point's distance to a mesh.
+///
+/// Threading: a value type; no shared state.
 struct PointDistance {
   /// The (unsigned) distance to the closest point of the mesh; +∞ for a point further than ε.
   double distance = std::numeric_limits<double>::infinity();
@@ -28,6 +30,8 @@ struct PointDistance {
 };
 
 /// What a points–mesh query asks.
+///
+/// Threading: a value type; no shared state.
 struct PointQuery {
   /// Answer only points closer than ε (strictly); the others get distance +∞ and no triangle.
   /// A finite ε lets the search stop near the root for points far from the mesh.
@@ -45,6 +49,11 @@ struct PointQuery {
 /// the QueryMesh's tree, in parallel over the points (core/parallel.h). Deterministic: the same
 /// answer for any thread count.
 ///
+/// Degenerate input: zero-area triangles are the segments or points they are; coincident points
+/// get the same answer; a point on the surface gets distance 0 (within rounding) and is not
+/// inside. A closed mesh that intersects itself has no well-defined inside: its signs are those
+/// of the closest feature's pseudonormal.
+///
 /// Throws delta::Error when ε is NaN or not positive, a point has a non-finite coordinate (the
 /// error names its index), or `signedDistance` is asked of a mesh that is not closed (the error
 /// says how: boundary, non-manifold or misoriented edges). No points: an empty result.
@@ -54,7 +63,8 @@ struct PointQuery {
 std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const Vec3> points,
                                      const PointQuery& query = {});
 
-/// The same, for points given as three coordinate arrays of equal length (structure of arrays).
+/// The same, for points given as three coordinate arrays of equal length (structure of arrays;
+/// delta::Error for different lengths).
 std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const double> x,
                                      std::span<const double> y, std::span<const double> z,
                                      const PointQuery& query = {});
@@ -76,7 +86,8 @@ void distances(const QueryMesh& mesh, std::span<const Vec3> points,
                std::span<const double> upperBounds, const PointQuery& query,
                std::span<PointDistance> out);
 
-/// One point (serial).
+/// One point, on the calling thread; the same answer as distances() gives it, and the same
+/// errors.
 PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query = {});
 
 /// Points–mesh contacts: every point closer than ε to the mesh, in point order, as a contact

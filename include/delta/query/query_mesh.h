@@ -36,19 +36,24 @@ struct QueryMeshData;
 /// has its own pose, so particles of one shape in a DEM code share one QueryMesh's data. A
 /// motion that is not rigid (a scale, a stretch) needs a new QueryMesh from the moved Mesh.
 ///
-/// Throws delta::Error for a mesh with no triangles.
+/// Any valid Mesh may be prepared: degenerate triangles, unreferenced vertices, open or
+/// non-manifold surfaces and self-intersections are kept as they are (closed() is then false
+/// where the topology says so, and only unsigned queries are defined). Throws delta::Error for a
+/// mesh with no triangles (which a Mesh cannot be) or with 2³² − 1 triangles or more.
 ///
 /// Threading: the prepared data is immutable and shared; any number of threads may query one
 /// QueryMesh (or copies of it) at once. `transform` changes only this object's pose: not while
 /// other threads query this same object. Copies cost a reference count.
 class QueryMesh {
  public:
+  /// Prepares `mesh` (O(n log n); copies what it needs, the Mesh may then change or go).
   explicit QueryMesh(const Mesh& mesh);
 
-  /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose. O(1).
+  /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose. O(1). Throws delta::Error for a
+  /// non-finite translation or a zero or non-finite rotation, leaving the pose unchanged.
   QueryMesh& transform(const RigidTransform& motion);
   /// Puts the mesh at `pose` (from the frame it was prepared in; the rotation is renormalised).
-  /// O(1).
+  /// O(1). Throws as transform().
   QueryMesh& setPose(const RigidTransform& pose);
   /// Where the mesh is: the map from the frame it was prepared in to where it is now.
   const RigidTransform& pose() const noexcept { return pose_; }

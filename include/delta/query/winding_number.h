@@ -16,10 +16,15 @@ namespace delta {
 /// surface itself it is about ½ and the question "inside?" has no robust answer: there the
 /// distance (zero) is what matters. Degenerate (zero-area) triangles contribute 0.
 ///
+/// An empty TriangleSoA gives 0.
+///
 /// O(triangles). Threading: reads the mesh only; safe to call from any number of threads.
 double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept;
 
-/// windingNumber(mesh, point) > ½: inside a closed, outward-oriented mesh.
+/// windingNumber(mesh, point) > ½: inside a closed, outward-oriented mesh (on its surface: no
+/// robust answer, see above).
+///
+/// Threading: as windingNumber.
 inline bool inside(const TriangleSoA& mesh, const Vec3& point) noexcept {
   return windingNumber(mesh, point) > 0.5;
 }
