@@ -1,18 +1,22 @@
-// Checks that the guide's C++ cannot rot: every C++ code block of docs/guide.md is, byte for
-// byte, an example program of docs/guide/ (which the tests build and run), and every example
-// appears in the guide. Run as the test Guide.CodeBlocksMatchExamples:
+// Checks that the guide's examples cannot rot: every C++ and Python code block of docs/guide.md
+// is, byte for byte, an example of docs/guide/ (C++ programs the tests build and run, Python
+// scripts they run), and every example appears in the guide. Run as the test
+// Guide.CodeBlocksMatchExamples:
 //
 //   delta_guide_check docs/guide.md docs/guide
 //
-// In the guide, the last non-blank line before a C++ block (```cpp) names its source:
+// In the guide, the last non-blank line before a C++ block (```cpp) or a Python block
+// (```python) names its source, an example in the block's language:
 //
-//   <!-- example: NAME.cpp -->           the block is the whole file
+//   <!-- example: NAME.cpp -->           the block is the whole file (NAME.py in Python)
 //   <!-- example: NAME.cpp#REGION -->    the block is the region REGION of the file
 //
 // In an example, a region is the lines between `// [guide:begin REGION]` and
-// `// [guide:end REGION]` (each alone on its line), without the marker lines of other regions
-// nested in it, and with the indentation common to its non-blank lines removed (so a region in
-// the body of main() shows at the left margin). Every file, and every region, must be shown.
+// `// [guide:end REGION]` (in Python `# [guide:begin REGION]` and `# [guide:end REGION]`), each
+// alone on its line, without the marker lines of other regions nested in it, and with the
+// indentation common to its non-blank lines removed (so a region in the body of main() shows at
+// the left margin). Every file, and every region, must be shown. Other blocks (```cmake, …) are
+// not checked; the table `languages()` says which are.
 //
 // After changing an example, `delta_guide_check --update docs/guide.md docs/guide` copies every
 // named file or region into its block of the guide (and still reports what it cannot fix).
@@ -22,12 +26,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <set>
-#include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -85,18 +90,53 @@ std::string markerName(std::string_view line, std::string_view prefix, std::stri
       trimmed(text.substr(prefix.size(), text.size() - prefix.size() - suffix.size())));
 }
 
-/// Whether a fence line opens a C++ block: ```cpp, ```c++, ```cxx, ```cc, ```h or ```hpp.
-bool isCppFence(std::string_view line) {
-  if (!line.starts_with("```")) return false;
-  std::string language(trimmed(line.substr(3)));
-  std::transform(language.begin(), language.end(), language.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  static const std::set<std::string> kCpp = {"cpp", "c++", "cxx", "cc", "h", "hpp"};
-  return kCpp.contains(language);
+/// A language of the guide's examples: the fence tags that open its blocks (lower case), its
+/// files' extension and the comment that starts its region markers.
+struct Language {
+  std::string_view name;
+  std::string_view extension;
+  std::string_view comment;
+  std::set<std::string, std::less<>> fences;
+};
+
+/// The languages checked; a block of any other (```cmake, ```sh) is left alone.
+const std::vector<Language>& languages() {
+  static const std::vector<Language> kLanguages = {
+      {"C++", ".cpp", "//", {"cpp", "c++", "cxx", "cc", "h", "hpp"}},
+      {"Python", ".py", "#", {"python", "py", "python3"}},
+  };
+  return kLanguages;
 }
 
-/// One example program and its regions.
+/// "C++ or Python", for messages.
+std::string languageNames() {
+  std::string names;
+  for (const Language& language : languages())
+    names += (names.empty() ? "" : " or ") + std::string(language.name);
+  return names;
+}
+
+/// The language whose block a fence line opens (```cpp, ```python, …), or null.
+const Language* fenceLanguage(std::string_view line) {
+  if (!line.starts_with("```")) return nullptr;
+  std::string tag(trimmed(line.substr(3)));
+  std::transform(tag.begin(), tag.end(), tag.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const Language& language : languages())
+    if (language.fences.contains(tag)) return &language;
+  return nullptr;
+}
+
+/// The language of an example file, by its extension, or null.
+const Language* fileLanguage(const fs::path& path) {
+  for (const Language& language : languages())
+    if (path.extension() == language.extension) return &language;
+  return nullptr;
+}
+
+/// One example (a program or a script) and its regions.
 struct Example {
+  const Language* language = nullptr;
   Lines lines;
   std::map<std::string, Lines> regions;
   bool shown = false;       // whole or in part
@@ -104,11 +144,17 @@ struct Example {
   std::set<std::string> regionsShown;
 };
 
-constexpr std::string_view kBegin = "// [guide:begin ";
-constexpr std::string_view kEnd = "// [guide:end ";
+/// The start of a region marker line, `// [guide:begin ` in C++ and `# [guide:begin ` in Python.
+std::string beginMarker(const Language& language) {
+  return std::string(language.comment) + " [guide:begin ";
+}
+std::string endMarker(const Language& language) {
+  return std::string(language.comment) + " [guide:end ";
+}
 
-bool isRegionMarker(std::string_view line) {
-  return !markerName(line, kBegin, "]").empty() || !markerName(line, kEnd, "]").empty();
+bool isRegionMarker(std::string_view line, const Language& language) {
+  return !markerName(line, beginMarker(language), "]").empty() ||
+         !markerName(line, endMarker(language), "]").empty();
 }
 
 Lines dedented(const Lines& lines) {
@@ -123,15 +169,17 @@ Lines dedented(const Lines& lines) {
   return out;
 }
 
-Example readExample(const fs::path& path) {
+Example readExample(const fs::path& path, const Language& language) {
   Example example;
+  example.language = &language;
   example.lines = readLines(path);
   const std::string where = path.filename().string();
+  const std::string beginPrefix = beginMarker(language), endPrefix = endMarker(language);
   std::map<std::string, std::size_t> open;  // region name -> line of its begin marker
   for (std::size_t i = 0; i < example.lines.size(); ++i) {
     const std::string& line = example.lines[i];
-    const std::string begin = markerName(line, kBegin, "]");
-    const std::string end = markerName(line, kEnd, "]");
+    const std::string begin = markerName(line, beginPrefix, "]");
+    const std::string end = markerName(line, endPrefix, "]");
     const std::string at = where + ":" + std::to_string(i + 1);
     if (!begin.empty()) {
       if (open.contains(begin) || example.regions.contains(begin))
@@ -145,11 +193,12 @@ Example readExample(const fs::path& path) {
       }
       Lines body;
       for (std::size_t k = found->second + 1; k < i; ++k)
-        if (!isRegionMarker(example.lines[k])) body.push_back(example.lines[k]);
+        if (!isRegionMarker(example.lines[k], language)) body.push_back(example.lines[k]);
       example.regions[end] = dedented(body);
       open.erase(found);
     } else if (line.find("[guide:") != std::string::npos) {
-      fail(at, "a malformed region marker: write `// [guide:begin NAME]` or `// [guide:end NAME]`");
+      fail(at, "a malformed region marker: write `" + beginPrefix + "NAME]` or `" + endPrefix +
+                   "NAME]`");
     }
   }
   for (const auto& [name, line] : open)
@@ -185,37 +234,44 @@ int main(int argc, char** argv) {
   }
   const fs::path guidePath = argv[argc - 2], examplesDir = argv[argc - 1];
 
-  std::map<std::string, Example> examples;
+  std::map<std::string, Example> examples;  // by file name: NAME.cpp and NAME.py are two
   std::error_code error;
-  for (const fs::directory_entry& entry : fs::directory_iterator(examplesDir, error))
-    if (entry.is_regular_file() && entry.path().extension() == ".cpp")
-      examples[entry.path().filename().string()] = readExample(entry.path());
+  for (const fs::directory_entry& entry : fs::directory_iterator(examplesDir, error)) {
+    const Language* language = fileLanguage(entry.path());
+    if (entry.is_regular_file() && language != nullptr)
+      examples[entry.path().filename().string()] = readExample(entry.path(), *language);
+  }
   if (error) fail(examplesDir.string(), "cannot list it: " + error.message());
-  if (examples.empty()) fail(examplesDir.string(), "holds no example (*.cpp)");
+  if (examples.empty()) fail(examplesDir.string(), "holds no example (*.cpp, *.py)");
 
   const Lines guide = readLines(guidePath);
   Lines updated;  // the guide with every block that names its source copied from it
-  std::size_t blocks = 0, changed = 0;
+  std::map<std::string_view, std::size_t> blocks;  // checked blocks by language
+  std::size_t changed = 0;
   std::string pendingSource;  // the example named by the last marker, until a block takes it
   std::size_t pendingLine = 0;
+  const auto markerUnused = [&] {
+    if (!pendingSource.empty())
+      fail("guide.md:" + std::to_string(pendingLine),
+           "no " + languageNames() + " block follows this marker");
+    pendingSource.clear();
+  };
   for (std::size_t i = 0; i < guide.size(); ++i) {
     const std::string& line = guide[i];
     updated.push_back(line);
     const std::string at = "guide.md:" + std::to_string(i + 1);
     const std::string named = markerName(line, "<!-- example:", "-->");
     if (!named.empty()) {
-      if (!pendingSource.empty())
-        fail("guide.md:" + std::to_string(pendingLine), "no C++ block follows this marker");
+      markerUnused();
       pendingSource = named;
       pendingLine = i + 1;
       continue;
     }
     if (isBlank(line)) continue;
     if (!line.starts_with("```")) {
-      if (isCppFence(trimmed(line))) fail(at, "an indented C++ block: start it at the margin");
-      if (!pendingSource.empty())
-        fail("guide.md:" + std::to_string(pendingLine), "no C++ block follows this marker");
-      pendingSource.clear();
+      if (const Language* indented = fenceLanguage(trimmed(line)))
+        fail(at, "an indented " + std::string(indented->name) + " block: start it at the margin");
+      markerUnused();
       continue;
     }
 
@@ -229,48 +285,48 @@ int main(int argc, char** argv) {
     }
     const Lines block(guide.begin() + static_cast<std::ptrdiff_t>(i + 1),
                       guide.begin() + static_cast<std::ptrdiff_t>(end));
+    const Language* language = fenceLanguage(line);
+    if (language == nullptr) markerUnused();  // a block of another language (```cmake)
+    const std::string sourceName = std::exchange(pendingSource, {});  // this block takes it
     const Lines* source = nullptr;  // what the block should be, when it names a valid source
-    if (isCppFence(line)) {
-      ++blocks;
-      if (pendingSource.empty()) {
-        fail(at,
-             "a C++ block without its source: put `<!-- example: NAME.cpp -->` or "
-             "`<!-- example: NAME.cpp#REGION -->` on the line above, naming a file of "
-             "docs/guide/");
+    if (language != nullptr) {
+      ++blocks[language->name];
+      const std::string name(language->name), extension(language->extension);
+      const std::size_t hash = sourceName.find('#');
+      const std::string file = sourceName.substr(0, hash);
+      const auto found = examples.find(file);
+      if (sourceName.empty()) {
+        fail(at, "a " + name + " block without its source: put `<!-- example: NAME" + extension +
+                     " -->` or `<!-- example: NAME" + extension +
+                     "#REGION -->` on the line above, naming a file of docs/guide/");
+      } else if (found == examples.end()) {
+        fail(at, "its source " + file + " is not in docs/guide/");
+      } else if (found->second.language != language) {
+        fail(at, "a " + name + " block, but its source " + file + " is " +
+                     std::string(found->second.language->name));
+      } else if (hash == std::string::npos) {
+        found->second.shown = found->second.shownWhole = true;
+        source = &found->second.lines;
       } else {
-        const std::size_t hash = pendingSource.find('#');
-        const std::string file = pendingSource.substr(0, hash);
-        const auto found = examples.find(file);
-        if (found == examples.end()) {
-          fail(at, "its source " + file + " is not in docs/guide/");
-        } else if (hash == std::string::npos) {
-          found->second.shown = found->second.shownWhole = true;
-          source = &found->second.lines;
+        const std::string region = sourceName.substr(hash + 1);
+        const auto regionFound = found->second.regions.find(region);
+        if (regionFound == found->second.regions.end()) {
+          fail(at, file + " has no region '" + region + "'");
         } else {
-          const std::string region = pendingSource.substr(hash + 1);
-          const auto regionFound = found->second.regions.find(region);
-          if (regionFound == found->second.regions.end()) {
-            fail(at, file + " has no region '" + region + "'");
-          } else {
-            found->second.shown = true;
-            found->second.regionsShown.insert(region);
-            source = &regionFound->second;
-          }
+          found->second.shown = true;
+          found->second.regionsShown.insert(region);
+          source = &regionFound->second;
         }
       }
-    } else if (!pendingSource.empty()) {
-      fail("guide.md:" + std::to_string(pendingLine), "no C++ block follows this marker");
     }
-    if (source != nullptr && !update) compare(block, i + 2, *source, pendingSource);
+    if (source != nullptr && !update) compare(block, i + 2, *source, sourceName);
     changed += source != nullptr && *source != block;
     const Lines& kept = source != nullptr && update ? *source : block;
     updated.insert(updated.end(), kept.begin(), kept.end());
     updated.push_back(guide[end]);
-    pendingSource.clear();
     i = end;
   }
-  if (!pendingSource.empty())
-    fail("guide.md:" + std::to_string(pendingLine), "no C++ block follows this marker");
+  markerUnused();
 
   for (const auto& [file, example] : examples) {
     if (!example.shown) fail(file, "is not shown in the guide");
@@ -289,7 +345,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%d problem(s): the guide and docs/guide/ disagree\n", failures);
     return 1;
   }
-  std::printf("%zu C++ blocks of %s match %zu examples\n", blocks, guidePath.string().c_str(),
-              examples.size());
+  std::string counts;
+  for (const Language& language : languages())
+    counts += (counts.empty() ? "" : ", ") + std::to_string(blocks[language.name]) + " " +
+              std::string(language.name);
+  std::printf("the code blocks of %s (%s) match its %zu examples\n", guidePath.string().c_str(),
+              counts.c_str(), examples.size());
   return 0;
 }
