@@ -1,6 +1,13 @@
-// World parameters by the built-in scenarios' rules, for DEM tests that build their own worlds.
+// World parameters by the built-in scenarios' rules, and a closed system of converging
+// particles, for DEM tests that build their own worlds.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <span>
+
+#include "delta/core/rotation.h"
 #include "delta/core/vec3.h"
 #include "delta/dem/contact_model.h"
 #include "delta/dem/world.h"
@@ -21,6 +28,26 @@ inline Parameters centimetreParameters(double mass, double speed, double restitu
   parameters.stiffness = stiffnessForImpact(mass, speed, parameters.epsilon);
   parameters.timeStep = suggestedTimeStep(parameters.stiffness, mass);
   return parameters;
+}
+
+/// A closed system for the conservation tests: six particles of radius about r = 1 cm flying at
+/// each other from ±x, ±y, ±z (2.6 r out, off-centre), spinning, drawn from `seed`; particle i
+/// has shape shapes[i].
+inline void addConvergingParticles(World& world, std::uint64_t seed,
+                                   std::span<const std::uint32_t, 6> shapes) {
+  constexpr double kRadius = 0.01;
+  std::mt19937_64 random(seed);
+  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
+  const Vec3 directions[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (std::size_t i = 0; i < 6; ++i) {
+    ParticleState state;
+    const Vec3 offset{uniform() * kRadius, uniform() * kRadius, uniform() * kRadius};
+    state.position = directions[i] * (2.6 * kRadius) + offset * 0.6;
+    state.velocity = directions[i] * -0.5 + Vec3{uniform(), uniform(), uniform()} * 0.1;
+    state.orientation = Quaternion::fromAxisAngle({uniform(), uniform(), 1.0}, 6.0 * uniform());
+    state.angularVelocity = Vec3{uniform(), uniform(), uniform()} * 20.0;
+    world.addParticle(shapes[i], state);
+  }
 }
 
 }  // namespace delta::dem::test

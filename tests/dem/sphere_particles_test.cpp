@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -94,23 +94,12 @@ TEST(DemSpheres, SphereOnAFloorComesToRest) {
 TEST(DemSpheres, ClosedSystemConservesMomentaToRoundOff) {
   // Five spheres of two sizes and a granulate (the mixed sphere–mesh path) flying at each other
   // off-centre and spinning, with friction: no gravity, no walls.
-  std::mt19937_64 random(5);
-  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
   const ParticleShape small = ParticleShape::sphere(0.8 * kRadius, kDensity);
   World world(test::centimetreParameters(small.mass(), 1.0, 0.7, 0.5, {}));
   world.addShape(small);
   world.addShape(ParticleShape::sphere(kRadius, kDensity));
   world.addShape(primitives::granulate(3, {kRadius, 0.8 * kRadius, 0.6 * kRadius}), kDensity);
-  const Vec3 directions[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (std::size_t i = 0; i < 6; ++i) {
-    ParticleState state;
-    const Vec3 offset{uniform() * kRadius, uniform() * kRadius, uniform() * kRadius};
-    state.position = directions[i] * (2.6 * kRadius) + offset * 0.6;
-    state.velocity = directions[i] * -0.5 + Vec3{uniform(), uniform(), uniform()} * 0.1;
-    state.orientation = Quaternion::fromAxisAngle({uniform(), uniform(), 1.0}, 6.0 * uniform());
-    state.angularVelocity = Vec3{uniform(), uniform(), uniform()} * 20.0;
-    world.addParticle(i == 2 ? 2 : i % 2, state);
-  }
+  test::addConvergingParticles(world, 5, std::array<std::uint32_t, 6>{0, 1, 2, 1, 0, 1});
   const Vec3 linear = world.linearMomentum(), angular = world.angularMomentum();
   double linearScale = 0.0, angularScale = 0.0;
   for (const Particle& particle : world.particles()) {

@@ -3,10 +3,10 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <random>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -24,8 +24,6 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// Six granulates flying at each other off-centre and spinning: no gravity, no walls, friction.
 World closedSystem() {
-  std::mt19937_64 random(11);
-  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
   std::vector<ParticleShape> shapes;
   for (std::uint64_t seed = 1; seed <= 3; ++seed)
     shapes.emplace_back(primitives::granulate(seed, {kRadius, 0.8 * kRadius, 0.6 * kRadius}),
@@ -33,16 +31,7 @@ World closedSystem() {
   World world(test::centimetreParameters(shapes[0].mass(), 1.0, 0.7, 0.5, {}));
   for (const ParticleShape& shape : shapes)
     world.addShape(shape);
-  const Vec3 directions[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (std::size_t i = 0; i < 6; ++i) {
-    ParticleState state;
-    const Vec3 offset{uniform() * kRadius, uniform() * kRadius, uniform() * kRadius};
-    state.position = directions[i] * (2.6 * kRadius) + offset * 0.6;
-    state.velocity = directions[i] * -0.5 + Vec3{uniform(), uniform(), uniform()} * 0.1;
-    state.orientation = Quaternion::fromAxisAngle({uniform(), uniform(), 1.0}, 6.0 * uniform());
-    state.angularVelocity = Vec3{uniform(), uniform(), uniform()} * 20.0;
-    world.addParticle(i % shapes.size(), state);
-  }
+  test::addConvergingParticles(world, 11, std::array<std::uint32_t, 6>{0, 1, 2, 0, 1, 2});
   return world;
 }
 
