@@ -36,6 +36,7 @@
 
 #include "delta/delta.h"
 
+#include "hopper_free_fall.h"
 #include "omp_threads.h"
 
 namespace {
@@ -64,17 +65,6 @@ struct FunnelWorld {
   double funnelTop = 0.0;  ///< the highest vertex of the funnel
 };
 
-/// One step of `world` with `timeStep`; false (and `world` unchanged) when it would find a contact.
-bool freeFallStep(dem::World& world, double timeStep) {
-  dem::World trial = world;
-  trial.setTimeStep(timeStep);
-  trial.step();
-  if (trial.statistics().rawContactPoints > 0) return false;
-  trial.setTimeStep(world.parameters().timeStep);
-  world = std::move(trial);
-  return true;
-}
-
 /// The hopper with `count` particles brought into the funnel once per process (see the top).
 const FunnelWorld& funnelWorld(std::size_t count, dem::ParticleKind kind,
                                std::size_t maxSettlingSteps) {
@@ -83,9 +73,7 @@ const FunnelWorld& funnelWorld(std::size_t count, dem::ParticleKind kind,
   if (found != cache.end()) return found->second;
   dem::Scenario scenario = dem::hopper(count, 1, kind);
   FunnelWorld funnel{std::move(scenario.world), 0, 0, 0.0};
-  const double stride = kFreeFallStride * funnel.world.parameters().timeStep;
-  while (freeFallStep(funnel.world, stride))
-    ++funnel.freeFallSteps;
+  funnel.freeFallSteps = delta::bench::fallFreely(funnel.world, kFreeFallStride);
   const std::size_t maxSteps = fromEnvironment("DELTA_BENCH_DEM_SETTLING_STEPS", maxSettlingSteps);
   const double target = kContactsPerParticle * static_cast<double>(count);
   while (funnel.settlingSteps < maxSteps &&

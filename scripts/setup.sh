@@ -15,6 +15,7 @@ packages=(
   libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
   python3-dev python3-numpy python3-pytest pybind11-dev  # the Python module delta (python/)
   doxygen  # the API reference (the docs target) and the test Docs.NoWarnings
+  libopenmpi-dev openmpi-bin  # MPI: the distributed DEM (delta::mpi, `delta dem` under mpirun)
 )
 missing=()
 for package in "${packages[@]}"; do

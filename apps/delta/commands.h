@@ -14,4 +14,8 @@ void addDistanceCommand(CLI::App& app);
 void addDemCommand(CLI::App& app);
 void addIbCommand(CLI::App& app);
 
+/// Thrown by the ranks other than 0 of a distributed run for an error that rank 0 reports:
+/// main() exits with status 1 and prints nothing.
+struct QuietFailure {};
+
 }  // namespace delta::cli

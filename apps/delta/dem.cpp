@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -17,6 +19,9 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/dem/scenarios.h"
+#ifdef DELTA_WITH_MPI
+#include "delta/dem/mpi/distributed_world.h"
+#endif
 
 #include "commands.h"
 #include "dem_output.h"
@@ -194,12 +199,29 @@ struct RunSummary {
   std::size_t maxContacts = 0;
   std::size_t overlappingContacts = 0;
   double deepestRatio = 0.0;
-  double stepSeconds = 0.0;  ///< Σ StepStatistics::totalSeconds
+  double stepSeconds = 0.0;  ///< Σ StepStatistics::totalSeconds (of the slowest rank)
   double contactDetectionSeconds = 0.0;
   double runSeconds = 0.0;  ///< wall clock of the steps alone
   double writeSeconds = 0.0;
   double restitution = NAN;
   double energyChange = NAN;
+  double time = 0.0;  ///< simulated, at the end
+  /// A distributed run's: ranks (0: one process), rebalances and every rank's load.
+  int ranks = 0;
+  std::size_t rebalances = 0;
+  std::vector<dem::RankLoad> loads;
+
+  /// Counts one more step with these statistics (of the whole world).
+  void add(const dem::StepStatistics& statistics) {
+    ++steps;
+    contacts += statistics.contactPoints;
+    contactPairs += statistics.pairsInContact;
+    maxContacts = std::max(maxContacts, statistics.contactPoints);
+    overlappingContacts += statistics.overlappingContacts;
+    deepestRatio = std::max(deepestRatio, statistics.deepestRatio);
+    stepSeconds += statistics.totalSeconds;
+    contactDetectionSeconds += statistics.contactDetectionSeconds;
+  }
 };
 
 RunSummary simulate(dem::Scenario& scenario, std::size_t steps, std::size_t outputEvery,
@@ -221,15 +243,7 @@ RunSummary simulate(dem::Scenario& scenario, std::size_t steps, std::size_t outp
     const Stopwatch stepping;
     world.step();
     summary.runSeconds += stepping.seconds();
-    const dem::StepStatistics& statistics = world.statistics();
-    summary.steps = step;
-    summary.contacts += world.contacts().size();
-    summary.contactPairs += statistics.pairsInContact;
-    summary.maxContacts = std::max(summary.maxContacts, world.contacts().size());
-    summary.overlappingContacts += statistics.overlappingContacts;
-    summary.deepestRatio = std::max(summary.deepestRatio, statistics.deepestRatio);
-    summary.stepSeconds += statistics.totalSeconds;
-    summary.contactDetectionSeconds += statistics.contactDetectionSeconds;
+    summary.add(world.statistics());
     if (meter) meter->observe(world);
     if (output) {
       writing.restart();
@@ -240,12 +254,118 @@ RunSummary simulate(dem::Scenario& scenario, std::size_t steps, std::size_t outp
     progress.update(step);
   }
   if (output) output->finish();
+  summary.time = world.time();
   if (meter) {
     summary.restitution = meter->restitution();
     summary.energyChange = (world.energies().total() - startEnergy) / std::fabs(startEnergy);
   }
   return summary;
 }
+
+#ifdef DELTA_WITH_MPI
+/// Whether this process was started by mpirun (Open MPI, MPICH and PMIx set these).
+bool startedByMpirun() {
+  for (const char* variable : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(variable)) return true;
+  return false;
+}
+
+/// MPI for one `delta dem` run: initialised for OpenMP threads, finalised on the way out.
+class MpiSession {
+ public:
+  MpiSession() {
+    int provided = 0;
+    MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+    if (provided < MPI_THREAD_FUNNELED) {
+      MPI_Finalize();
+      throw Error("MPI gives no MPI_THREAD_FUNNELED (threads with MPI calls on one)");
+    }
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  }
+  ~MpiSession() { MPI_Finalize(); }
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+  int rank() const noexcept { return rank_; }
+
+ private:
+  int rank_ = 0;
+};
+
+/// Runs an error that only this rank meets (writing output) to its end: one line, and every
+/// rank stopped, since the others wait for this one.
+template <class Action>
+void orAbort(Action&& action) {
+  try {
+    action();
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "delta: %s\n", error.what());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+}
+
+/// simulate() on every rank of a DistributedWorld: rank 0 shows the progress, measures the
+/// restitution (from the gathered particles) and writes log.csv; every rank writes its piece
+/// of each frame.
+RunSummary simulateDistributed(dem::Scenario& scenario, dem::DistributedWorld& world,
+                               std::size_t steps, std::size_t outputEvery, DemOutput* output,
+                               bool showLine) {
+  const bool root = world.rank() == 0;
+  std::optional<dem::RestitutionMeter> meter;
+  const bool measure = scenario.name == "two-particles";
+  if (measure) {
+    const std::vector<dem::Particle> particles = world.gatherParticles();
+    if (root) meter.emplace(particles);
+  }
+  const double startEnergy = world.energies().total();
+  RunSummary summary;
+  summary.ranks = world.size();
+  Stopwatch writing;
+  const auto write = [&](bool frame) {
+    const dem::Energies energies = world.energies();
+    const dem::StepStatistics statistics = world.statistics();
+    const bool stepped = world.stepCount() > 0;
+    orAbort([&] {
+      output->log({world.stepCount(), world.time(), energies, statistics.contactPoints,
+                   statistics.pairsInContact, stepped ? statistics.totalSeconds : 0.0,
+                   stepped ? statistics.contactDetectionSeconds : 0.0});
+      if (frame) output->frame(world.part(), world.ids(), world.time());
+    });
+  };
+  if (output) {
+    orAbort([&] { output->begin(scenario.world); });
+    write(true);
+  }
+  summary.writeSeconds += writing.seconds();
+  Progress progress("dem " + scenario.name, steps, showLine && root);
+  for (std::size_t step = 1; step <= steps; ++step) {
+    const Stopwatch stepping;
+    world.step();
+    summary.runSeconds += stepping.seconds();
+    summary.add(world.statistics());
+    if (measure) {
+      const std::vector<dem::Particle> particles = world.gatherParticles();
+      const std::vector<dem::Contact> contacts = world.gatherContacts();
+      if (meter) meter->observe(particles, contacts);
+    }
+    if (output) {
+      writing.restart();
+      write(step % outputEvery == 0 || step == steps);
+      summary.writeSeconds += writing.seconds();
+    }
+    progress.update(step);
+  }
+  if (output) orAbort([&] { output->finish(); });
+  const double endEnergy = world.energies().total();
+  summary.time = world.time();
+  if (meter) {
+    summary.restitution = meter->restitution();
+    summary.energyChange = (endEnergy - startEnergy) / std::fabs(startEnergy);
+  }
+  summary.rebalances = world.rebalances();
+  summary.loads = world.gatherLoads();
+  return summary;
+}
+#endif
 
 void printJson(const dem::Scenario& scenario, std::size_t triangles, double buildSeconds,
                const RunSummary& run, const DemOutput* output) {
@@ -259,7 +379,7 @@ void printJson(const dem::Scenario& scenario, std::size_t triangles, double buil
       .value("obstacles", world.obstacles().size())
       .value("steps", run.steps)
       .value("time_step", world.parameters().timeStep)
-      .value("time", world.time())
+      .value("time", run.time)
       .value("steps_per_s", static_cast<double>(run.steps) / run.runSeconds)
       .value("contacts_per_step", perStep(static_cast<double>(run.contacts)))
       .value("max_contacts", run.maxContacts)
@@ -274,6 +394,22 @@ void printJson(const dem::Scenario& scenario, std::size_t triangles, double buil
       .value("threads", omp_get_max_threads());
   if (scenario.name == "two-particles")
     json.value("restitution", run.restitution).value("energy_change", run.energyChange);
+  if (run.ranks > 0) {
+    json.value("ranks", run.ranks).value("rebalances", run.rebalances).beginArray("rank_loads");
+    for (std::size_t r = 0; r < run.loads.size(); ++r) {
+      const dem::RankLoad& load = run.loads[r];
+      json.beginObject()
+          .value("rank", r)
+          .value("particles", load.particles)
+          .value("ghosts", load.ghosts)
+          .value("contacts", load.contacts)
+          .value("contact_detection_s", load.contactDetectionSeconds)
+          .value("communication_s", load.communicationSeconds)
+          .value("step_s", load.stepSeconds)
+          .endObject();
+    }
+    json.endArray();
+  }
   std::printf("%s\n", json.endObject().str().c_str());
 }
 
@@ -285,9 +421,12 @@ void printText(const dem::Scenario& scenario, std::size_t triangles, double buil
               counted(triangles, "triangle").c_str(),
               counted(world.obstacles().size(), "obstacle").c_str(), world.parameters().timeStep,
               buildSeconds);
+  const std::string threads = counted(static_cast<std::size_t>(omp_get_max_threads()), "thread");
+  const std::string where =
+      run.ranks > 0 ? counted(static_cast<std::size_t>(run.ranks), "rank") + " of " + threads
+                    : threads;
   std::printf("%s (%.4g s simulated) in %.3f s on %s: %.3g steps/s\n",
-              counted(run.steps, "step").c_str(), world.time(), run.runSeconds,
-              counted(static_cast<std::size_t>(omp_get_max_threads()), "thread").c_str(),
+              counted(run.steps, "step").c_str(), run.time, run.runSeconds, where.c_str(),
               static_cast<double>(run.steps) / run.runSeconds);
   std::printf(
       "%.1f contact points a step (at most %zu), %.0f%% of the step time in contact "
@@ -302,29 +441,97 @@ void printText(const dem::Scenario& scenario, std::size_t triangles, double buil
       std::printf("restitution %.4f (asked %.4g), total energy changed by %.3g%%\n",
                   run.restitution, world.parameters().restitution, 100.0 * run.energyChange);
   }
+  if (run.ranks > 0) {
+    std::printf(
+        "%d ranks, split again %zu times; per rank (last step: particles, ghosts, "
+        "contact points; whole run: seconds):\n",
+        run.ranks, run.rebalances);
+    std::printf(
+        "  rank  particles   ghosts  contacts  contact detection  communication    "
+        "step\n");
+    for (std::size_t r = 0; r < run.loads.size(); ++r) {
+      const dem::RankLoad& load = run.loads[r];
+      std::printf("  %4zu  %9zu  %7zu  %8zu  %17.3f  %13.3f  %6.3f\n", r, load.particles,
+                  load.ghosts, load.contacts, load.contactDetectionSeconds,
+                  load.communicationSeconds, load.stepSeconds);
+    }
+  }
   if (output)
     std::printf("%zu frames written to %s in %.3f s\n", output->frames(),
                 output->directory().string().c_str(), run.writeSeconds);
 }
 
+/// What run() and runDistributed() start from.
+struct Prepared {
+  dem::Scenario scenario;
+  double buildSeconds = 0.0;
+  std::size_t steps = 0;
+  std::size_t outputEvery = 1;
+  std::size_t triangles = 0;
+};
+
+Prepared prepare(const DemSettings& settings) {
+  Stopwatch clock;
+  Prepared prepared{build(settings)};
+  prepared.buildSeconds = clock.seconds();
+  const dem::Scenario& scenario = prepared.scenario;
+  prepared.steps = settings.steps.value_or(scenario.steps);
+  prepared.outputEvery = settings.outputEvery.value_or(scenario.outputInterval);
+  for (const dem::Particle& particle : scenario.world.particles())
+    prepared.triangles += scenario.world.shapes()[particle.shape].mesh().triangleCount();
+  return prepared;
+}
+
+void report(const DemOptions& options, const Prepared& prepared, const RunSummary& summary,
+            const DemOutput* output) {
+  if (options.json)
+    printJson(prepared.scenario, prepared.triangles, prepared.buildSeconds, summary, output);
+  else
+    printText(prepared.scenario, prepared.triangles, prepared.buildSeconds, summary, output);
+}
+
+#ifdef DELTA_WITH_MPI
+/// `delta dem` under mpirun: the scenario built on every rank, split over the ranks
+/// (dem::DistributedWorld), the summary from rank 0. An error every rank meets (bad settings)
+/// is reported once, by rank 0.
+void runDistributed(const DemOptions& options) {
+  MpiSession mpi;
+  const bool root = mpi.rank() == 0;
+  try {
+    const DemSettings settings = resolve(options);
+    int ranks = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    std::unique_ptr<DemOutput> output;
+    if (!options.out.empty()) {  // rank 0 makes the folder, then the others find it
+      if (root) orAbort([&] { output = std::make_unique<DemOutput>(options.out, 0, ranks); });
+      MPI_Barrier(MPI_COMM_WORLD);
+      if (!root)
+        orAbort([&] { output = std::make_unique<DemOutput>(options.out, mpi.rank(), ranks); });
+    }
+    Prepared prepared = prepare(settings);
+    dem::DistributedWorld world(MPI_COMM_WORLD, prepared.scenario.world);
+    const RunSummary summary =
+        simulateDistributed(prepared.scenario, world, prepared.steps, prepared.outputEvery,
+                            output.get(), showProgress(options.quiet || options.json));
+    if (root) report(options, prepared, summary, output.get());
+  } catch (const Error&) {
+    if (!root) throw QuietFailure{};
+    throw;
+  }
+}
+#endif
+
 void run(const DemOptions& options) {
+#ifdef DELTA_WITH_MPI
+  if (startedByMpirun()) return runDistributed(options);
+#endif
   const DemSettings settings = resolve(options);
   std::unique_ptr<DemOutput> output;
   if (!options.out.empty()) output = std::make_unique<DemOutput>(options.out);  // fail early
-  Stopwatch clock;
-  dem::Scenario scenario = build(settings);
-  const double buildSeconds = clock.seconds();
-  const std::size_t steps = settings.steps.value_or(scenario.steps);
-  const std::size_t outputEvery = settings.outputEvery.value_or(scenario.outputInterval);
-  std::size_t triangles = 0;
-  for (const dem::Particle& particle : scenario.world.particles())
-    triangles += scenario.world.shapes()[particle.shape].mesh().triangleCount();
-  const RunSummary summary = simulate(scenario, steps, outputEvery, output.get(),
-                                      showProgress(options.quiet || options.json));
-  if (options.json)
-    printJson(scenario, triangles, buildSeconds, summary, output.get());
-  else
-    printText(scenario, triangles, buildSeconds, summary, output.get());
+  Prepared prepared = prepare(settings);
+  const RunSummary summary = simulate(prepared.scenario, prepared.steps, prepared.outputEvery,
+                                      output.get(), showProgress(options.quiet || options.json));
+  report(options, prepared, summary, output.get());
 }
 
 constexpr const char* kFooter = R"(Threads: delta --threads N dem ... (or OMP_NUM_THREADS).
@@ -346,7 +553,13 @@ each key at most once; options given on the command line override it.
 
 --out DIR writes particles.pvd (particles_NNNNNN.vtp: triangles, particle id, velocity),
 contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, overlap),
-obstacles.vtp and log.csv (energies, contacts and step times, one row per step).)";
+obstacles.vtp and log.csv (energies, contacts and step times, one row per step).
+
+Under mpirun (where delta was built with MPI): mpirun -np P delta dem ... splits the particles
+over P ranks (recursive coordinate bisection, split again when the counts drift 10% apart),
+with the same trajectories as one process; frames are .pvtp files of one piece per rank, and
+the summary adds each rank's load. As root: mpirun --allow-run-as-root; more ranks than
+cores: --oversubscribe.)";
 
 }  // namespace
 

@@ -16,7 +16,7 @@ void append(io::VtkArray& array, const Vec3& v) {
 }
 
 /// Every particle's triangles where the particle is, with the velocity of each vertex.
-io::VtkPolyData particlesOf(const dem::World& world) {
+io::VtkPolyData particlesOf(const dem::World& world, std::span<const std::uint32_t> ids) {
   io::VtkPolyData data;
   io::VtkArray velocity{"velocity", 3, {}}, particleId{"particle", 1, {}}, shapeId{"shape", 1, {}};
   const std::span<const dem::Particle> particles = world.particles();
@@ -32,7 +32,7 @@ io::VtkPolyData particlesOf(const dem::World& world) {
     }
     for (const TriangleIndices& triangle : mesh.triangles()) {
       data.triangles.push_back({base + triangle[0], base + triangle[1], base + triangle[2]});
-      particleId.values.push_back(static_cast<double>(p));
+      particleId.values.push_back(static_cast<double>(ids.empty() ? p : ids[p]));
       shapeId.values.push_back(static_cast<double>(particle.shape));
     }
   }
@@ -91,7 +91,8 @@ bool moves(const dem::Obstacle& obstacle) {
 
 }  // namespace
 
-DemOutput::DemOutput(std::filesystem::path directory) : directory_(std::move(directory)) {
+DemOutput::DemOutput(std::filesystem::path directory, int piece, int pieces)
+    : directory_(std::move(directory)), piece_(piece), pieces_(pieces) {
   makeOutputFolder(directory_);
 }
 
@@ -100,9 +101,10 @@ DemOutput::~DemOutput() {
 }
 
 void DemOutput::begin(const dem::World& world) {
-  io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
   for (const dem::Obstacle& obstacle : world.obstacles())
     obstaclesMove_ = obstaclesMove_ || moves(obstacle);
+  if (piece_ != 0) return;
+  io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
   const std::filesystem::path path = directory_ / "log.csv";
   log_ = std::fopen(path.c_str(), "w");
   if (!log_) throw Error("cannot write '" + path.string() + "'");
@@ -112,27 +114,47 @@ void DemOutput::begin(const dem::World& world) {
 }
 
 void DemOutput::log(const dem::World& world) {
-  const dem::Energies energies = world.energies();
   const dem::StepStatistics& statistics = world.statistics();
-  std::fprintf(log_, "%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,%zu,%.6g,%.6g\n", world.stepCount(),
-               world.time(), energies.kinetic(), energies.gravitational, energies.elastic,
-               energies.total(), world.contacts().size(), statistics.pairsInContact,
-               world.stepCount() > 0 ? statistics.totalSeconds : 0.0,
-               world.stepCount() > 0 ? statistics.contactDetectionSeconds : 0.0);
+  const bool stepped = world.stepCount() > 0;
+  log(LogRow{world.stepCount(), world.time(), world.energies(), world.contacts().size(),
+             statistics.pairsInContact, stepped ? statistics.totalSeconds : 0.0,
+             stepped ? statistics.contactDetectionSeconds : 0.0});
 }
 
-void DemOutput::frame(const dem::World& world) {
+void DemOutput::log(const LogRow& row) {
+  if (!log_) return;
+  const dem::Energies& energies = row.energies;
+  std::fprintf(log_, "%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,%zu,%.6g,%.6g\n", row.step, row.time,
+               energies.kinetic(), energies.gravitational, energies.elastic, energies.total(),
+               row.contacts, row.contactPairs, row.stepSeconds, row.contactDetectionSeconds);
+}
+
+void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids, double time) {
   const std::size_t frame = frames();
   const auto add = [&](std::vector<io::VtkSeriesEntry>& series, const char* name,
-                       const io::VtkPolyData& data) {
-    const std::string file = frameFileName(name, frame, ".vtp");
-    io::writeVtp(data, directory_ / file);
-    series.push_back({world.time(), file});
+                       const io::VtkPolyData& data, bool pieced) {
+    std::string file = frameFileName(name, frame, ".vtp");
+    if (pieced && pieces_ > 0) {
+      const std::string stem = frameFileName(name, frame, "");
+      io::writeVtp(data, directory_ / (stem + "_" + std::to_string(piece_) + ".vtp"));
+      if (piece_ != 0) {  // rank 0 keeps the series; the others only count frames
+        series.push_back({time, {}});
+        return;
+      }
+      std::vector<std::filesystem::path> pieces;
+      for (int k = 0; k < pieces_; ++k)
+        pieces.push_back(stem + "_" + std::to_string(k) + ".vtp");
+      file = stem + ".pvtp";
+      io::writePvtp(data, pieces, directory_ / file);
+    } else {
+      io::writeVtp(data, directory_ / file);
+    }
+    series.push_back({time, file});
     io::writePvd(series, directory_ / (std::string(name) + ".pvd"));
   };
-  add(particleSeries_, "particles", particlesOf(world));
-  add(contactSeries_, "contacts", contactsOf(world));
-  if (obstaclesMove_) add(obstacleSeries_, "obstacles", obstaclesOf(world));
+  add(particleSeries_, "particles", particlesOf(part, ids), true);
+  add(contactSeries_, "contacts", contactsOf(part), true);
+  if (obstaclesMove_ && piece_ == 0) add(obstacleSeries_, "obstacles", obstaclesOf(part), false);
 }
 
 void DemOutput::finish() {

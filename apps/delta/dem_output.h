@@ -1,7 +1,9 @@
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <span>
 #include <vector>
 
 #include "delta/dem/world.h"
@@ -31,22 +33,46 @@ namespace delta::cli {
 /// NNNNNN is the frame number; the .pvd files give each frame its simulated time and are
 /// rewritten after every frame, so a run cut short leaves a series that opens.
 ///
-/// Threading: one object per run, used from one thread.
+/// A run on P processes (`delta dem` under mpirun) writes a piece of each frame per rank,
+/// particles_NNNNNN_K.vtp and contacts_NNNNNN_K.vtp (K the rank, each with the particles it owns
+/// and the contacts of the pairs it evaluated; `particle` and `other` are particle ids), and
+/// rank 0 joins them in particles_NNNNNN.pvtp and contacts_NNNNNN.pvtp, which the .pvd series
+/// play; rank 0 alone writes obstacles and log.csv.
+///
+/// Threading: one object per run (per rank), used from one thread.
 class DemOutput {
  public:
+  /// One line of log.csv.
+  struct LogRow {
+    std::size_t step = 0;
+    double time = 0.0;
+    dem::Energies energies;
+    std::size_t contacts = 0;
+    std::size_t contactPairs = 0;
+    double stepSeconds = 0.0;
+    double contactDetectionSeconds = 0.0;
+  };
+
   /// Makes `directory` (and its parents) unless it exists. Throws delta::Error naming it when it
-  /// is a file or cannot be made. Writes nothing else yet.
-  explicit DemOutput(std::filesystem::path directory);
+  /// is a file or cannot be made. Writes nothing else yet. `piece` and `pieces`: this rank and
+  /// the number of ranks of a distributed run; pieces = 0: one process.
+  explicit DemOutput(std::filesystem::path directory, int piece = 0, int pieces = 0);
   ~DemOutput();
   DemOutput(const DemOutput&) = delete;
   DemOutput& operator=(const DemOutput&) = delete;
 
-  /// Writes obstacles.vtp and opens log.csv with its header. Call once, before the first step.
+  /// Writes obstacles.vtp and opens log.csv with its header (rank 0). Call once, before the
+  /// first step, with the world or any rank's part (their obstacles are the same).
   void begin(const dem::World& world);
   /// Appends the world's current step to log.csv.
   void log(const dem::World& world);
+  /// Appends a row to log.csv (rank 0; the others ignore it).
+  void log(const LogRow& row);
   /// Writes a frame of particles and contacts (and of moving obstacles) and updates the series.
-  void frame(const dem::World& world);
+  void frame(const dem::World& world) { frame(world, {}, world.time()); }
+  /// Writes this rank's piece of a frame: the particles of `part` with their ids (empty: their
+  /// indices), at simulated time `time`; rank 0 also joins the pieces and updates the series.
+  void frame(const dem::World& part, std::span<const std::uint32_t> ids, double time);
   /// Flushes log.csv; throws delta::Error when anything could not be written.
   void finish();
 
@@ -55,6 +81,7 @@ class DemOutput {
 
  private:
   std::filesystem::path directory_;
+  int piece_ = 0, pieces_ = 0;
   std::FILE* log_ = nullptr;
   bool obstaclesMove_ = false;
   std::vector<io::VtkSeriesEntry> particleSeries_, contactSeries_, obstacleSeries_;

@@ -70,6 +70,8 @@ int main(int argc, char** argv) {
     return fail("", std::string(error.what()) + " (see delta --help)", 2);
   } catch (const delta::Error& error) {
     return fail("", error.what(), 1);
+  } catch (const delta::cli::QuietFailure&) {
+    return 1;
   } catch (const std::exception& error) {
     return fail("internal error: ", error.what(), 3);
   }

@@ -13,6 +13,7 @@
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 #include "delta/core/version.h"
+#include "delta/dem/bisection.h"
 #include "delta/dem/broad_phase.h"
 #include "delta/dem/contact_model.h"
 #include "delta/dem/narrow_phase.h"

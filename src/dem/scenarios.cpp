@@ -272,23 +272,32 @@ Scenario hopper(std::size_t count, std::uint64_t seed, ParticleKind kind) {
 }
 
 RestitutionMeter::RestitutionMeter(const World& world, std::size_t first, std::size_t second)
+    : RestitutionMeter(world.particles(), first, second) {}
+
+RestitutionMeter::RestitutionMeter(std::span<const Particle> particles, std::size_t first,
+                                   std::size_t second)
     : first_(first), second_(second) {
-  if (first >= world.particles().size() || second >= world.particles().size() || first == second)
+  if (first >= particles.size() || second >= particles.size() || first == second)
     throw Error("RestitutionMeter: particles " + std::to_string(first) + " and " +
                 std::to_string(second) + " must be two of the world's " +
-                std::to_string(world.particles().size()));
-  before_ = world.particles()[first].velocity - world.particles()[second].velocity;
+                std::to_string(particles.size()));
+  before_ = particles[first].velocity - particles[second].velocity;
 }
 
 void RestitutionMeter::observe(const World& world) {
+  observe(world.particles(), world.contacts());
+}
+
+void RestitutionMeter::observe(std::span<const Particle> particles,
+                               std::span<const Contact> contacts) {
   const auto low = static_cast<std::uint32_t>(std::min(first_, second_));
   const auto high = static_cast<std::uint32_t>(std::max(first_, second_));
   bool touching = false;
-  for (const Contact& contact : world.contacts())
+  for (const Contact& contact : contacts)
     touching =
         touching || (!contact.withObstacle && contact.first == low && contact.second == high);
-  const Particle& one = world.particles()[first_];
-  const Particle& other = world.particles()[second_];
+  const Particle& one = particles[first_];
+  const Particle& other = particles[second_];
   if (touching && !collided_) {
     collided_ = true;
     lineOfCentres_ = normalized(other.position - one.position);

@@ -17,13 +17,13 @@
 
 namespace delta::dem {
 
-/// A pair the broad phase found: two particles, or a particle and an obstacle.
+/// A pair the broad phase found: two particles (local indices; `first` has the lower id), or a
+/// particle and an obstacle.
 struct World::Interaction {
   std::uint32_t first;
   std::uint32_t second;
   bool withObstacle;
-
-  std::uint64_t key() const noexcept { return (std::uint64_t{first} << 32) | second; }
+  std::uint64_t key;  ///< first id << 32 | second id (or obstacle): the order forces are summed in
 };
 
 /// What the narrow phase and the contact law found for one pair.
@@ -147,7 +147,8 @@ std::size_t World::addParticle(std::size_t shape, const ParticleState& state) {
   particle.orientation = Quaternion::fromComponents(q.w, q.x, q.y, q.z);  // throws if invalid
   particle.velocity = state.velocity;
   particles_.push_back(particle);
-  placed_.push_back(shapes_[shape].queryMesh());
+  ids_.push_back(static_cast<std::uint32_t>(particles_.size() - 1));
+  owned_ = particles_.size();
   setAngularVelocity(particles_.size() - 1, state.angularVelocity);
   return particles_.size() - 1;
 }
@@ -163,9 +164,9 @@ std::size_t World::addObstacle(const Mesh& mesh, const ObstacleMotion& motion) {
 }
 
 Particle& World::particleAt(std::size_t index, const char* operation) {
-  if (index >= particles_.size())
+  if (index >= owned_)
     throw Error(std::string("dem: ") + operation + ": particle " + std::to_string(index) +
-                " does not exist (" + std::to_string(particles_.size()) + " particles)");
+                " does not exist (" + std::to_string(owned_) + " particles)");
   forcesCurrent_ = false;
   return particles_[index];
 }
@@ -206,7 +207,11 @@ Vec3 World::angularVelocityOf(const Particle& particle,
 }
 
 std::vector<World::Interaction> World::findPairs() {
-  const std::size_t count = particles_.size();
+  const std::size_t count = particles_.size();  // ghosts included
+  if (placed_.size() > count)
+    placed_.erase(placed_.begin() + static_cast<std::ptrdiff_t>(count), placed_.end());
+  for (std::size_t i = placed_.size(); i < count; ++i)
+    placed_.push_back(shapes_[particles_[i].shape].queryMesh());
   std::vector<Sphere> spheres(count);
   parallelFor(0, count, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
@@ -220,9 +225,18 @@ std::vector<World::Interaction> World::findPairs() {
     }
   });
   const double reach = 2.0 * law_.epsilon;
+  // A pair is evaluated where its lower id is owned (the only rule, in one process or many);
+  // pairs of two ghosts are some other process's. Summed in the order of their ids, forces
+  // come out the same however the particles are split.
   std::vector<Interaction> pairs;
-  for (const CandidatePair& pair : nearbyPairs(spheres, reach))
-    pairs.push_back({pair.first, pair.second, false});
+  for (CandidatePair pair : nearbyPairs(spheres, reach)) {
+    if (ids_[pair.second] < ids_[pair.first]) std::swap(pair.first, pair.second);
+    if (pair.first >= owned_) continue;
+    pairs.push_back({pair.first, pair.second, false,
+                     (std::uint64_t{ids_[pair.first]} << 32) | ids_[pair.second]});
+  }
+  std::sort(pairs.begin(), pairs.end(),
+            [](const Interaction& a, const Interaction& b) { return a.key < b.key; });
   statistics_.particlePairsTested = pairs.size();
 
   std::vector<Aabb> obstacleBoxes;
@@ -235,8 +249,8 @@ std::vector<World::Interaction> World::findPairs() {
   // Particle–obstacle pairs: the bounding sphere within 2ε of the obstacle's box, then of its
   // surface (a nearest-triangle search stopped at r + 2ε): a funnel's box holds every particle
   // inside it, its surface only those near the wall.
-  std::vector<std::uint8_t> near(count * obstacles_.size(), 0);
-  parallelFor(0, count, kParticleGrain, [&](std::size_t begin, std::size_t end) {
+  std::vector<std::uint8_t> near(owned_ * obstacles_.size(), 0);
+  parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       for (std::size_t o = 0; o < obstacles_.size(); ++o) {
         const double limit = spheres[i].radius + reach;
@@ -247,10 +261,14 @@ std::vector<World::Interaction> World::findPairs() {
             contactdetection::distance(placedObstacles_[o], spheres[i].center, query).found();
       }
   });
-  for (std::size_t i = 0; i < count; ++i)
+  const std::size_t particlePairs = pairs.size();
+  for (std::size_t i = 0; i < owned_; ++i)
     for (std::size_t o = 0; o < obstacles_.size(); ++o)
       if (near[i * obstacles_.size() + o])
-        pairs.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o), true});
+        pairs.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o), true,
+                         (std::uint64_t{ids_[i]} << 32) | o});
+  std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(particlePairs), pairs.end(),
+            [](const Interaction& a, const Interaction& b) { return a.key < b.key; });
   statistics_.obstaclePairsTested = pairs.size() - statistics_.particlePairsTested;
   return pairs;
 }
@@ -297,7 +315,7 @@ std::vector<std::span<const ContactPoint>> World::sphereObstacleContacts(
   return found;
 }
 
-void World::evaluateForces(bool halfStepVelocities) {
+void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   Clock::time_point start = Clock::now();
   const std::vector<Interaction> pairs = findPairs();
   statistics_.broadPhaseSeconds = secondsSince(start);
@@ -370,20 +388,55 @@ void World::evaluateForces(bool halfStepVelocities) {
         const Obstacle& obstacle = obstacles_[pair.second];
         const Vec3 pivot = obstacle.pose.apply(obstacle.motion.pivot);
         secondMotion = {pivot, obstacle.motion.velocity, obstacle.motion.angularVelocity};
-        spring = springOf(obstacleSprings_, pair.key());
+        spring = springOf(obstacleSprings_, pair.key);
       } else {
         const Particle& other = particles_[pair.second];
         const double otherMass = shapes_[other.shape].mass();
         secondMotion = motions[pair.second];
         effectiveMass = mass * otherMass / (mass + otherMass);
-        spring = springOf(particleSprings_, pair.key());
+        spring = springOf(particleSprings_, pair.key);
       }
       outcomes[p].forces = pairForces(outcomes[p].points, firstMotion, secondMotion, effectiveMass,
                                       spring ? *spring : TangentialSpring{}, dt, law_);
     }
   });
 
-  // Summed pair by pair in their fixed order: bitwise the same for any thread count.
+  // Forces on ghosts go to their owners; theirs on this process's particles come back.
+  std::vector<GhostForce> imported;
+  if (exchange) {
+    std::vector<GhostForce> exported;
+    for (std::size_t p = 0; p < statistics_.particlePairsTested; ++p)
+      if (pairs[p].second >= owned_)
+        for (const PointForce& point : outcomes[p].forces.points)
+          exported.push_back({pairs[p].key, ids_[pairs[p].second], point.point.x, point.force});
+    const Clock::time_point swap = Clock::now();
+    imported = exchange->swapGhostForces(std::move(exported));
+    statistics_.communicationSeconds += secondsSince(swap);
+    std::stable_sort(imported.begin(), imported.end(),
+                     [](const GhostForce& a, const GhostForce& b) { return a.key < b.key; });
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> indexOfId;  // owned: (id, index)
+  if (!imported.empty()) {
+    for (std::size_t i = 0; i < owned_; ++i)
+      indexOfId.push_back({ids_[i], static_cast<std::uint32_t>(i)});
+    std::sort(indexOfId.begin(), indexOfId.end());
+  }
+  std::size_t nextImported = 0;
+  // Applies the imported forces of the pairs before `key`, as their owner would have.
+  const auto importBefore = [&](std::uint64_t key) {
+    for (; nextImported < imported.size() && imported[nextImported].key < key; ++nextImported) {
+      const GhostForce& ghost = imported[nextImported];
+      const auto found =
+          std::lower_bound(indexOfId.begin(), indexOfId.end(),
+                           std::pair<std::uint32_t, std::uint32_t>{ghost.particle, 0});
+      Particle& particle = particles_[found->second];
+      particle.force -= ghost.force;
+      particle.torque -= cross(ghost.point - particle.position, ghost.force);
+    }
+  };
+
+  // Summed pair by pair in the order of their ids: bitwise the same for any thread count, and
+  // for any number of processes a DistributedWorld splits the particles over.
   for (Particle& particle : particles_)
     particle.force = particle.torque = Vec3{};
   contacts_.clear();
@@ -397,6 +450,7 @@ void World::evaluateForces(bool halfStepVelocities) {
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const Interaction& pair = pairs[p];
     const PairOutcome& outcome = outcomes[p];
+    importBefore(pair.withObstacle ? std::numeric_limits<std::uint64_t>::max() : pair.key);
     statistics_.rawContactPoints += outcome.rawPoints;
     if (outcome.points.empty()) continue;
     ++statistics_.pairsInContact;
@@ -405,9 +459,10 @@ void World::evaluateForces(bool halfStepVelocities) {
     elasticEnergy_ += outcome.forces.springEnergy;
     if (friction)
       (pair.withObstacle ? obstacleSprings_ : particleSprings_)
-          .push_back({pair.key(), outcome.forces.spring});
+          .push_back({pair.key, outcome.forces.spring});
     Particle& one = particles_[pair.first];
-    Particle* other = pair.withObstacle ? nullptr : &particles_[pair.second];
+    Particle* other =
+        pair.withObstacle || pair.second >= owned_ ? nullptr : &particles_[pair.second];
     for (const PointForce& point : outcome.forces.points) {
       one.force += point.force;
       one.torque += cross(point.point.x - one.position, point.force);
@@ -417,18 +472,20 @@ void World::evaluateForces(bool halfStepVelocities) {
       }
       statistics_.contactPoints += 1;
       statistics_.overlappingContacts += point.point.overlap ? 1 : 0;
-      contacts_.push_back(
-          {point.point, pair.first, pair.second, pair.withObstacle, point.depth, point.force});
+      contacts_.push_back({point.point, ids_[pair.first],
+                           pair.withObstacle ? pair.second : ids_[pair.second], pair.withObstacle,
+                           point.depth, point.force});
     }
   }
-  statistics_.forceSeconds = secondsSince(start);
+  importBefore(std::numeric_limits<std::uint64_t>::max());
+  statistics_.forceSeconds = secondsSince(start) - statistics_.communicationSeconds;
   forcesCurrent_ = true;
 }
 
 void World::halfKick() {
   const double half = 0.5 * parameters_.timeStep;
   const Vec3 gravity = parameters_.gravity;
-  parallelFor(0, particles_.size(), kParticleGrain, [&](std::size_t begin, std::size_t end) {
+  parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       Particle& particle = particles_[i];
       particle.velocity += (particle.force / shapes_[particle.shape].mass() + gravity) * half;
@@ -440,7 +497,7 @@ void World::halfKick() {
 
 void World::drift() {
   const double dt = parameters_.timeStep;
-  parallelFor(0, particles_.size(), kParticleGrain, [&](std::size_t begin, std::size_t end) {
+  parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       Particle& particle = particles_[i];
       particle.position += particle.velocity * dt;
@@ -458,24 +515,53 @@ void World::drift() {
 }
 
 void World::step() {
-  const Clock::time_point start = Clock::now();
-  if (!forcesCurrent_) evaluateForces(false);
-  Clock::time_point phase = Clock::now();
-  halfKick();
-  drift();
-  double integration = secondsSince(phase);
-  evaluateForces(true);
-  phase = Clock::now();
-  halfKick();
-  for (std::size_t i = 0; i < particles_.size(); ++i) {
+  advance(nullptr);
+}
+
+void World::requireFiniteParticles(Exchange* exchange) const {
+  std::uint32_t failed = std::numeric_limits<std::uint32_t>::max();
+  for (std::size_t i = 0; i < owned_; ++i) {
     const Particle& particle = particles_[i];
     if (!isFinite(particle.position) || !isFinite(particle.velocity) ||
         !isFinite(particle.angularMomentum))
-      throw Error("dem: particle " + std::to_string(i) + " is no longer finite at step " +
-                  std::to_string(stepCount_ + 1) + " (time step " + toString(parameters_.timeStep) +
-                  " too large for stiffness " + toString(parameters_.stiffness) + "?)");
+      failed = std::min(failed, ids_[i]);
   }
+  if (exchange) failed = exchange->firstNonFinite(failed);
+  if (failed != std::numeric_limits<std::uint32_t>::max())
+    throw Error("dem: particle " + std::to_string(failed) + " is no longer finite at step " +
+                std::to_string(stepCount_ + 1) + " (time step " + toString(parameters_.timeStep) +
+                " too large for stiffness " + toString(parameters_.stiffness) + "?)");
+}
+
+void World::advance(Exchange* exchange) {
+  const Clock::time_point start = Clock::now();
+  double communication = 0.0;
+  const auto refreshGhosts = [&] {
+    if (!exchange) return;
+    const Clock::time_point begin = Clock::now();
+    exchange->refreshGhosts(*this);
+    communication += secondsSince(begin);
+  };
+  if (!forcesCurrent_) {
+    refreshGhosts();
+    statistics_.communicationSeconds = 0.0;
+    evaluateForces(false, exchange);
+    communication += statistics_.communicationSeconds;
+  }
+  Clock::time_point phase = Clock::now();
+  halfKick();
+  drift();
+  requireFiniteParticles(exchange);  // before the broad phase meets it
+  double integration = secondsSince(phase);
+  refreshGhosts();
+  statistics_.communicationSeconds = 0.0;
+  evaluateForces(true, exchange);
+  communication += statistics_.communicationSeconds;
+  phase = Clock::now();
+  halfKick();
+  requireFiniteParticles(exchange);
   integration += secondsSince(phase);
+  statistics_.communicationSeconds = communication;
   statistics_.integrationSeconds = integration;
   time_ += parameters_.timeStep;
   ++stepCount_;
@@ -489,7 +575,7 @@ void World::run(std::size_t steps) {
 
 Energies World::energies() const noexcept {
   Energies energies;
-  for (const Particle& particle : particles_) {
+  for (const Particle& particle : particles()) {
     const double mass = shapes_[particle.shape].mass();
     energies.translational += 0.5 * mass * lengthSquared(particle.velocity);
     energies.rotational += 0.5 * dot(particle.angularVelocity, particle.angularMomentum);
@@ -501,23 +587,23 @@ Energies World::energies() const noexcept {
 
 Vec3 World::linearMomentum() const noexcept {
   Vec3 sum;
-  for (const Particle& particle : particles_)
+  for (const Particle& particle : particles())
     sum += particle.velocity * shapes_[particle.shape].mass();
   return sum;
 }
 
 Vec3 World::angularMomentum() const noexcept {
   Vec3 sum;
-  for (const Particle& particle : particles_)
+  for (const Particle& particle : particles())
     sum += cross(particle.position, particle.velocity * shapes_[particle.shape].mass()) +
            particle.angularMomentum;
   return sum;
 }
 
 double World::suggestedTimeStep() const noexcept {
-  if (particles_.empty()) return 0.0;
+  if (owned_ == 0) return 0.0;
   double smallest = std::numeric_limits<double>::infinity();
-  for (const Particle& particle : particles_)
+  for (const Particle& particle : particles())
     smallest = std::min(smallest, shapes_[particle.shape].mass());
   return dem::suggestedTimeStep(law_.stiffness, smallest);
 }

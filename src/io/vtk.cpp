@@ -193,6 +193,34 @@ void writeDocument(const std::string& head, const AppendedData& appended,
   }
 }
 
+/// Writes a whole XML document that has no appended data (.pvd, .pvtp); a file that could not
+/// be written whole is removed.
+void writeText(const std::string& xml, const std::filesystem::path& path) {
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw Error("cannot open it for writing");
+  file << xml;
+  if (!file.flush()) {
+    file.close();
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);  // no partial file
+    throw Error("writing failed");
+  }
+}
+
+/// The PDataArray elements of a .pvtp's PPointData or PCellData: each array's name and
+/// components, as writeVtp declares them.
+std::string parallelDataSection(const char* tag, const std::vector<VtkArray>& arrays) {
+  std::string xml = std::string("<") + tag + ">\n";
+  for (const VtkArray& array : arrays) {
+    if (array.components < 1)
+      throw Error("array '" + array.name + "' has " + std::to_string(array.components) +
+                  " components");
+    xml += "<PDataArray type=\"Float64\" Name=\"" + escaped(array.name) +
+           "\" NumberOfComponents=\"" + std::to_string(array.components) + "\"/>\n";
+  }
+  return xml + "</" + tag + ">\n";
+}
+
 }  // namespace
 
 VtkPolyData VtkPolyData::fromMesh(const Mesh& mesh) {
@@ -248,10 +276,28 @@ void writePvd(std::span<const VtkSeriesEntry> entries, const std::filesystem::pa
              escaped(entry.file.generic_string()) + "\"/>\n";
     }
     xml += "</Collection>\n</VTKFile>\n";
-    std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    if (!file) throw Error("cannot open it for writing");
-    file << xml;
-    if (!file.flush()) throw Error("writing failed");
+    writeText(xml, path);
+  } catch (const Error& error) {
+    throw Error("cannot write '" + path.string() + "': " + error.what());
+  }
+}
+
+void writePvtp(const VtkPolyData& layout, std::span<const std::filesystem::path> pieces,
+               const std::filesystem::path& path) {
+  try {
+    if (pieces.empty()) throw Error("no pieces to show");
+    std::string xml =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PPolyData\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PPolyData GhostLevel=\"0\">\n";
+    xml += parallelDataSection("PPointData", layout.pointData);
+    xml += parallelDataSection("PCellData", layout.cellData);
+    xml +=
+        "<PPoints>\n<PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
+        "</PPoints>\n";
+    for (const std::filesystem::path& piece : pieces)
+      xml += "<Piece Source=\"" + escaped(piece.generic_string()) + "\"/>\n";
+    xml += "</PPolyData>\n</VTKFile>\n";
+    writeText(xml, path);
   } catch (const Error& error) {
     throw Error("cannot write '" + path.string() + "': " + error.what());
   }

@@ -46,11 +46,12 @@ struct TemporaryFolder {
   std::filesystem::path path;
 };
 
-/// Runs `delta ARGUMENTS` (the build's DELTA_CLI) through the shell, capturing both streams;
-/// a death by signal reads as exit code 128 + the signal.
-inline CliRun runDelta(const std::string& arguments) {
+/// Runs `LAUNCHER delta ARGUMENTS` (the build's DELTA_CLI; LAUNCHER e.g. an mpirun command
+/// line, or nothing) through the shell, capturing both streams; a death by signal reads as exit
+/// code 128 + the signal.
+inline CliRun runDeltaUnder(const std::string& launcher, const std::string& arguments) {
   const TemporaryFolder streams("streams");
-  const std::string command = std::string("'") + DELTA_CLI + "' " + arguments + " >'" +
+  const std::string command = launcher + " '" + DELTA_CLI + "' " + arguments + " >'" +
                               (streams.path / "out").string() + "' 2>'" +
                               (streams.path / "err").string() + "'";
   const int status = std::system(command.c_str());
@@ -59,6 +60,11 @@ inline CliRun runDelta(const std::string& arguments) {
   run.out = slurp(streams.path / "out");
   run.err = slurp(streams.path / "err");
   return run;
+}
+
+/// Runs `delta ARGUMENTS` as runDeltaUnder does, with no launcher.
+inline CliRun runDelta(const std::string& arguments) {
+  return runDeltaUnder("", arguments);
 }
 
 /// The contract for bad input: a non-zero exit (not a crash), nothing on stdout, one line on

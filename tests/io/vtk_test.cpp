@@ -90,6 +90,93 @@ TEST(Vtk, RejectsMismatchedArraysAndWritesNothing) {
   EXPECT_THROW(writeVtp(VtkPolyData::fromPoints({}), "/nonexistent/dir/x.vtp"), Error);
 }
 
+/// The piece of a parallel run: points with a scalar and a vector per point and a scalar per
+/// vertex cell.
+VtkPolyData piece(std::vector<Vec3> points) {
+  VtkPolyData data = VtkPolyData::fromPoints(std::move(points));
+  const std::size_t count = data.points.size();
+  data.pointData.push_back({"radius", 1, std::vector<double>(count, 0.5)});
+  data.pointData.push_back({"velocity", 3, std::vector<double>(3 * count, 1.0)});
+  data.cellData.push_back({"rank & part", 1, std::vector<double>(count, 2.0)});
+  return data;
+}
+
+TEST(Vtk, WritesAParallelPolyDataThatListsItsPieces) {
+  const fs::path directory = tempFile("pieces");
+  fs::create_directories(directory / "frame");
+  const VtkPolyData first = piece({{0, 0, 0}, {1, 0, 0}});
+  const VtkPolyData second = piece({});  // a process that owns nothing writes an empty piece
+  writeVtp(first, directory / "frame" / "rank_0.vtp");
+  writeVtp(second, directory / "frame" / "rank_1.vtp");
+  const std::vector<fs::path> pieces = {"frame/rank_0.vtp", directory / "frame" / "rank_1.vtp"};
+  const fs::path path = directory / "frame.pvtp";
+  writePvtp(first, pieces, path);
+  const std::string file = readFile(path);
+  EXPECT_EQ(file.rfind("<?xml version=\"1.0\"?>\n<VTKFile type=\"PPolyData\" version=\"1.0\" "
+                       "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+                       "<PPolyData GhostLevel=\"0\">\n",
+                       0),
+            0u)
+      << file;
+  EXPECT_NE(file.find("<PPointData>\n"
+                      "<PDataArray type=\"Float64\" Name=\"radius\" NumberOfComponents=\"1\"/>\n"
+                      "<PDataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\"/>\n"
+                      "</PPointData>\n"),
+            std::string::npos)
+      << file;
+  EXPECT_NE(file.find("<PCellData>\n<PDataArray type=\"Float64\" Name=\"rank &amp; part\" "
+                      "NumberOfComponents=\"1\"/>\n</PCellData>\n"),
+            std::string::npos)
+      << file;
+  EXPECT_NE(file.find("<PPoints>\n<PDataArray type=\"Float64\" Name=\"Points\" "
+                      "NumberOfComponents=\"3\"/>\n</PPoints>\n"),
+            std::string::npos)
+      << file;
+  const std::string pieceList = "<Piece Source=\"frame/rank_0.vtp\"/>\n<Piece Source=\"" +
+                                (directory / "frame" / "rank_1.vtp").generic_string() + "\"/>\n";
+  EXPECT_NE(file.find(pieceList), std::string::npos) << file;
+  EXPECT_EQ(file.substr(file.size() - 24), "</PPolyData>\n</VTKFile>\n");
+
+  // Each array the .pvtp declares is in the piece, with as many values as its components say.
+  const std::string firstPiece = readFile(directory / "frame" / "rank_0.vtp");
+  const std::regex declared(
+      "<PDataArray type=\"Float64\" Name=\"([^\"]*)\" "
+      "NumberOfComponents=\"([0-9]+)\"");
+  int arrays = 0;
+  for (auto match = std::sregex_iterator(file.begin(), file.end(), declared);
+       match != std::sregex_iterator(); ++match, ++arrays) {
+    const std::string name = (*match)[1];  // escaped as in the piece: "rank &amp; part"
+    const std::size_t components = std::stoul((*match)[2]);
+    EXPECT_EQ(readVtkArray<double>(firstPiece, name).size(), 2 * components) << name;
+  }
+  EXPECT_EQ(arrays, 4);  // three arrays and the points
+
+  writePvtp(VtkPolyData{}, std::vector<fs::path>{"other.vtp"}, path);  // replaces the file
+  const std::string replaced = readFile(path);
+  EXPECT_NE(replaced.find("<PPointData>\n</PPointData>\n<PCellData>\n</PCellData>\n"),
+            std::string::npos)
+      << replaced;
+  EXPECT_EQ(replaced.find("rank_0"), std::string::npos);
+  fs::remove_all(directory);
+}
+
+TEST(Vtk, RejectsAParallelPolyDataWithoutPiecesOrUnwritable) {
+  const fs::path path = tempFile("bad.pvtp");
+  try {
+    writePvtp(piece({}), {}, path);
+    ADD_FAILURE() << "a .pvtp without pieces was written";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find(path.string()), std::string::npos) << error.what();
+  }
+  EXPECT_FALSE(fs::exists(path));
+  VtkPolyData noComponents = piece({});
+  noComponents.pointData[0].components = 0;
+  const std::vector<fs::path> pieces = {"a.vtp"};
+  EXPECT_THROW(writePvtp(noComponents, pieces, path), Error);
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_THROW(writePvtp(piece({}), pieces, "/nonexistent/dir/x.pvtp"), Error);
+}
+
 /// Two unit voxels side by side along x, sharing a face: 12 points on a 3 × 2 × 2 lattice.
 VtkVoxelGrid twoVoxels() {
   VtkVoxelGrid grid;

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 
 #include "delta/core/vec3.h"
@@ -90,10 +91,16 @@ class RestitutionMeter {
   /// Records the particles' relative velocity now, as "before". Throws delta::Error when
   /// either particle does not exist or they are the same.
   RestitutionMeter(const World& world, std::size_t first = 0, std::size_t second = 1);
+  /// The same from the particles alone, by index (e.g. DistributedWorld::gatherParticles).
+  RestitutionMeter(std::span<const Particle> particles, std::size_t first = 0,
+                   std::size_t second = 1);
 
   /// Looks at the world after a step: notes the first contact between the two particles and,
   /// once they are apart again, their relative velocity as "after".
   void observe(const World& world);
+  /// The same from the particles by index and the step's contacts (e.g. a DistributedWorld's,
+  /// gathered).
+  void observe(std::span<const Particle> particles, std::span<const Contact> contacts);
 
   bool collided() const noexcept { return collided_; }
   /// They touched and are apart now.

@@ -124,7 +124,24 @@ struct StepStatistics {
   double contactDetectionSeconds = 0.0;  ///< contacts() and filter(h) over all pairs
   double forceSeconds = 0.0;             ///< the contact law and summing the forces
   double integrationSeconds = 0.0;       ///< moving the particles and obstacles
+  /// Handing particles, ghosts and forces to other processes and waiting for theirs
+  /// (DistributedWorld); 0 in a World of one process.
+  double communicationSeconds = 0.0;
   double totalSeconds = 0.0;
+};
+
+/// One process's share of the work of a simulation split over processes
+/// (DistributedWorld::load); RankLoad{} in one process.
+///
+/// Threading: a value type; no shared state.
+struct RankLoad {
+  std::size_t particles = 0;  ///< owned now
+  std::size_t ghosts = 0;     ///< copies of other processes' particles held for the last step
+  std::size_t contacts = 0;   ///< contact points of the pairs this process evaluated, last step
+  std::size_t steps = 0;      ///< steps summed below
+  double contactDetectionSeconds = 0.0;  ///< Σ StepStatistics::contactDetectionSeconds
+  double communicationSeconds = 0.0;     ///< Σ StepStatistics::communicationSeconds
+  double stepSeconds = 0.0;              ///< Σ StepStatistics::totalSeconds
 };
 
 /// The energies of the current state.
@@ -224,10 +241,11 @@ class World {
   const Parameters& parameters() const noexcept { return parameters_; }
   const ContactLaw& contactLaw() const noexcept { return law_; }
   std::span<const ParticleShape> shapes() const noexcept { return shapes_; }
-  std::span<const Particle> particles() const noexcept { return particles_; }
+  std::span<const Particle> particles() const noexcept { return {particles_.data(), owned_}; }
   std::span<const Obstacle> obstacles() const noexcept { return obstacles_; }
   /// The contact points of the last force evaluation (after the last step), sorted by pair
   /// (particle pairs by their indices, then particle–obstacle pairs) and within a pair as found.
+  /// In a DistributedWorld's part, `first` and `second` are the particles' ids.
   std::span<const Contact> contacts() const noexcept { return contacts_; }
   const StepStatistics& statistics() const noexcept { return statistics_; }
   double time() const noexcept { return time_; }
@@ -244,8 +262,42 @@ class World {
  private:
   struct Interaction;
   struct PairOutcome;
+  // A DistributedWorld keeps its process's part of a simulation in a World: the particles it
+  // owns, then ghosts (copies of other processes' particles near its part), and steps it with an
+  // Exchange between the phases.
+  friend class DistributedWorld;
 
-  void evaluateForces(bool halfStepVelocities);
+  /// A contact point's force on a ghost, for the process that owns it: a pair is evaluated by
+  /// the process owning its first particle (the lower id), so the ghost is the pair's second,
+  /// and its owner subtracts `force` at `point` as this process would.
+  struct GhostForce {
+    std::uint64_t key = 0;       ///< the pair: first id << 32 | second id
+    std::uint32_t particle = 0;  ///< the ghost's id
+    Vec3 point;
+    Vec3 force;  ///< on the pair's first particle
+  };
+  /// What a process owning part of a simulation does between the phases of a step. Every call
+  /// is collective: all processes make it in the same order.
+  class Exchange {
+   public:
+    virtual ~Exchange() = default;
+    /// Before a force evaluation: hands on the owned particles that left this process's part,
+    /// takes in those that entered it, and replaces the ghosts.
+    virtual void refreshGhosts(World& world) = 0;
+    /// Sends the forces found here on other processes' particles; returns the forces they found
+    /// on this process's.
+    virtual std::vector<GhostForce> swapGhostForces(std::vector<GhostForce> found) = 0;
+    /// The smallest id of a particle that is no longer finite on any process (or `none`), given
+    /// this process's.
+    virtual std::uint32_t firstNonFinite(std::uint32_t local) = 0;
+  };
+
+  /// One step (step()), with `exchange` between the phases when not null.
+  void advance(Exchange* exchange);
+  void evaluateForces(bool halfStepVelocities, Exchange* exchange);
+  /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
+  /// finite.
+  void requireFiniteParticles(Exchange* exchange) const;
   std::vector<Interaction> findPairs();
   /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
   /// other pairs), viewing sphereObstacleFound_.
@@ -260,14 +312,18 @@ class World {
   Parameters parameters_;
   ContactLaw law_;
   std::vector<ParticleShape> shapes_;
-  std::vector<Particle> particles_;
+  std::vector<Particle> particles_;  ///< [0, owned_) integrated here; the rest are ghosts
+  std::vector<std::uint32_t> ids_;   ///< each particle's id: its index, unless distributed
+  std::size_t owned_ = 0;
   std::vector<Obstacle> obstacles_;
-  std::vector<QueryMesh> placed_;  ///< each particle's shape at its pose, for the narrow phase
+  /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
+  std::vector<QueryMesh> placed_;
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now
   /// Per obstacle, the sphere particles' contacts with it of this evaluation (scratch).
   std::vector<std::vector<ContactPoint>> sphereObstacleFound_;
   std::vector<Contact> contacts_;
-  /// Tangential springs of touching pairs, keyed (first << 32 | second), sorted.
+  /// Tangential springs of touching pairs, keyed (first id << 32 | second id or obstacle),
+  /// sorted.
   std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings_;
   std::vector<std::pair<std::uint64_t, TangentialSpring>> obstacleSprings_;
   StepStatistics statistics_;

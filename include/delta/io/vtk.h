@@ -12,9 +12,10 @@
 
 /// @file
 /// Output that ParaView opens: VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), binary, double
-/// precision, and ParaView collections (.pvd) that play files as a time series. Each writer
-/// replaces an existing file, writes empty data as a valid empty file, and writes coordinates
-/// and values as they are (NaN included).
+/// precision, parallel PolyData (.pvtp) that joins .vtp pieces into one data set, and ParaView
+/// collections (.pvd) that play files as a time series. Each writer replaces an existing file,
+/// writes empty data as a valid empty file (a .pvtp needs one piece at least), and writes
+/// coordinates and values as they are (NaN included).
 ///
 /// Threading: the writers read their arguments only; they may run on several threads at once,
 /// for different paths.
@@ -59,6 +60,17 @@ struct VtkPolyData {
 /// data, Float64 values, Int64 connectivity). Throws delta::Error naming the path when an array's
 /// size does not match its points or cells, a triangle refers past the points, or writing fails.
 void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
+
+/// Writes a ParaView parallel PolyData file (.pvtp) that shows `pieces` — .vtp files written by
+/// writeVtp, each path relative to the .pvtp file or absolute, in the order given — as one data
+/// set: what each process of a parallel run writes its own piece of, and one process writes the
+/// .pvtp for. `layout` is the data of any one piece: only the names and components of its point
+/// and cell arrays are read, and every piece must have been written with the same arrays (names
+/// and components). A piece may hold no points; the pieces need not exist yet. Throws delta::Error
+/// naming the path when there are no pieces, an array has fewer than one component, or writing
+/// fails (removing what was written); replaces an existing file.
+void writePvtp(const VtkPolyData& layout, std::span<const std::filesystem::path> pieces,
+               const std::filesystem::path& path);
 
 /// Axis-aligned hexahedra (VTK_VOXEL, cell type 11): eight point indices each, corner c at offset
 /// (c & 1, (c >> 1) & 1, (c >> 2) & 1) from the lowest corner — VTK's voxel order. The writer does
