@@ -390,7 +390,7 @@ void DistributedWorld::receiveGhosts() {
   std::vector<int> near;
   for (std::size_t i = 0; i < part.owned_; ++i) {
     const Particle& particle = part.particles_[i];
-    if (!isFinite(particle.position)) continue;  // the step's end reports it on every rank
+    if (!isFinite(particle.position)) continue;  // the finiteness check reports it, on every rank
     const double reach = part.shapes_[particle.shape].boundingRadius() + shell;
     decomposition_.partsWithin(particle.position, reach, near);
     for (const int r : near)
