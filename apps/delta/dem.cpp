@@ -402,6 +402,7 @@ void printJson(const dem::Scenario& scenario, std::size_t triangles, double buil
           .value("rank", r)
           .value("particles", load.particles)
           .value("ghosts", load.ghosts)
+          .value("neighbours", load.neighbours)
           .value("contacts", load.contacts)
           .value("contact_detection_s", load.contactDetectionSeconds)
           .value("communication_s", load.communicationSeconds)
@@ -444,15 +445,15 @@ void printText(const dem::Scenario& scenario, std::size_t triangles, double buil
   if (run.ranks > 0) {
     std::printf(
         "%d ranks, split again %zu times; per rank (last step: particles, ghosts, "
-        "contact points; whole run: seconds):\n",
+        "ranks exchanged with, contact points; whole run: seconds):\n",
         run.ranks, run.rebalances);
     std::printf(
-        "  rank  particles   ghosts  contacts  contact detection  communication    "
+        "  rank  particles   ghosts  neighbours  contacts  contact detection  communication    "
         "step\n");
     for (std::size_t r = 0; r < run.loads.size(); ++r) {
       const dem::RankLoad& load = run.loads[r];
-      std::printf("  %4zu  %9zu  %7zu  %8zu  %17.3f  %13.3f  %6.3f\n", r, load.particles,
-                  load.ghosts, load.contacts, load.contactDetectionSeconds,
+      std::printf("  %4zu  %9zu  %7zu  %10zu  %8zu  %17.3f  %13.3f  %6.3f\n", r, load.particles,
+                  load.ghosts, load.neighbours, load.contacts, load.contactDetectionSeconds,
                   load.communicationSeconds, load.stepSeconds);
     }
   }

@@ -54,7 +54,9 @@ TEST(DemMpiCli, SettleRunsTheSameOnOneTwoAndFourRanks) {
                             "contact_pairs_per_step", "max_depth_ratio"})
       EXPECT_EQ(jsonNumber(run.out, key), jsonNumber(serial.out, key)) << key << ", " << ranks;
     // One load a rank, and every particle owned by one rank.
-    const std::regex load("\"rank\":[0-9]+,\"particles\":([0-9]+),\"ghosts\":([0-9]+)");
+    const std::regex load(
+        "\"rank\":[0-9]+,\"particles\":([0-9]+),\"ghosts\":([0-9]+),"
+        "\"neighbours\":[0-9]+");
     double owned = 0.0, ghosts = 0.0;
     int loads = 0;
     for (auto it = std::sregex_iterator(run.out.begin(), run.out.end(), load);

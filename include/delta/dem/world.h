@@ -135,10 +135,11 @@ struct StepStatistics {
 ///
 /// Threading: a value type; no shared state.
 struct RankLoad {
-  std::size_t particles = 0;  ///< owned now
-  std::size_t ghosts = 0;     ///< copies of other processes' particles held for the last step
-  std::size_t contacts = 0;   ///< contact points of the pairs this process evaluated, last step
-  std::size_t steps = 0;      ///< steps summed below
+  std::size_t particles = 0;   ///< owned now
+  std::size_t ghosts = 0;      ///< copies of other processes' particles held for the last step
+  std::size_t neighbours = 0;  ///< processes whose regions are near enough to exchange with
+  std::size_t contacts = 0;    ///< contact points of the pairs this process evaluated, last step
+  std::size_t steps = 0;       ///< steps summed below
   double contactDetectionSeconds = 0.0;  ///< Σ StepStatistics::contactDetectionSeconds
   double communicationSeconds = 0.0;     ///< Σ StepStatistics::communicationSeconds
   double stepSeconds = 0.0;              ///< Σ StepStatistics::totalSeconds

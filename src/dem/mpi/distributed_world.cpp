@@ -44,21 +44,42 @@ struct Received {
 };
 
 /// Sends outgoing[r] to rank r, for every r, and returns what every rank sent this one: sizes
-/// first (one MPI_Alltoall), then the data between the ranks that have any. Collective over
-/// `communicator`.
+/// first, then the data between the ranks that have any. With `neighbours` (ranks, the same
+/// relation on every rank: r is j's neighbour when j is r's), only they exchange anything, each
+/// with each of its own: O(neighbours) messages instead of an MPI_Alltoall over all ranks;
+/// outgoing[r] must then be empty for every other r. Collective over `communicator`.
 template <class T>
-Received<T> sendToRanks(MPI_Comm communicator, const std::vector<std::vector<T>>& outgoing) {
+Received<T> sendToRanks(MPI_Comm communicator, const std::vector<std::vector<T>>& outgoing,
+                        const std::vector<int>* neighbours = nullptr) {
   static_assert(std::is_trivially_copyable_v<T>);
   const int ranks = static_cast<int>(outgoing.size());
-  std::vector<int> sendCounts(outgoing.size()), receiveCounts(outgoing.size());
+  std::vector<int> sendCounts(outgoing.size()), receiveCounts(outgoing.size(), 0);
   for (int r = 0; r < ranks; ++r) {
     const std::size_t bytes = outgoing[r].size() * sizeof(T);
     if (bytes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
       throw Error("dem: more than 2 GiB for one rank in one exchange");
     sendCounts[r] = static_cast<int>(outgoing[r].size());
   }
-  check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, communicator),
+  if (neighbours) {
+    std::vector<MPI_Request> requests;
+    constexpr int kCountTag = 7000;
+    for (const int r : *neighbours) {
+      requests.emplace_back();
+      check(MPI_Irecv(&receiveCounts[r], 1, MPI_INT, r, kCountTag, communicator, &requests.back()),
+            "MPI_Irecv");
+    }
+    for (const int r : *neighbours) {
+      requests.emplace_back();
+      check(MPI_Isend(&sendCounts[r], 1, MPI_INT, r, kCountTag, communicator, &requests.back()),
+            "MPI_Isend");
+    }
+    check(MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE),
+          "MPI_Waitall");
+  } else {
+    check(
+        MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, communicator),
         "MPI_Alltoall");
+  }
   std::vector<std::size_t> offset(outgoing.size() + 1, 0);
   for (int r = 0; r < ranks; ++r)
     offset[r + 1] = offset[r] + static_cast<std::size_t>(receiveCounts[r]);
@@ -117,6 +138,17 @@ void permute(std::vector<T>& values, const std::vector<std::size_t>& order) {
 
 using SpringList = std::vector<std::pair<std::uint64_t, TangentialSpring>>;
 
+/// The distance between two boxes (faces at ±infinity allowed): 0 where they touch or overlap.
+double boxDistance(const Aabb& a, const Aabb& b) {
+  double squared = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const double gap =
+        std::max({a.lower[axis] - b.upper[axis], b.lower[axis] - a.upper[axis], 0.0});
+    squared += gap * gap;
+  }
+  return std::sqrt(squared);
+}
+
 /// The springs whose pair's first id is leaving (`leaving`: (id, new owner), by id), removed
 /// from `springs` and added to what goes to the new owner.
 void takeSprings(SpringList& springs, const std::vector<std::pair<std::uint32_t, int>>& leaving,
@@ -155,7 +187,7 @@ class DistributedWorld::Exchange final : public World::Exchange {
                                           std::pair<std::uint32_t, int>{force.particle, -1});
       outgoing[static_cast<std::size_t>(owner->second)].push_back(force);
     }
-    return sendToRanks(owner_.communicator_, outgoing).items;
+    return sendToRanks(owner_.communicator_, outgoing, &owner_.neighbours_).items;
   }
 
   std::uint32_t firstNonFinite(std::uint32_t local) override {
@@ -289,6 +321,7 @@ void DistributedWorld::step() {
   const StepStatistics& statistics = part_.statistics();
   load_.particles = part_.owned_;
   load_.ghosts = part_.particles_.size() - part_.owned_;
+  load_.neighbours = neighbours_.size();
   load_.contacts = part_.contacts().size();
   ++load_.steps;
   load_.contactDetectionSeconds += statistics.contactDetectionSeconds;
@@ -301,7 +334,7 @@ void DistributedWorld::run(std::size_t steps) {
     step();
 }
 
-void DistributedWorld::migrate() {
+void DistributedWorld::migrate(bool everywhere) {
   World& part = part_;
   part.particles_.resize(part.owned_);  // the ghosts are refreshed after
   part.ids_.resize(part.owned_);
@@ -324,8 +357,16 @@ void DistributedWorld::migrate() {
   takeSprings(part.particleSprings_, leaving, false, springsOut);
   takeSprings(part.obstacleSprings_, leaving, true, springsOut);
 
-  const std::vector<ParticleRecord> arrived = sendToRanks(communicator_, outgoing).items;
-  const std::vector<SpringRecord> springsIn = sendToRanks(communicator_, springsOut).items;
+  // A step moves a particle far less than the ghosts' reach, so into a neighbour's region; after
+  // a new bisection, or a particle that jumped, every rank may send to any (all ranks agree).
+  int far = everywhere ? 1 : 0;
+  for (const auto& [id, owner] : leaving)
+    far = far || !std::binary_search(neighbours_.begin(), neighbours_.end(), owner);
+  if (!everywhere)
+    check(MPI_Allreduce(MPI_IN_PLACE, &far, 1, MPI_INT, MPI_MAX, communicator_), "MPI_Allreduce");
+  const std::vector<int>* to = far ? nullptr : &neighbours_;
+  const std::vector<ParticleRecord> arrived = sendToRanks(communicator_, outgoing, to).items;
+  const std::vector<SpringRecord> springsIn = sendToRanks(communicator_, springsOut, to).items;
   part.particles_.resize(kept);
   part.ids_.resize(kept);
   for (const ParticleRecord& record : arrived) {
@@ -379,8 +420,16 @@ void DistributedWorld::rebalance() {
           "MPI_Allreduce");
   };
   decomposition_ = Bisection(centres, size_, reduction);
+  // The ranks whose regions lie within the largest reach of a ghost of this one's (2·rMax + 2ε):
+  // the only ones a step exchanges particles, ghosts and forces with.
+  const double reach = 2.0 * (largestRadius_ + part_.contactLaw().epsilon);
+  const Aabb mine = decomposition_.region(rank_);
+  neighbours_.clear();
+  for (int r = 0; r < size_; ++r)
+    if (r != rank_ && boxDistance(mine, decomposition_.region(r)) <= reach)
+      neighbours_.push_back(r);
   ++rebalances_;
-  migrate();
+  migrate(true);
 }
 
 void DistributedWorld::receiveGhosts() {
@@ -396,7 +445,7 @@ void DistributedWorld::receiveGhosts() {
     for (const int r : near)
       if (r != rank_) outgoing[static_cast<std::size_t>(r)].push_back({part.ids_[i], particle});
   }
-  const Received<ParticleRecord> ghosts = sendToRanks(communicator_, outgoing);
+  const Received<ParticleRecord> ghosts = sendToRanks(communicator_, outgoing, &neighbours_);
   ghostOwners_.clear();  // the forces on them go back to these ranks
   std::size_t next = 0;
   for (int r = 0; r < size_; ++r)

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <random>
 #include <vector>
@@ -245,6 +246,36 @@ TEST(DistributedWorld, HopperFollowsTheOneProcessRun) {
   if (rankOfThis() != 0) return;
   EXPECT_EQ(result.mismatchedParticles, 0u);
   EXPECT_EQ(result.mismatchedContacts, 0u);
+}
+
+TEST(DistributedWorld, ALongRowExchangesWithItsNeighboursOnly) {
+  // 40 spheres in a row along x, colliding in pairs, and one more beside the row (no contact)
+  // flying along it across several ranks' regions in each step: the ranks, slabs along x,
+  // exchange with the slabs beside them only, and with everyone when a particle jumps further.
+  Parameters parameters = crowdedBox(ParticleKind::Sphere).parameters();
+  parameters.gravity = {};
+  World world(parameters);
+  world.addShape(ParticleShape::sphere(0.009, 2500.0));
+  for (int i = 0; i < 40; ++i)
+    world.addParticle(0, {Vec3{0.0195 * i, 0.0, 0.0}, {}, Vec3{i % 2 ? -0.3 : 0.3, 0.0, 0.0}, {}});
+  const double jump = 0.3 / world.parameters().timeStep;  // 0.3 m a step
+  world.addParticle(0, {Vec3{0.0, 0.1, 0.0}, {}, Vec3{jump, 0.0, 0.0}, {}});
+  DecompositionOptions options;
+  options.rebalanceTolerance = std::numeric_limits<double>::infinity();
+  const Comparison result = compare(world, 300, 10, options);
+  DistributedWorld distributed(MPI_COMM_WORLD, world, options);
+  std::uint64_t neighbours = distributed.neighbours().size();
+  MPI_Allreduce(MPI_IN_PLACE, &neighbours, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
+  if (rankOfThis() != 0) return;
+  EXPECT_EQ(result.mismatchedParticles, 0u);
+  EXPECT_EQ(result.mismatchedContacts, 0u);
+  EXPECT_GT(result.contacts, 100u);
+  EXPECT_EQ(result.rebalances, 0u);
+  // Slabs of about 10 particles, 0.2 m wide against a reach of 0.02 m: two neighbours at most.
+  EXPECT_LE(neighbours, std::min<std::uint64_t>(2, static_cast<std::uint64_t>(ranks() - 1)));
+  if (ranks() > 1) {
+    EXPECT_GT(result.contactsAcrossRanks, 0u);
+  }
 }
 
 TEST(DistributedWorld, MomentumIsConservedWithPairsAcrossRanks) {

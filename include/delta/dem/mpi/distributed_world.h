@@ -36,8 +36,9 @@ struct DecompositionOptions {
 /// their new owners (with the friction springs of the pairs they evaluate) and receives ghost
 /// copies of every particle within reach of its region: the particle's bounding radius, plus
 /// the largest bounding radius, plus 2ε. A pair of particles is evaluated by the rank owning its
-/// lower id (the same rule as World's), once; the forces on a ghost go back to its owner. The
-/// particles are split again when the counts drift apart (DecompositionOptions).
+/// lower id (the same rule as World's), once; the forces on a ghost go back to its owner. All of
+/// this passes between neighbouring ranks only (neighbours()). The particles are split again
+/// when the counts drift apart (DecompositionOptions).
 ///
 /// The obstacles, shapes and parameters are the same on every rank; each rank places only its
 /// own particles and ghosts, so its meshes' spatial caches follow its region.
@@ -96,6 +97,10 @@ class DistributedWorld {
   /// This rank's part: its parameters, shapes and obstacles are the whole simulation's.
   const World& part() const noexcept { return part_; }
   const Bisection& decomposition() const noexcept { return decomposition_; }
+  /// The ranks whose regions lie within 2·(rMax + ε) of this one's (rMax the largest bounding
+  /// radius), ascending: the only ones a step exchanges particles, ghosts and forces with (a
+  /// new bisection, or a particle that moved further than that in a step, exchanges with all).
+  std::span<const int> neighbours() const noexcept { return neighbours_; }
   /// How many times the particles were split again after the start.
   std::size_t rebalances() const noexcept { return rebalances_; }
   RankLoad load() const noexcept { return load_; }
@@ -123,8 +128,9 @@ class DistributedWorld {
  private:
   class Exchange;
 
-  /// Hands every owned particle whose centre is outside this rank's region to its owner.
-  void migrate();
+  /// Hands every owned particle whose centre is outside this rank's region to its owner: to the
+  /// neighbours only, unless `everywhere` (after a new bisection) or a particle jumped further.
+  void migrate(bool everywhere = false);
   /// Splits the particles again if the counts drifted apart (every rank decides alike).
   void rebalanceIfNeeded();
   void rebalance();
@@ -142,6 +148,9 @@ class DistributedWorld {
   std::size_t rebalances_ = 0;
   double largestRadius_ = 0.0;
   std::vector<std::pair<std::uint32_t, int>> ghostOwners_;  ///< (id, rank), by id
+  /// The ranks whose regions lie within 2·(rMax + ε) of this one's, ascending: the ones its
+  /// steps exchange with (the same relation on every rank).
+  std::vector<int> neighbours_;
   RankLoad load_;
 };
 
