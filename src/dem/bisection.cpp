@@ -93,15 +93,26 @@ namespace detail {
 /// calls (see the header for the calls).
 class BisectionBuilder {
  public:
-  BisectionBuilder(std::span<const Vec3> points, int parts, const BisectionReduction& reduction)
+  /// `weights` empty: every point weighs 1.
+  BisectionBuilder(std::span<const Vec3> points, std::span<const std::uint32_t> weights, int parts,
+                   const BisectionReduction& reduction)
       : parts_(parts), reduction_(reduction) {
+    if (!weights.empty() && weights.size() != points.size())
+      badWeight_ = std::min(weights.size(), points.size());
     points_.reserve(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Vec3& p = points[i];
       if (!badPoint_ && !(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
         badPoint_ = i;
-      points_.push_back({canonical(p.x), canonical(p.y), canonical(p.z)});
+      const std::uint32_t weight = i < weights.size() ? weights[i] : 1;
+      if (!badWeight_ && weight == 0) badWeight_ = i;
+      points_.push_back({{canonical(p.x), canonical(p.y), canonical(p.z)}, weight});
     }
+    if (badWeight_ && weights.size() != points.size())
+      weightMessage_ = std::to_string(weights.size()) + " weights for " +
+                       std::to_string(points.size()) + " points";
+    else if (badWeight_)
+      weightMessage_ = "the weight of point " + std::to_string(*badWeight_) + " is 0";
   }
 
   void build(Bisection& bisection);
@@ -179,8 +190,15 @@ class BisectionBuilder {
 
   int parts_;
   const BisectionReduction& reduction_;
-  std::vector<Vec3> points_;  ///< this process's, canonical, reordered node by node
+  /// A point of this process and its weight (the counts below are sums of weights).
+  struct WeightedPoint {
+    Vec3 point;
+    std::uint64_t weight = 1;
+  };
+  std::vector<WeightedPoint> points_;  ///< this process's, canonical, reordered node by node
   std::optional<std::size_t> badPoint_;
+  std::optional<std::size_t> badWeight_;
+  std::string weightMessage_;
   Aabb domain_;  ///< the bounding box of all points, or [−1, 1]³ without any
 };
 
@@ -195,7 +213,9 @@ void BisectionBuilder::build(Bisection& bisection) {
   reduceRoot(level[0]);
   domain_ = level[0].box.empty() ? Aabb{{-1, -1, -1}, {1, 1, 1}} : level[0].box;
   if (parts_ > 1) {
-    level[0].count = points_.size();
+    level[0].count = 0;
+    for (const WeightedPoint& p : points_)
+      level[0].count += p.weight;
     sum({&level[0].count, 1});
   }
   std::vector<Split> splits;
@@ -217,18 +237,20 @@ void BisectionBuilder::build(Bisection& bisection) {
 void BisectionBuilder::reduceRoot(LevelNode& root) {
   Aabb box;  // of finite points only: an empty box where there is a bad one
   if (!badPoint_)
-    for (const Vec3& p : points_)
-      box.extend(p);
-  const double bad = badPoint_ ? 1.0 : 0.0, parts = parts_;
+    for (const WeightedPoint& p : points_)
+      box.extend(p.point);
+  const double bad = badPoint_ || badWeight_ ? 1.0 : 0.0, parts = parts_;
   std::vector<double> values = {bad,         parts,        -parts,       box.upper.x, box.upper.y,
                                 box.upper.z, -box.lower.x, -box.lower.y, -box.lower.z};
   maximum(values);
   if (badPoint_) {
-    const Vec3& p = points_[*badPoint_];
+    const Vec3& p = points_[*badPoint_].point;
     throw Error("Bisection: point " + std::to_string(*badPoint_) +
                 " is not finite: " + toString(p));
   }
-  if (values[0] > 0.0) throw Error("Bisection: a point of another process is not finite");
+  if (badWeight_) throw Error("Bisection: " + weightMessage_);
+  if (values[0] > 0.0)
+    throw Error("Bisection: a point of another process is not finite, or its weight is 0");
   if (values[1] != parts || -values[2] != parts)
     throw Error("Bisection: the processes disagree on the number of parts (" +
                 std::to_string(parts_) + " here, from " + toString(-values[2]) + " to " +
@@ -246,7 +268,7 @@ void BisectionBuilder::reduceBoxes(std::span<LevelNode> level) {
     for (const LevelNode& node : batch) {
       Aabb box;
       for (std::size_t i = node.begin; i < node.end; ++i)
-        box.extend(points_[i]);
+        box.extend(points_[i].point);
       values.insert(values.end(), {box.upper.x, box.upper.y, box.upper.z, -box.lower.x,
                                    -box.lower.y, -box.lower.z});
     }
@@ -324,7 +346,9 @@ std::vector<BisectionBuilder::Split> BisectionBuilder::cutLevel(std::span<const 
       middle = static_cast<std::size_t>(
           std::partition(points_.begin() + static_cast<std::ptrdiff_t>(node.begin),
                          points_.begin() + static_cast<std::ptrdiff_t>(node.end),
-                         [&](const Vec3& p) { return orderedKey(p[axis]) < decision.threshold; }) -
+                         [&](const WeightedPoint& p) {
+                           return orderedKey(p.point[axis]) < decision.threshold;
+                         }) -
           points_.begin());
     const int child = static_cast<int>(nodes.size());
     nodes.resize(nodes.size() + 2);
@@ -384,8 +408,8 @@ void BisectionBuilder::searchRound(std::span<Search*> searches, std::span<const 
     const auto axis = static_cast<std::size_t>(s.decision->axis);
     std::uint64_t* bins = &counts[kBins * i];
     for (std::size_t p = node.begin; p < node.end; ++p) {
-      const std::uint64_t key = orderedKey(points_[p][axis]);
-      if (key >= s.low && key <= s.high) ++bins[(key - s.low) / widths[i]];
+      const std::uint64_t key = orderedKey(points_[p].point[axis]);
+      if (key >= s.low && key <= s.high) bins[(key - s.low) / widths[i]] += points_[p].weight;
     }
   }
   sum(counts);
@@ -426,7 +450,15 @@ Bisection::Bisection(std::span<const Vec3> points, int parts, const BisectionRed
   if (parts < 1 || parts > kMaxParts)
     throw Error("Bisection: parts " + std::to_string(parts) + " is not in [1, " +
                 std::to_string(kMaxParts) + "]");
-  detail::BisectionBuilder(points, parts, reduction).build(*this);
+  detail::BisectionBuilder(points, {}, parts, reduction).build(*this);
+}
+
+Bisection::Bisection(std::span<const Vec3> points, std::span<const std::uint32_t> weights,
+                     int parts, const BisectionReduction& reduction) {
+  if (parts < 1 || parts > kMaxParts)
+    throw Error("Bisection: parts " + std::to_string(parts) + " is not in [1, " +
+                std::to_string(kMaxParts) + "]");
+  detail::BisectionBuilder(points, weights, parts, reduction).build(*this);
 }
 
 int Bisection::partOf(const Vec3& x) const noexcept {

@@ -288,6 +288,64 @@ TEST(DemBisection, RejectsBadInput) {
   EXPECT_THROW(bisection.region(4), Error);
 }
 
+TEST(DemBisection, EqualWeightsGiveTheCutsOfCounts) {
+  const std::vector<Vec3> points = randomPoints(500, 51);
+  const std::vector<std::uint32_t> threes(points.size(), 3);
+  for (int parts = 1; parts <= 9; ++parts) {
+    const Bisection counted(points, parts), weighted(points, threes, parts);
+    for (int part = 0; part < parts; ++part) {
+      const Aabb a = counted.region(part), b = weighted.region(part);
+      EXPECT_EQ(a.lower, b.lower) << parts << " parts, part " << part;
+      EXPECT_EQ(a.upper, b.upper) << parts << " parts, part " << part;
+    }
+  }
+}
+
+TEST(DemBisection, PartsGetAboutEqualWeight) {
+  // Points with x < 1 weigh 40 (the busy half of a hopper), the others 1: the parts over the
+  // heavy half hold fewer points, every part about the same weight.
+  std::vector<Vec3> points = randomPoints(2000, 53);
+  for (Vec3& p : points)
+    p.x *= 2.0;  // so that the first cut is along x
+  std::vector<std::uint32_t> weights;
+  std::uint64_t total = 0;
+  for (const Vec3& p : points) {
+    weights.push_back(p.x < 1.0 ? 40 : 1);
+    total += weights.back();
+  }
+  for (int parts = 2; parts <= 9; ++parts) {
+    const Bisection bisection(points, weights, parts);
+    std::vector<std::uint64_t> weightOf(static_cast<std::size_t>(parts), 0);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      weightOf[static_cast<std::size_t>(bisection.partOf(points[i]))] += weights[i];
+    const double mean = static_cast<double>(total) / parts;
+    const int levels = std::bit_width(static_cast<unsigned>(parts - 1));
+    for (int part = 0; part < parts; ++part)  // each cut is off by at most one point's weight
+      EXPECT_LE(std::fabs(static_cast<double>(weightOf[static_cast<std::size_t>(part)]) - mean),
+                40.0 * levels)
+          << parts << " parts, part " << part;
+    // The same parts by count would be far apart in weight.
+    const Bisection counted(points, parts);
+    std::vector<std::uint64_t> countedWeight(static_cast<std::size_t>(parts), 0);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      countedWeight[static_cast<std::size_t>(counted.partOf(points[i]))] += weights[i];
+    EXPECT_GT(static_cast<double>(*std::max_element(countedWeight.begin(), countedWeight.end())),
+              1.5 * mean);
+  }
+}
+
+TEST(DemBisection, RejectsBadWeights) {
+  const std::vector<Vec3> points = randomPoints(10, 57);
+  std::vector<std::uint32_t> weights(points.size(), 2);
+  weights[4] = 0;
+  EXPECT_THROW(Bisection(points, weights, 3), Error);
+  weights.pop_back();
+  weights[4] = 2;
+  EXPECT_THROW(Bisection(points, weights, 3), Error);
+  weights.push_back(2);
+  EXPECT_NO_THROW(Bisection(points, weights, 3));
+}
+
 TEST(DemBisection, CostsOneMaximumAndAFewSumsALevel) {
   const std::vector<Vec3> points = randomPoints(20000, 21);
   int sums = 0, maxima = 0;

@@ -90,6 +90,16 @@ class Bisection {
   /// the others in a call they never make.
   Bisection(std::span<const Vec3> points, int parts, const BisectionReduction& reduction = {});
 
+  /// The same with a weight for each point (e.g. its share of the work): the rule above holds
+  /// with every count read as a sum of weights, so the parts get about equal total weight. A
+  /// cut cannot split a point: where the boundary falls inside one coordinate's weight, the
+  /// lower side gets the sum nearest T that a cut gives (below, where both are as near), as for
+  /// duplicates. Equal weights give the cuts of the unweighted call. Throws delta::Error as the
+  /// unweighted call does, and also, on every process together, when a weight is 0 or the
+  /// weights are not as many as the points.
+  Bisection(std::span<const Vec3> points, std::span<const std::uint32_t> weights, int parts,
+            const BisectionReduction& reduction = {});
+
   int parts() const noexcept { return static_cast<int>(regions_.size()); }
 
   /// The part whose region holds x: regions tile all of space, half-open (a point on a cut
