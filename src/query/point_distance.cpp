@@ -1,5 +1,6 @@
 #include "delta/query/point_distance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -39,23 +40,36 @@ void validatePoints(std::size_t count, const PointAt& pointAt) {
                   ") has a non-finite coordinate");
 }
 
+/// The triangle (tree order) that answered the previous point of a run, whose exact distance to
+/// the next point is a first bound for its search: consecutive points along a Morton curve lie
+/// close together, and so do their nearest triangles.
+struct Hint {
+  std::uint32_t sorted = kNoTriangle;
+};
+
 /// One point's answer. A moved mesh is searched in the frame it was prepared in: the point goes
 /// in by the inverse pose, the closest point comes out by the pose (distances are unchanged).
-/// With an upper bound of the distance below ε, the search first prunes with it; a bound that
-/// was too small finds nothing and the search runs again with ε, so the answer is the same.
+/// The search starts from the smallest of ε, the upper bound given and the distance to the
+/// hint's triangle, each grown a little so that a triangle exactly at it is found; a given bound
+/// that was too small finds nothing and the search runs again with ε (the hint's cannot be too
+/// small: it is the distance to a triangle). So the answer is the same whatever the bounds.
 PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQuery& query,
-                     double upperBound = std::numeric_limits<double>::infinity()) {
+                     double upperBound = std::numeric_limits<double>::infinity(),
+                     Hint* hint = nullptr) {
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
-  detail::Nearest nearest;
-  if (upperBound < query.epsilon) {
-    // Strictly above the bound, so that a point exactly at it is found on the first search.
-    nearest = detail::nearestTriangle(data, point, upperBound * upperBound * kBoundGrowth);
-    if (!nearest.found()) nearest = detail::nearestTriangle(data, point, limit);
-  } else {
-    nearest = detail::nearestTriangle(data, point, limit);
-  }
+  const auto grown = [](double distanceSquared) {
+    return std::nextafter(distanceSquared * kBoundGrowth, std::numeric_limits<double>::infinity());
+  };
+  double first = limit;
+  if (upperBound < query.epsilon) first = grown(upperBound * upperBound);
+  if (hint && hint->sorted != kNoTriangle)
+    first = std::min(
+        first, grown(kernels::closestPointOnTriangle(point, data.sorted.triangle(hint->sorted))
+                         .distanceSquared));
+  detail::Nearest nearest = detail::nearestTriangle(data, point, first);
+  if (!nearest.found() && first < limit) nearest = detail::nearestTriangle(data, point, limit);
   PointDistance result;
   if (!nearest.found()) {
     if (std::isinf(query.epsilon))
@@ -63,6 +77,7 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
                   " to the mesh overflows a double");
     return result;
   }
+  if (hint) hint->sorted = nearest.sorted;
   result.distance = std::sqrt(nearest.distanceSquared);
   result.closest =
       mesh.moved() ? mesh.pose().apply(nearest.closest.closest) : nearest.closest.closest;
@@ -93,8 +108,9 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   // fast as sorted input. Each answer is that point's alone, so the order changes no result.
   const std::vector<std::uint32_t> order = detail::mortonOrder(count, pointAt);
   parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
+    Hint hint;
     for (std::size_t k = begin; k < end; ++k)
-      out[order[k]] = answer(mesh, pointAt(order[k]), query, boundOf(order[k]));
+      out[order[k]] = answer(mesh, pointAt(order[k]), query, boundOf(order[k]), &hint);
   });
 }
 

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/query/winding_number.h"
 
 #include "query_mesh_data.h"
@@ -30,17 +31,37 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
          (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
 }
 
-/// The triangles of leaf `leaf`, nearest box first: most are farther than the best already
-/// found by their own box (grown by the slack), a cheap bound that skips the kernel.
-void visitLeaf(const QueryMeshData& mesh, const Vec3& point, std::size_t leaf,
-               Nearest& best) noexcept {
+/// What a descent reads besides the tree: the sorted triangles as plain streams, and the ISA's
+/// bounds of a point against a leaf's eight triangles.
+struct Leaves {
+  SoaView triangles;
+  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8]) noexcept;
+};
+
+/// The triangles of leaf `leaf`, nearest first: most are farther than the best already found by
+/// their own box (grown by the slack), and, where two or more boxes are not, by a vector bound
+/// of the eight distances (kernels/detail/point_lanes.h), so that the exact kernel runs on the
+/// few triangles that can still win.
+[[gnu::always_inline]] inline void visitLeaf(const QueryMeshData& mesh, const Leaves& leaves,
+                                             const Vec3& point, std::size_t leaf,
+                                             Nearest& best) noexcept {
   double bounds[kFanout];
   distancesSquared(mesh.leafOctets[leaf], point, bounds);
+  int near = 0;
+  for (std::size_t i = 0; i < kFanout; ++i)
+    near += bounds[i] <= best.distanceSquared;  // not the empty slots past the last triangle
+  if (near == 0) return;
+  if (near > 1) {
+    double triangles[kFanout];
+    leaves.bounds(leaves.triangles, leaf * kFanout, {point.x, point.y, point.z}, triangles);
+    for (std::size_t i = 0; i < kFanout; ++i)  // the larger bound; the box's where NaN
+      if (triangles[i] > bounds[i]) bounds[i] = triangles[i];
+  }
   std::uint32_t candidates[kFanout];
   std::size_t count = 0;
   for (std::uint32_t i = 0; i < kFanout; ++i) {
-    if (bounds[i] > best.distanceSquared) continue;  // also the empty slots past the last triangle
-    std::size_t at = count++;                        // insertion into ascending order
+    if (!(bounds[i] <= best.distanceSquared)) continue;
+    std::size_t at = count++;  // insertion into ascending order
     for (; at > 0 && bounds[candidates[at - 1]] > bounds[i]; --at)
       candidates[at] = candidates[at - 1];
     candidates[at] = i;
@@ -59,10 +80,10 @@ void visitLeaf(const QueryMeshData& mesh, const Vec3& point, std::size_t leaf,
   }
 }
 
-}  // namespace
-
-Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
-                        double limitSquared) noexcept {
+/// The descent, inlined into one function per instruction set below: the same source, whose box
+/// tests the compiler turns into eight-lane code where it may use AVX-512.
+[[gnu::always_inline]] inline Nearest descend(const QueryMeshData& mesh, const Leaves& leaves,
+                                              const Vec3& point, double limitSquared) noexcept {
   Nearest best;
   best.distanceSquared = limitSquared;
   // Nearest-first, depth first: children are pushed farthest first, and every entry is checked
@@ -77,7 +98,7 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
     const Pending entry = stack[--top];
     if (entry.bound > best.distanceSquared) continue;
     if (entry.level() == 0) {
-      visitLeaf(mesh, point, entry.index(), best);
+      visitLeaf(mesh, leaves, point, entry.index(), best);
       continue;
     }
     double bounds[kFanout];
@@ -97,6 +118,56 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
       stack[top++] = near[c];
   }
   return best;
+}
+
+Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
+                        double limitSquared) noexcept {
+  return descend(mesh, leaves, point, limitSquared);
+}
+
+#if defined(DELTA_X86_ISAS)
+// A function-level target (not a translation unit built with -mavx512f): every inline function
+// it calls is inlined into it or stays a baseline out-of-line copy, so no AVX-512 code can reach
+// callers on other CPUs. (The answers do not depend on the ISA: the exact kernel is the library's
+// one out-of-line closestPointOnTriangle, and bounds only decide what it skips.)
+[[gnu::target("avx512f,avx512dq,avx512vl,avx2,fma")]] Nearest descendAvx512(
+    const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
+    double limitSquared) noexcept {
+  return descend(mesh, leaves, point, limitSquared);
+}
+#endif
+
+/// The descent and leaf bounds of `isa` (lowered to a supported one).
+struct Descent {
+  Nearest (*descend)(const QueryMeshData&, const Leaves&, const Vec3&, double) noexcept;
+  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8]) noexcept;
+};
+
+Descent descentFor(kernels::Isa isa) noexcept {
+  const kernels::Isa supported = kernels::supportedIsaAtMost(isa);
+  Descent descent{&descendBaseline, batchKernels(supported).pointTriangleBounds};
+#if defined(DELTA_X86_ISAS)
+  if (supported == kernels::Isa::Avx512) descent.descend = &descendAvx512;
+#endif
+  return descent;
+}
+
+Nearest nearestWith(const Descent& descent, const QueryMeshData& mesh, const Vec3& point,
+                    double limitSquared) noexcept {
+  return descent.descend(mesh, {soaView(mesh.sorted), descent.bounds}, point, limitSquared);
+}
+
+}  // namespace
+
+Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
+                        double limitSquared) noexcept {
+  static const Descent descent = descentFor(kernels::defaultIsa());
+  return nearestWith(descent, mesh, point, limitSquared);
+}
+
+Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
+                        kernels::Isa isa) noexcept {
+  return nearestWith(descentFor(isa), mesh, point, limitSquared);
 }
 
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {

@@ -9,6 +9,7 @@
 #include "delta/core/aabb.h"
 #include "delta/core/aligned_allocator.h"
 #include "delta/core/vec3.h"
+#include "delta/kernels/isa.h"
 #include "delta/kernels/point_triangle.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
@@ -86,6 +87,10 @@ struct Nearest {
 /// nearest-first descent of the tree; the smallest triangle id wins a tie, so the answer is that
 /// of a loop over all triangles in id order. Not found when none is that close.
 Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared) noexcept;
+/// The same, with the descent and leaf bounds of `isa` (lowered to a supported one) instead of
+/// kernels::defaultIsa()'s: the same answer for every ISA (tests compare them).
+Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
+                        kernels::Isa isa) noexcept;
 
 /// Whether `point` lies inside the closed mesh, given its nearest triangle: the sign of the
 /// offset from the closest point along the pseudonormal of the feature it lies on, or, where that

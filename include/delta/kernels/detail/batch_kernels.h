@@ -9,6 +9,7 @@
 #include "delta/kernels/detail/hybrid_candidates.h"
 #include "delta/kernels/detail/pair_lanes.h"
 #include "delta/kernels/detail/penalty_newton.h"
+#include "delta/kernels/detail/point_lanes.h"
 
 namespace delta::detail {
 
@@ -49,13 +50,20 @@ template <int W, template <int> class Kernel>
 }
 
 template <int W>
+[[gnu::flatten]] void pointBounds(const SoaView& block, std::size_t first, const double (&point)[3],
+                                  double (&out)[8]) noexcept {
+  pointTriangleBounds8<Shape<W>::H>(block.streams, first, point, out);
+}
+
+template <int W>
 constexpr BatchKernels makeBatchKernels() noexcept {
   return {W,
           &runBlocks<W, PenaltyKernel>,
           &runOne<W, PenaltyKernel>,
           &runBlocks<W, HybridKernel>,
           &runOne<W, HybridKernel>,
-          &runBlocks<W, ExhaustiveKernel>};
+          &runBlocks<W, ExhaustiveKernel>,
+          &pointBounds<W>};
 }
 
 }  // namespace delta::detail

@@ -1,0 +1,87 @@
+// The nearest-triangle descent under every instruction set (query/detail/nearest.cpp: a
+// baseline and an AVX-512 build of one descent, each with its ISA's leaf bounds): the same
+// answer as a loop over every triangle, bit for bit, whatever the ISA and whatever limit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "delta/io/mesh_io.h"
+#include "delta/kernels/isa.h"
+#include "delta/kernels/point_triangle.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/query_mesh.h"
+
+#include "query/detail/query_mesh_data.h"
+
+namespace delta::detail {
+namespace {
+
+double unit(std::mt19937_64& random) {
+  return static_cast<double>(random() >> 11) * 0x1p-53;
+}
+
+/// Points uniform in the box grown by 10%, and on and next to vertices, edges and faces.
+std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  const Aabb box = mesh.bounds();
+  const Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;
+  std::vector<Vec3> points;
+  for (std::size_t i = 0; i < count; ++i)
+    points.push_back(lower +
+                     Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)});
+  for (std::size_t i = 0; i < count / 4; ++i) {
+    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
+    const Vec3 normal = normalized(t.areaVector()) * (1e-7 * box.diagonal());
+    for (const Vec3& on : {t.a, (t.b + t.c) * 0.5, t.centroid()})
+      for (const Vec3& p : {on, on + normal, on - normal})
+        points.push_back(p);
+  }
+  return points;
+}
+
+void expectEveryIsaLikeAllTriangles(const Mesh& mesh, const char* name) {
+  const QueryMesh query(mesh);
+  const std::vector<Vec3> points = probes(mesh, 300, 3);
+  for (kernels::Isa isa : kernels::supportedIsas()) {
+    for (const Vec3& p : points) {
+      double expected = std::numeric_limits<double>::infinity();
+      std::uint32_t triangle = 0;
+      for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+        const double d = kernels::closestPointOnTriangle(p, mesh.triangle(t)).distanceSquared;
+        if (d < expected) {
+          expected = d;
+          triangle = t;
+        }
+      }
+      const Nearest found =
+          nearestTriangle(query.data(), p, std::numeric_limits<double>::infinity(), isa);
+      ASSERT_EQ(found.distanceSquared, expected) << name << ", " << kernels::name(isa);
+      ASSERT_EQ(found.triangle, triangle) << name << ", " << kernels::name(isa);
+      // A limit just above the distance still finds it; one at it (strict) does not.
+      const double above = std::nextafter(expected, std::numeric_limits<double>::infinity());
+      EXPECT_EQ(nearestTriangle(query.data(), p, above, isa).triangle, triangle);
+      if (expected > 0.0) {
+        EXPECT_FALSE(nearestTriangle(query.data(), p, expected, isa).found());
+      }
+    }
+  }
+}
+
+TEST(NearestDescent, EveryIsaGivesTheAnswerOfEveryTriangle) {
+  Mesh far = primitives::granulate(3, {1, 0.4, 0.2}, 200);
+  far.translate({1e6, -3e6, 2e5});
+  expectEveryIsaLikeAllTriangles(primitives::icosphere(3), "icosphere");
+  expectEveryIsaLikeAllTriangles(primitives::box({1, 2, 3}), "box (ties)");
+  expectEveryIsaLikeAllTriangles(primitives::quad(2, 1), "quad");
+  expectEveryIsaLikeAllTriangles(far, "granulate at 1e6");
+  expectEveryIsaLikeAllTriangles(primitives::icosphere(2, 1e-7, {3, 1, 2}), "tiny icosphere");
+  expectEveryIsaLikeAllTriangles(
+      io::load(std::filesystem::path(DELTA_DATA_DIR) / "meshes" / "fandisk.off"), "fandisk");
+}
+
+}  // namespace
+}  // namespace delta::detail
