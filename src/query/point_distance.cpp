@@ -59,6 +59,7 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
+  if (data.boundGrid.lowerBoundSquared(point) > limit) return {};  // the seed's early "no contact"
   const auto grown = [](double distanceSquared) {
     return std::nextafter(distanceSquared * kBoundGrowth, std::numeric_limits<double>::infinity());
   };
@@ -103,14 +104,38 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
     });
     return;
   }
+  // The points the distance-bound grid puts beyond ε are answered first, in input order (one
+  // cell read each, streaming through the input and output); only the others are searched.
+  std::vector<std::uint32_t> searched;
+  const detail::QueryMeshData& data = mesh.data();
+  const double limit = query.epsilon * query.epsilon;
+  if (std::isfinite(limit) && !data.boundGrid.empty()) {
+    std::vector<std::uint8_t> inDoubt(count);
+    parallelFor(0, count, 16 * kGrain, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Vec3 point = mesh.moved() ? mesh.inversePose().apply(pointAt(i)) : pointAt(i);
+        inDoubt[i] = !(data.boundGrid.lowerBoundSquared(point) > limit);
+        if (!inDoubt[i]) out[i] = PointDistance{};
+      }
+    });
+    for (std::size_t i = 0; i < count; ++i)
+      if (inDoubt[i]) searched.push_back(static_cast<std::uint32_t>(i));
+  } else {
+    searched.resize(count);
+    for (std::size_t i = 0; i < count; ++i)
+      searched[i] = static_cast<std::uint32_t>(i);
+  }
   // Along a Morton curve, consecutive points descend to the same nodes and triangles, which the
   // previous descents left in the cache: scattered input (a user's points in any order) runs as
   // fast as sorted input. Each answer is that point's alone, so the order changes no result.
-  const std::vector<std::uint32_t> order = detail::mortonOrder(count, pointAt);
-  parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
+  const std::vector<std::uint32_t> order =
+      detail::mortonOrder(searched.size(), [&](std::size_t k) { return pointAt(searched[k]); });
+  parallelFor(0, order.size(), kGrain, [&](std::size_t begin, std::size_t end) {
     Hint hint;
-    for (std::size_t k = begin; k < end; ++k)
-      out[order[k]] = answer(mesh, pointAt(order[k]), query, boundOf(order[k]), &hint);
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::uint32_t i = searched[order[k]];
+      out[i] = answer(mesh, pointAt(i), query, boundOf(i), &hint);
+    }
   });
 }
 

@@ -212,6 +212,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
                            data->bounds.diagonal());
   data->levels = buildLevels(data->sorted, data->slack);
   buildOctets(*data);
+  data->boundGrid = detail::BoundGrid(data->sorted, data->bounds);
   data->topology = analyzeTopology(mesh);
   data->closed = data->topology.closed && data->topology.consistentlyOriented;
   if (data->closed) {
@@ -274,7 +275,7 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
   for (const detail::BoxOctets& level : data_->childOctets)
     bytes += level.capacity() * sizeof(detail::BoxOctet);
   bytes += data_->leafOctets.capacity() * sizeof(detail::BoxOctet);
-  return bytes;
+  return bytes + data_->boundGrid.memoryBytes();
 }
 
 }  // namespace delta

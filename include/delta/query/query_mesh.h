@@ -18,6 +18,9 @@ struct QueryMeshData;
 /// A mesh prepared for queries: its flattened triangles (in the mesh's order, for the kernels), a
 /// bounding-volume tree over them (eight triangles to a leaf, eight nodes to a parent, each node
 /// with its box; built top-down by splits at the median of the centroids along the longest axis),
+/// a uniform grid over its box with a lower bound of the distance to the mesh in every cell (one
+/// byte a cell, about two cells a triangle: queries with a limit ε reject most points farther
+/// than ε with one read, the seed's early "no contact"),
 /// and, for a closed mesh, the angle-weighted pseudonormals of its vertices and edges (Bærentzen
 /// and Aanæs, "Signed distance computation using the angle weighted pseudonormal", IEEE TVCG 2005)
 /// that sign a distance in O(1) once the closest point is known.
@@ -72,8 +75,8 @@ class QueryMesh {
   bool closed() const noexcept;
   /// The box of all vertices, in the prepared frame.
   const Aabb& bounds() const noexcept;
-  /// Bytes held on the heap (triangles twice: in mesh order and in tree order; tree boxes;
-  /// pseudonormals of closed meshes).
+  /// Bytes held on the heap (triangles twice: in mesh order and in tree order; tree boxes; the
+  /// distance-bound grid; pseudonormals of closed meshes).
   std::size_t memoryBytes() const noexcept;
 
   /// The prepared data, for the query implementations.

@@ -14,6 +14,8 @@
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
 
+#include "bound_grid.h"
+
 namespace delta::detail {
 
 /// Children per tree node and triangles per leaf.
@@ -67,6 +69,9 @@ struct QueryMeshData {
   /// Per sorted triangle: the pseudonormals of vertices a, b, c, then of edges ab, bc, ca (not
   /// normalised). Empty unless the mesh is closed.
   std::vector<std::array<Vec3, 6>> pseudonormals;
+  /// Per cell of a uniform grid over the box, a lower bound of the distance to the mesh: the
+  /// ε-limited queries reject most points farther than ε with one read (bound_grid.h).
+  BoundGrid boundGrid;
   Topology topology;
   bool closed = false;
   double orientation = 1.0;  ///< −1 for an inside-out closed mesh
