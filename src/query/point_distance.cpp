@@ -1,6 +1,7 @@
 #include "delta/query/point_distance.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -130,11 +131,20 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   // fast as sorted input. Each answer is that point's alone, so the order changes no result.
   const std::vector<std::uint32_t> order =
       detail::mortonOrder(searched.size(), [&](std::size_t k) { return pointAt(searched[k]); });
+  // Each run of kGrain points is gathered before and its answers scattered after the searches:
+  // the scattered reads and writes then overlap in tight loops instead of each stalling a search.
   parallelFor(0, order.size(), kGrain, [&](std::size_t begin, std::size_t end) {
+    std::array<Vec3, kGrain> points;
+    std::array<PointDistance, kGrain> answers;
     Hint hint;
-    for (std::size_t k = begin; k < end; ++k) {
-      const std::uint32_t i = searched[order[k]];
-      out[i] = answer(mesh, pointAt(i), query, boundOf(i), &hint);
+    for (std::size_t run = begin; run < end; run += kGrain) {
+      const std::size_t runEnd = std::min(run + kGrain, end);
+      for (std::size_t k = run; k < runEnd; ++k)
+        points[k - run] = pointAt(searched[order[k]]);
+      for (std::size_t k = run; k < runEnd; ++k)
+        answers[k - run] = answer(mesh, points[k - run], query, boundOf(searched[order[k]]), &hint);
+      for (std::size_t k = run; k < runEnd; ++k)
+        out[searched[order[k]]] = answers[k - run];
     }
   });
 }
