@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
@@ -22,6 +24,8 @@ constexpr std::size_t kMaxTriangles = std::size_t{1} << 32;
 /// Tasks (one triangle against one block, at most kBlock kernel pairs, a few µs) per parallel
 /// chunk: enough to amortise the chunk's scratch and scheduling, few enough to balance.
 constexpr std::size_t kTaskGrain = 2;
+/// The id of an empty slot of the moved second leaves (a last leaf holds fewer than eight).
+constexpr std::uint32_t kNoPartner = std::numeric_limits<std::uint32_t>::max();
 
 /// The boxes of consecutive blocks of kBlock triangles.
 std::vector<Aabb> blockBoxes(const TriangleSoA& mesh) {
@@ -171,17 +175,40 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     if (p == 0 || pairs[p].first != pairs[p - 1].first) groups.push_back(p);
   groups.push_back(pairs.size());
 
+  // Every second leaf the pairs name, carried into the first's frame once (a leaf meets several
+  // first leaves): its triangles, their boxes and planes, and ids, at 8·(its rank among them).
+  std::vector<std::uint32_t> secondLeaves(pairs.size());
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    secondLeaves[p] = pairs[p].second;
+  std::sort(secondLeaves.begin(), secondLeaves.end());
+  secondLeaves.erase(std::unique(secondLeaves.begin(), secondLeaves.end()), secondLeaves.end());
+  const std::size_t slots = secondLeaves.size() * detail::kFanout;
+  std::vector<Triangle> partnerTriangles(slots);
+  std::vector<Aabb> partnerBoxes(slots);
+  std::vector<detail::SeparatingPlane> partnerPlanes(slots);
+  std::vector<std::uint32_t> partnerIds(slots, kNoPartner);
+  parallelFor(0, secondLeaves.size(), 64, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t j = begin; j < end; ++j) {
+      const std::size_t from = std::size_t{secondLeaves[j]} * detail::kFanout;
+      const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
+      for (std::size_t k = from; k < to; ++k) {
+        const std::size_t slot = j * detail::kFanout + (k - from);
+        const Triangle other = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+        partnerTriangles[slot] = other;
+        partnerBoxes[slot] = other.bounds();
+        partnerPlanes[slot] = detail::separatingPlane(other);
+        partnerIds[slot] = b.order[k];
+      }
+    }
+  });
+
   std::vector<std::vector<ContactPoint>> perGroup(groups.size() - 1);
   parallelFor(0, groups.size() - 1, 1, [&](std::size_t begin, std::size_t end) {
     kernels::PairResults results(kBlock);
     TriangleSoA batch;
     std::vector<Triangle> candidates;
     std::vector<std::uint32_t> candidateIds;
-    // The group's second triangles, carried into the first's frame once for all eight first
-    // triangles, with their boxes and ids.
-    std::vector<Triangle> partners;
-    std::vector<Aabb> partnerBoxes;
-    std::vector<std::uint32_t> partnerIds;
+    std::vector<std::uint32_t> partners;  // slots of the group's second triangles near its leaf
     for (std::size_t g = begin; g < end; ++g) {
       std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
       const std::uint32_t firstLeaf = pairs[groups[g]].first;
@@ -189,29 +216,27 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
       const Aabb firstLeafBox = a.levels[0][firstLeaf];
       partners.clear();
-      partnerBoxes.clear();
-      partnerIds.clear();
       for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {
-        const std::size_t from = std::size_t{pairs[p].second} * detail::kFanout;
-        const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
-        for (std::size_t k = from; k < to; ++k) {
-          const Triangle other = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
-          const Aabb otherBox = other.bounds();
-          if (apart(firstLeafBox, otherBox, reach)) continue;  // most leaf neighbours are
-          partners.push_back(other);
-          partnerBoxes.push_back(otherBox);
-          partnerIds.push_back(b.order[k]);
-        }
+        const std::size_t j = static_cast<std::size_t>(
+            std::lower_bound(secondLeaves.begin(), secondLeaves.end(), pairs[p].second) -
+            secondLeaves.begin());
+        for (std::size_t slot = j * detail::kFanout; slot < (j + 1) * detail::kFanout; ++slot)
+          if (partnerIds[slot] != kNoPartner && !apart(firstLeafBox, partnerBoxes[slot], reach))
+            partners.push_back(static_cast<std::uint32_t>(slot));  // most leaf neighbours are not
       }
       for (std::size_t i = firstBegin; i < firstEnd && !partners.empty(); ++i) {
         const Triangle one = a.sorted.triangle(i);
         const Aabb box = one.bounds();
+        const detail::SeparatingPlane plane = detail::separatingPlane(one);
         candidates.clear();
         candidateIds.clear();
-        for (std::size_t k = 0; k < partners.size(); ++k) {
-          if (apart(box, partnerBoxes[k], reach)) continue;
-          candidates.push_back(partners[k]);
-          candidateIds.push_back(partnerIds[k]);
+        for (const std::uint32_t slot : partners) {
+          if (apart(box, partnerBoxes[slot], reach) ||
+              detail::separated(plane, partnerTriangles[slot], reach) ||
+              detail::separated(partnerPlanes[slot], one, reach))
+            continue;
+          candidates.push_back(partnerTriangles[slot]);
+          candidateIds.push_back(partnerIds[slot]);
         }
         if (candidates.empty()) continue;
         batch.assign(candidates);

@@ -281,19 +281,25 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     std::uint32_t firstLevel, firstNode, secondLevel, secondNode;
     bool operator>(const Entry& other) const noexcept { return bound > other.bound; }
   };
+  MinimumDistance best;
+  double bestSquared = std::numeric_limits<double>::infinity();
+  bool found = false;
+  // A pair farther than the best found so far can never be opened (the best only falls): it is
+  // not queued at all.
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
   const auto push = [&](std::uint32_t la, std::uint32_t na, std::uint32_t lb, std::uint32_t nb) {
-    open.push({distanceSquared(a.levels[la][na], secondTree.box(lb, nb)), la, na, lb, nb});
+    const double bound = distanceSquared(a.levels[la][na], secondTree.box(lb, nb));
+    if (!(bound > bestSquared)) open.push({bound, la, na, lb, nb});
   };
   push(static_cast<std::uint32_t>(a.levels.size() - 1), 0,
        static_cast<std::uint32_t>(secondTree.levelCount() - 1), 0);
 
-  MinimumDistance best;
-  double bestSquared = std::numeric_limits<double>::infinity();
-  bool found = false;
   kernels::PairResults results(detail::kFanout);
   TriangleSoA batch;
   Triangle leafTriangles[detail::kFanout];
+  detail::SeparatingPlane leafPlanes[detail::kFanout];
+  Triangle candidates[detail::kFanout];
+  std::uint32_t ids[detail::kFanout];
   while (!open.empty()) {
     const Entry entry = open.top();
     open.pop();
@@ -321,8 +327,11 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     const std::size_t secondBegin = std::size_t{entry.secondNode} * detail::kFanout;
     const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
     std::size_t count = 0;
-    for (std::size_t k = secondBegin; k < secondEnd; ++k)
-      leafTriangles[count++] = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+    for (std::size_t k = secondBegin; k < secondEnd; ++k) {
+      leafTriangles[count] = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+      leafPlanes[count] = detail::separatingPlane(leafTriangles[count]);
+      ++count;
+    }
     const Aabb secondBox = secondTree.box(0, entry.secondNode);
     const std::size_t firstBegin = std::size_t{entry.firstNode} * detail::kFanout;
     const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
@@ -330,11 +339,13 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
       const Triangle one = a.sorted.triangle(i);
       const Aabb box = one.bounds().grown(a.slack);
       if (distanceSquared(box, secondBox) > bestSquared) continue;
-      Triangle candidates[detail::kFanout];
-      std::uint32_t ids[detail::kFanout];
+      const detail::SeparatingPlane plane = detail::separatingPlane(one);
+      const double reach = std::sqrt(bestSquared);  // +∞ before the first pair
       std::size_t kept = 0;
       for (std::size_t k = 0; k < count; ++k)
-        if (!(distanceSquared(box, leafTriangles[k].bounds()) > bestSquared)) {
+        if (!(distanceSquared(box, leafTriangles[k].bounds()) > bestSquared) &&
+            !detail::separated(plane, leafTriangles[k], reach) &&
+            !detail::separated(leafPlanes[k], one, reach)) {
           candidates[kept] = leafTriangles[k];
           ids[kept++] = b.order[secondBegin + k];
         }

@@ -33,20 +33,24 @@ MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
 
 std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firstLevels,
                                       const MovedTree& second, double reach) {
+  // Pairs are tested when they are found, so that the box that stays (the second one, moved,
+  // when the first node splits) is computed once for its eight partners, and only pairs within
+  // reach are stacked.
   std::vector<LeafPair> pairs;
   std::vector<NodePair> stack;
-  stack.push_back({static_cast<std::uint32_t>(firstLevels.size() - 1), 0,
-                   static_cast<std::uint32_t>(second.levelCount() - 1), 0});
+  const auto firstRoot = static_cast<std::uint32_t>(firstLevels.size() - 1);
+  const auto secondRoot = static_cast<std::uint32_t>(second.levelCount() - 1);
+  if (!apart(firstLevels[firstRoot][0], second.box(secondRoot, 0), reach))
+    stack.push_back({firstRoot, 0, secondRoot, 0});
   while (!stack.empty()) {
     const NodePair pair = stack.back();
     stack.pop_back();
-    const Aabb& a = firstLevels[pair.firstLevel][pair.first];
-    const Aabb b = second.box(pair.secondLevel, pair.second);
-    if (apart(a, b, reach)) continue;
     if (pair.firstLevel == 0 && pair.secondLevel == 0) {
       pairs.push_back({pair.first, pair.second});
       continue;
     }
+    const Aabb& a = firstLevels[pair.firstLevel][pair.first];
+    const Aabb b = second.box(pair.secondLevel, pair.second);
     const bool splitFirst =
         pair.secondLevel == 0 || (pair.firstLevel > 0 && largestExtent(a) >= largestExtent(b));
     if (splitFirst) {
@@ -54,13 +58,15 @@ std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firs
       const std::size_t begin = std::size_t{pair.first} * kFanout;
       const std::size_t end = std::min(begin + kFanout, firstLevels[level].size());
       for (std::size_t c = begin; c < end; ++c)
-        stack.push_back({level, static_cast<std::uint32_t>(c), pair.secondLevel, pair.second});
+        if (!apart(firstLevels[level][c], b, reach))
+          stack.push_back({level, static_cast<std::uint32_t>(c), pair.secondLevel, pair.second});
     } else {
       const std::uint32_t level = pair.secondLevel - 1;
       const std::size_t begin = std::size_t{pair.second} * kFanout;
       const std::size_t end = std::min(begin + kFanout, second.nodeCount(level));
       for (std::size_t c = begin; c < end; ++c)
-        stack.push_back({pair.firstLevel, pair.first, level, static_cast<std::uint32_t>(c)});
+        if (!apart(a, second.box(level, c), reach))
+          stack.push_back({pair.firstLevel, pair.first, level, static_cast<std::uint32_t>(c)});
     }
   }
   return pairs;
