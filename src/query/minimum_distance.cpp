@@ -264,6 +264,55 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
           best.intersect};
 }
 
+namespace {
+
+/// The leaves of a prepared mesh as one search meets them: each leaf's triangles (moved by
+/// `motion` when there is one), their boxes (grown by the mesh's slack, so that rounding never
+/// drops a tie), their separating planes and ids, made on the leaf's first use.
+class LeafCache {
+ public:
+  struct Leaf {
+    const Triangle* triangles;
+    const Aabb* boxes;
+    const detail::SeparatingPlane* planes;
+    const std::uint32_t* ids;
+    std::size_t count;
+  };
+
+  LeafCache(const detail::QueryMeshData& mesh, const detail::MatrixMotion* motion)
+      : mesh_(mesh), motion_(motion), slot_(mesh.levels[0].size(), kNone) {}
+
+  Leaf leaf(std::uint32_t index) {
+    const std::size_t begin = std::size_t{index} * detail::kFanout;
+    const std::size_t count = std::min(begin + detail::kFanout, mesh_.sorted.size()) - begin;
+    if (slot_[index] == kNone) {
+      slot_[index] = static_cast<std::uint32_t>(triangles_.size());
+      for (std::size_t k = begin; k < begin + count; ++k) {
+        const Triangle t =
+            motion_ ? motion_->apply(mesh_.sorted.triangle(k)) : mesh_.sorted.triangle(k);
+        triangles_.push_back(t);
+        boxes_.push_back(t.bounds().grown(mesh_.slack));
+        planes_.push_back(detail::separatingPlane(t));
+        ids_.push_back(mesh_.order[k]);
+      }
+    }
+    const std::size_t at = slot_[index];
+    return {&triangles_[at], &boxes_[at], &planes_[at], &ids_[at], count};
+  }
+
+ private:
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const detail::QueryMeshData& mesh_;
+  const detail::MatrixMotion* motion_;
+  std::vector<std::uint32_t> slot_;  ///< per leaf: where its entries start, or kNone
+  std::vector<Triangle> triangles_;
+  std::vector<Aabb> boxes_;
+  std::vector<detail::SeparatingPlane> planes_;
+  std::vector<std::uint32_t> ids_;
+};
+
+}  // namespace
+
 MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
                                 kernels::Solver solver) {
   // Best first over pairs of nodes of the two prepared trees: the pair with the nearest boxes is
@@ -296,8 +345,9 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
 
   kernels::PairResults results(detail::kFanout);
   TriangleSoA batch;
-  Triangle leafTriangles[detail::kFanout];
-  detail::SeparatingPlane leafPlanes[detail::kFanout];
+  // A leaf of either tree meets several of the other's: its triangles (the second's carried into
+  // the first's frame), boxes and planes are made once, on its first meeting.
+  LeafCache firstLeaves(a, nullptr), secondLeaves(b, moved ? &motion : nullptr);
   Triangle candidates[detail::kFanout];
   std::uint32_t ids[detail::kFanout];
   while (!open.empty()) {
@@ -324,37 +374,26 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     }
     // Two leaves: each triangle of the first against those of the second's (at most) eight
     // whose boxes (grown by the slack: rounding never drops a tie) are not farther than the best.
-    const std::size_t secondBegin = std::size_t{entry.secondNode} * detail::kFanout;
-    const std::size_t secondEnd = std::min(secondBegin + detail::kFanout, b.sorted.size());
-    std::size_t count = 0;
-    for (std::size_t k = secondBegin; k < secondEnd; ++k) {
-      leafTriangles[count] = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
-      leafPlanes[count] = detail::separatingPlane(leafTriangles[count]);
-      ++count;
-    }
+    const LeafCache::Leaf other = secondLeaves.leaf(entry.secondNode);
+    const LeafCache::Leaf one = firstLeaves.leaf(entry.firstNode);
     const Aabb secondBox = secondTree.box(0, entry.secondNode);
-    const std::size_t firstBegin = std::size_t{entry.firstNode} * detail::kFanout;
-    const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
-    for (std::size_t i = firstBegin; i < firstEnd; ++i) {
-      const Triangle one = a.sorted.triangle(i);
-      const Aabb box = one.bounds().grown(a.slack);
-      if (distanceSquared(box, secondBox) > bestSquared) continue;
-      const detail::SeparatingPlane plane = detail::separatingPlane(one);
+    for (std::size_t i = 0; i < one.count; ++i) {
+      if (distanceSquared(one.boxes[i], secondBox) > bestSquared) continue;
       const double reach = std::sqrt(bestSquared);  // +∞ before the first pair
       std::size_t kept = 0;
-      for (std::size_t k = 0; k < count; ++k)
-        if (!(distanceSquared(box, leafTriangles[k].bounds()) > bestSquared) &&
-            !detail::separated(plane, leafTriangles[k], reach) &&
-            !detail::separated(leafPlanes[k], one, reach)) {
-          candidates[kept] = leafTriangles[k];
-          ids[kept++] = b.order[secondBegin + k];
+      for (std::size_t k = 0; k < other.count; ++k)
+        if (!(distanceSquared(one.boxes[i], other.boxes[k]) > bestSquared) &&
+            !detail::separated(one.planes[i], other.triangles[k], reach) &&
+            !detail::separated(other.planes[k], one.triangles[i], reach)) {
+          candidates[kept] = other.triangles[k];
+          ids[kept++] = other.ids[k];
         }
       if (kept == 0) continue;
       batch.assign(std::span(candidates, kept));
-      kernels::distances(solver, one, batch, 0, kept, results);
+      kernels::distances(solver, one.triangles[i], batch, 0, kept, results);
       for (std::size_t k = 0; k < results.size(); ++k) {
         const double d = results.distanceSquared(k);
-        const std::uint32_t ia = a.order[i], ib = ids[k];
+        const std::uint32_t ia = one.ids[i], ib = ids[k];
         const bool better =
             d < bestSquared || (d == bestSquared && found &&
                                 (ia < best.first || (ia == best.first && ib < best.second)));
