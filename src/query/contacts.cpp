@@ -232,8 +232,9 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
         candidateIds.clear();
         for (const std::uint32_t slot : partners) {
           if (apart(box, partnerBoxes[slot], reach) ||
-              detail::separated(plane, partnerTriangles[slot], reach) ||
-              detail::separated(partnerPlanes[slot], one, reach))
+              detail::separated(plane, partnerTriangles[slot], partnerPlanes[slot].magnitude,
+                                reach) ||
+              detail::separated(partnerPlanes[slot], one, plane.magnitude, reach))
             continue;
           candidates.push_back(partnerTriangles[slot]);
           candidateIds.push_back(partnerIds[slot]);

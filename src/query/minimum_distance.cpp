@@ -383,8 +383,9 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
       std::size_t kept = 0;
       for (std::size_t k = 0; k < other.count; ++k)
         if (!(distanceSquared(one.boxes[i], other.boxes[k]) > bestSquared) &&
-            !detail::separated(one.planes[i], other.triangles[k], reach) &&
-            !detail::separated(other.planes[k], one.triangles[i], reach)) {
+            !detail::separated(one.planes[i], other.triangles[k], other.planes[k].magnitude,
+                               reach) &&
+            !detail::separated(other.planes[k], one.triangles[i], one.planes[i].magnitude, reach)) {
           candidates[kept] = other.triangles[k];
           ids[kept++] = other.ids[k];
         }

@@ -64,7 +64,10 @@ class MovedTree {
 struct SeparatingPlane {
   Vec3 normal;  ///< unit
   Vec3 origin;  ///< the triangle's first vertex
-  double scale = 0.0;
+  /// The triangle's largest absolute coordinate, the scale of the rounding of a signed distance
+  /// to its plane, or of one of its vertices to another plane.
+  double magnitude = 0.0;
+  double size = 0.0;  ///< its longest edge from the origin
   bool usable = false;
 };
 
@@ -72,22 +75,26 @@ inline SeparatingPlane separatingPlane(const Triangle& t) noexcept {
   const Vec3 u = t.b - t.a, v = t.c - t.a, n = cross(u, v);
   const double nn = lengthSquared(n);
   SeparatingPlane plane;
+  plane.magnitude =
+      std::max({std::abs(t.a.x), std::abs(t.a.y), std::abs(t.a.z), std::abs(t.b.x), std::abs(t.b.y),
+                std::abs(t.b.z), std::abs(t.c.x), std::abs(t.c.y), std::abs(t.c.z)});
   plane.usable = nn > 0x1p-20 * lengthSquared(u) * lengthSquared(v);
   if (!plane.usable) return plane;
   plane.normal = n * (1.0 / std::sqrt(nn));
   plane.origin = t.a;
-  plane.scale = maxAbs(t.a) + std::sqrt(std::max(lengthSquared(u), lengthSquared(v)));
+  plane.size = std::sqrt(std::max(lengthSquared(u), lengthSquared(v)));
   return plane;
 }
 
-/// Whether every vertex of `t` lies farther than `reach` from the plane, all on one side; with a
-/// margin of 2⁻³⁰ of the coordinates' magnitude, thousands of times the rounding of the signed
-/// distances (a few ε of the coordinates, and 2¹⁰·ε of the distance for the normal), so a pair
-/// within reach is never taken for separated.
-inline bool separated(const SeparatingPlane& plane, const Triangle& t, double reach) noexcept {
+/// Whether every vertex of `t` (whose largest absolute coordinate is `magnitude`) lies farther
+/// than `reach` from the plane, all on one side; with a margin of 2⁻³⁰ of the coordinates'
+/// magnitude, thousands of times the rounding of the signed distances (a few ε of the
+/// coordinates, and 2¹⁰·ε of the distance for the normal), so a pair within reach is never taken
+/// for separated.
+inline bool separated(const SeparatingPlane& plane, const Triangle& t, double magnitude,
+                      double reach) noexcept {
   if (!plane.usable) return false;
-  const double beyond =
-      reach + 0x1p-30 * (plane.scale + std::max({maxAbs(t.a), maxAbs(t.b), maxAbs(t.c)}));
+  const double beyond = reach + 0x1p-30 * (plane.magnitude + plane.size + magnitude);
   const double a = dot(plane.normal, t.a - plane.origin), b = dot(plane.normal, t.b - plane.origin),
                c = dot(plane.normal, t.c - plane.origin);
   return (a > beyond && b > beyond && c > beyond) || (a < -beyond && b < -beyond && c < -beyond);
