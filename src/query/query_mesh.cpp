@@ -118,13 +118,13 @@ double cornerAngle(const Vec3& from, const Vec3& next, const Vec3& previous) noe
 }
 
 /// Angle-weighted vertex pseudonormals and edge pseudonormals (sum of the two faces' unit
-/// normals), per triangle in tree order. For a closed, consistently oriented mesh every edge of
-/// a triangle with three distinct indices has exactly one partner.
-std::vector<std::array<Vec3, 6>> pseudonormals(const Mesh& mesh,
-                                               const std::vector<std::uint32_t>& order) {
+/// normals), stored once each and named per triangle in tree order. For a closed, consistently
+/// oriented mesh every edge of a triangle with three distinct indices has exactly one partner.
+detail::Pseudonormals pseudonormals(const Mesh& mesh, const std::vector<std::uint32_t>& order) {
   const std::size_t n = mesh.triangleCount();
   std::vector<Vec3> faceNormal(n);
-  std::vector<Vec3> vertexNormal(mesh.vertexCount());
+  detail::Pseudonormals result;
+  result.vertices.assign(mesh.vertexCount(), Vec3{});
   struct EdgeUse {
     std::uint64_t key;
     std::uint32_t triangle;
@@ -139,7 +139,7 @@ std::vector<std::array<Vec3, 6>> pseudonormals(const Mesh& mesh,
     faceNormal[t] = normalized(triangle.areaVector());
     const Vec3 corners[3] = {triangle.a, triangle.b, triangle.c};
     for (std::size_t k = 0; k < 3; ++k)
-      vertexNormal[v[k]] +=
+      result.vertices[v[k]] +=
           cornerAngle(corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]) * faceNormal[t];
     if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;  // a fold: no edges (topology.h)
     for (std::uint32_t slot = 0; slot < 3; ++slot) {
@@ -153,20 +153,23 @@ std::vector<std::array<Vec3, 6>> pseudonormals(const Mesh& mesh,
   std::vector<std::uint32_t> position(n);  // mesh id → tree order
   for (std::size_t k = 0; k < n; ++k)
     position[order[k]] = static_cast<std::uint32_t>(k);
-  std::vector<std::array<Vec3, 6>> normals(n);
+  result.ofTriangle.assign(n, {});  // edges without a partner (a fold's) name edges[0] = 0
   for (std::size_t t = 0; t < n; ++t) {
     const TriangleIndices& v = mesh.triangles()[t];
     for (std::size_t k = 0; k < 3; ++k)
-      normals[position[t]][k] = vertexNormal[v[k]];
+      result.ofTriangle[position[t]][k] = v[k];
   }
+  result.edges.reserve(edges.size() / 2 + 1);
+  result.edges.assign(1, Vec3{});
   for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
     if (edges[e].key != edges[e + 1].key) continue;
-    const Vec3 sum = faceNormal[edges[e].triangle] + faceNormal[edges[e + 1].triangle];
-    normals[position[edges[e].triangle]][3 + edges[e].slot] = sum;
-    normals[position[edges[e + 1].triangle]][3 + edges[e + 1].slot] = sum;
+    const auto index = static_cast<std::uint32_t>(result.edges.size());
+    result.edges.push_back(faceNormal[edges[e].triangle] + faceNormal[edges[e + 1].triangle]);
+    result.ofTriangle[position[edges[e].triangle]][3 + edges[e].slot] = index;
+    result.ofTriangle[position[edges[e + 1].triangle]][3 + edges[e + 1].slot] = index;
     ++e;
   }
-  return normals;
+  return result;
 }
 
 }  // namespace
@@ -269,7 +272,7 @@ const Aabb& QueryMesh::bounds() const noexcept {
 std::size_t QueryMesh::memoryBytes() const noexcept {
   std::size_t bytes = data_->triangles.memoryBytes() + data_->sorted.memoryBytes() +
                       data_->order.capacity() * sizeof(std::uint32_t) +
-                      data_->pseudonormals.capacity() * sizeof(std::array<Vec3, 6>);
+                      data_->pseudonormals.memoryBytes();
   for (const std::vector<Aabb>& level : data_->levels)
     bytes += level.capacity() * sizeof(Aabb);
   for (const detail::BoxOctets& level : data_->childOctets)

@@ -134,5 +134,26 @@ TEST(QueryMesh, ManyThreadsQueryCopiesWithTheirOwnPoses) {
     }
 }
 
+TEST(QueryMesh, MemoryPerTriangle) {
+  // What the parts take a triangle: the triangles twice (2 × 72 bytes, padded), the tree's boxes
+  // and octets (about 35), the bound grid (about 2) and, for a closed mesh, the pseudonormals
+  // stored once per vertex and edge with six indices a triangle (about 72: 24 + 12 + 36). Twice
+  // the pseudonormals (a copy per triangle, 144) or a grid of a cell per byte of a triangle's
+  // worth more would break the upper bound.
+  const Mesh closed = primitives::icosphere(5);  // 20,480 triangles
+  const double perTriangle = static_cast<double>(QueryMesh(closed).memoryBytes()) /
+                             static_cast<double>(closed.triangleCount());
+  EXPECT_GT(perTriangle, 144.0 + 72.0);
+  EXPECT_LT(perTriangle, 270.0);
+  Mesh open = primitives::icosphere(5);
+  open = Mesh(std::vector<Vec3>(open.vertices().begin(), open.vertices().end()),
+              std::vector<TriangleIndices>(open.triangles().begin() + 1, open.triangles().end()));
+  const QueryMesh openQuery(open);
+  EXPECT_FALSE(openQuery.closed());
+  EXPECT_LT(
+      static_cast<double>(openQuery.memoryBytes()) / static_cast<double>(open.triangleCount()),
+      perTriangle - 60.0);  // no pseudonormals for an open mesh
+}
+
 }  // namespace
 }  // namespace delta::contactdetection

@@ -172,32 +172,16 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double lim
 
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {
   if (!(nearest.distanceSquared > 0.0)) return false;  // on the surface
-  Vec3 normal;
-  using kernels::TriangleFeature;
-  const std::array<Vec3, 6>& pseudonormal = mesh.pseudonormals[nearest.sorted];
-  switch (nearest.closest.feature) {
-    case TriangleFeature::VertexA:
-      normal = pseudonormal[0];
-      break;
-    case TriangleFeature::VertexB:
-      normal = pseudonormal[1];
-      break;
-    case TriangleFeature::VertexC:
-      normal = pseudonormal[2];
-      break;
-    case TriangleFeature::EdgeAB:
-      normal = pseudonormal[3];
-      break;
-    case TriangleFeature::EdgeBC:
-      normal = pseudonormal[4];
-      break;
-    case TriangleFeature::EdgeCA:
-      normal = pseudonormal[5];
-      break;
-    case TriangleFeature::Face:
-      normal = mesh.sorted.triangle(nearest.sorted).areaVector();
-      break;
-  }
+  // The features VertexA … EdgeCA are the pseudonormal slots 0 … 5, in that order; a face point
+  // takes the face's own normal.
+  static_assert(static_cast<int>(kernels::TriangleFeature::VertexA) == 0 &&
+                static_cast<int>(kernels::TriangleFeature::EdgeAB) == 3 &&
+                static_cast<int>(kernels::TriangleFeature::EdgeCA) == 5);
+  const kernels::TriangleFeature feature = nearest.closest.feature;
+  const Vec3 normal =
+      feature == kernels::TriangleFeature::Face
+          ? mesh.sorted.triangle(nearest.sorted).areaVector()
+          : mesh.pseudonormals.of(nearest.sorted, static_cast<std::size_t>(feature));
   const Vec3 offset = point - nearest.closest.closest;
   const double side = dot(offset, normal) * mesh.orientation;
   // Exactly, the side is positive outside and negative inside (Bærentzen and Aanæs); where it
