@@ -222,7 +222,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
     contact.direction = normalized(points[i] - near[i].closest);
     if (!(lengthSquared(contact.direction) > 0.5))
       contact.direction = mesh.pose().rotation.rotate(
-          normalized(data.triangles.triangle(near[i].triangle).areaVector() * data.orientation));
+          normalized(mesh.triangles().triangle(near[i].triangle).areaVector() * data.orientation));
     if (!(lengthSquared(contact.direction) > 0.5)) contact.direction = {0, 0, 1};
     contact.overlap = near[i].inside;
     contact.first = static_cast<std::uint32_t>(i);

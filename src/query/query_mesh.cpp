@@ -176,6 +176,17 @@ detail::Pseudonormals pseudonormals(const Mesh& mesh, const std::vector<std::uin
 
 namespace detail {
 
+const TriangleSoA& QueryMeshData::meshOrder() const {
+  std::call_once(meshOrderOnce_, [this] {
+    std::vector<Triangle> inMeshOrder(sorted.size());
+    for (std::size_t k = 0; k < sorted.size(); ++k)
+      inMeshOrder[order[k]] = sorted.triangle(k);
+    meshOrder_.assign(inMeshOrder);
+    meshOrderMade_.store(true, std::memory_order_release);
+  });
+  return meshOrder_;
+}
+
 BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first) noexcept {
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
   BoxOctet octet;
@@ -199,7 +210,6 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   if (mesh.triangleCount() >= std::numeric_limits<std::uint32_t>::max())
     throw Error("QueryMesh: more triangles than 32-bit ids can name");
   auto data = std::make_shared<detail::QueryMeshData>();
-  data->triangles = flatten(mesh);
   data->bounds = mesh.bounds();
   data->order = treeOrder(mesh);
   std::vector<TriangleIndices> sortedIndices(mesh.triangleCount());
@@ -254,10 +264,10 @@ QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
 }
 
 std::size_t QueryMesh::size() const noexcept {
-  return data_->triangles.size();
+  return data_->sorted.size();
 }
-const TriangleSoA& QueryMesh::triangles() const noexcept {
-  return data_->triangles;
+const TriangleSoA& QueryMesh::triangles() const {
+  return data_->meshOrder();
 }
 const Topology& QueryMesh::topology() const noexcept {
   return data_->topology;
@@ -270,7 +280,8 @@ const Aabb& QueryMesh::bounds() const noexcept {
 }
 
 std::size_t QueryMesh::memoryBytes() const noexcept {
-  std::size_t bytes = data_->triangles.memoryBytes() + data_->sorted.memoryBytes() +
+  std::size_t bytes = (data_->meshOrderMade() ? data_->meshOrder().memoryBytes() : 0) +
+                      data_->sorted.memoryBytes() +
                       data_->order.capacity() * sizeof(std::uint32_t) +
                       data_->pseudonormals.memoryBytes();
   for (const std::vector<Aabb>& level : data_->levels)

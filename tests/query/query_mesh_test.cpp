@@ -135,24 +135,51 @@ TEST(QueryMesh, ManyThreadsQueryCopiesWithTheirOwnPoses) {
 }
 
 TEST(QueryMesh, MemoryPerTriangle) {
-  // What the parts take a triangle: the triangles twice (2 × 72 bytes, padded), the tree's boxes
-  // and octets (about 35), the bound grid (about 2) and, for a closed mesh, the pseudonormals
-  // stored once per vertex and edge with six indices a triangle (about 72: 24 + 12 + 36). Twice
-  // the pseudonormals (a copy per triangle, 144) or a grid of a cell per byte of a triangle's
-  // worth more would break the upper bound.
+  // What the parts take a triangle: the triangles once, in tree order (72 bytes, padded), the
+  // tree's boxes and octets (about 35), the bound grid (about 2) and, for a closed mesh, the
+  // pseudonormals stored once per vertex and edge with six indices a triangle (about 72: 24 + 12
+  // + 36). A second copy of the triangles or of the pseudonormals (a copy per triangle took 144)
+  // breaks the upper bound; the mesh-order triangles appear once triangles() is called.
   const Mesh closed = primitives::icosphere(5);  // 20,480 triangles
-  const double perTriangle = static_cast<double>(QueryMesh(closed).memoryBytes()) /
-                             static_cast<double>(closed.triangleCount());
-  EXPECT_GT(perTriangle, 144.0 + 72.0);
-  EXPECT_LT(perTriangle, 270.0);
+  const auto perTriangle = [](const QueryMesh& query) {
+    return static_cast<double>(query.memoryBytes()) / static_cast<double>(query.size());
+  };
+  const QueryMesh query(closed);
+  const double prepared = perTriangle(query);
+  EXPECT_GT(prepared, 72.0 + 72.0);
+  EXPECT_LT(prepared, 200.0);
+  ASSERT_EQ(query.triangles().size(), closed.triangleCount());
+  EXPECT_NEAR(perTriangle(query), prepared + 72.0, 1.0);
   Mesh open = primitives::icosphere(5);
   open = Mesh(std::vector<Vec3>(open.vertices().begin(), open.vertices().end()),
               std::vector<TriangleIndices>(open.triangles().begin() + 1, open.triangles().end()));
   const QueryMesh openQuery(open);
   EXPECT_FALSE(openQuery.closed());
-  EXPECT_LT(
-      static_cast<double>(openQuery.memoryBytes()) / static_cast<double>(open.triangleCount()),
-      perTriangle - 60.0);  // no pseudonormals for an open mesh
+  EXPECT_LT(perTriangle(openQuery), prepared - 60.0);  // no pseudonormals for an open mesh
+}
+
+TEST(QueryMesh, MeshOrderTrianglesMadeOnceForManyThreads) {
+  // triangles() is made on the first call, whichever thread makes it; every thread and copy gets
+  // the same object, in the mesh's order.
+  const Mesh mesh = primitives::granulate(4, {1, 2, 0.5}, 300);
+  const QueryMesh query(mesh);
+  std::vector<const TriangleSoA*> seen(8, nullptr);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < seen.size(); ++t)
+    threads.emplace_back([&, t] {
+      const QueryMesh copy = query;
+      seen[t] = &copy.triangles();
+    });
+  for (std::thread& thread : threads)
+    thread.join();
+  for (const TriangleSoA* soa : seen)
+    EXPECT_EQ(soa, &query.triangles());
+  for (std::size_t i = 0; i < mesh.triangleCount(); ++i) {
+    const Triangle expected = mesh.triangle(i), found = query.triangles().triangle(i);
+    ASSERT_EQ(found.a, expected.a) << i;
+    ASSERT_EQ(found.b, expected.b) << i;
+    ASSERT_EQ(found.c, expected.c) << i;
+  }
 }
 
 }  // namespace

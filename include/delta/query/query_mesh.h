@@ -15,7 +15,7 @@ namespace detail {
 struct QueryMeshData;
 }
 
-/// A mesh prepared for queries: its flattened triangles (in the mesh's order, for the kernels), a
+/// A mesh prepared for queries: its flattened triangles (in the tree's order, for the kernels), a
 /// bounding-volume tree over them (eight triangles to a leaf, eight nodes to a parent, each node
 /// with its box; built top-down by splits at the median of the centroids along the longest axis),
 /// a uniform grid over its box with a lower bound of the distance to the mesh in every cell (one
@@ -68,15 +68,16 @@ class QueryMesh {
   /// The number of triangles.
   std::size_t size() const noexcept;
   /// The flattened triangles in the mesh's order, in the frame the mesh was prepared in (apply
-  /// pose() for where they are now).
-  const TriangleSoA& triangles() const noexcept;
+  /// pose() for where they are now). Made on the first call (72 bytes a triangle, shared by the
+  /// copies; the queries do not need them) and kept; thread-safe. May throw std::bad_alloc.
+  const TriangleSoA& triangles() const;
   const Topology& topology() const noexcept;
   /// Closed and consistently oriented: signed distances and inside tests are defined.
   bool closed() const noexcept;
   /// The box of all vertices, in the prepared frame.
   const Aabb& bounds() const noexcept;
-  /// Bytes held on the heap (triangles twice: in mesh order and in tree order; tree boxes; the
-  /// distance-bound grid; pseudonormals of closed meshes).
+  /// Bytes held on the heap (the triangles in tree order, and in mesh order once triangles() has
+  /// made them; tree boxes; the distance-bound grid; pseudonormals of closed meshes).
   std::size_t memoryBytes() const noexcept;
 
   /// The prepared data, for the query implementations.

@@ -188,7 +188,7 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
   // is within rounding of zero (a degenerate triangle's zero normal, a point almost tangent to
   // the surface) the winding number, O(n) but robust, decides.
   if (std::abs(side) > 1e-9 * length(offset) * length(normal)) return side < 0.0;
-  return windingNumber(mesh.triangles, point) * mesh.orientation > 0.5;
+  return windingNumber(mesh.sorted, point) * mesh.orientation > 0.5;
 }
 
 }  // namespace delta::detail

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 #include "delta/core/aabb.h"
@@ -74,8 +76,7 @@ struct Pseudonormals {
 
 /// What a QueryMesh holds (see query_mesh.h).
 struct QueryMeshData {
-  TriangleSoA triangles;  ///< mesh order
-  TriangleSoA sorted;     ///< tree order: sorted[k] is triangles[order[k]]
+  TriangleSoA sorted;  ///< tree order: sorted[k] is the mesh's triangle order[k]
   std::vector<std::uint32_t> order;
   /// levels[0]: the leaves' boxes (leaf i holds sorted triangles [8i, 8i + 8)); levels[l]: node i
   /// has the children [8i, 8i + 8) of level l − 1; levels.back() holds the root alone. Boxes are
@@ -97,6 +98,18 @@ struct QueryMeshData {
   double orientation = 1.0;  ///< −1 for an inside-out closed mesh
   Aabb bounds;
   double slack = 0.0;
+
+  /// The triangles in the mesh's order (QueryMesh::triangles()), made from `sorted` on the first
+  /// call (the queries never need them: most users never pay their 72 bytes a triangle).
+  /// Thread-safe.
+  const TriangleSoA& meshOrder() const;
+  /// Whether meshOrder() has been made (then its bytes count in QueryMesh::memoryBytes()).
+  bool meshOrderMade() const noexcept { return meshOrderMade_.load(std::memory_order_acquire); }
+
+ private:
+  mutable std::once_flag meshOrderOnce_;
+  mutable TriangleSoA meshOrder_;
+  mutable std::atomic<bool> meshOrderMade_{false};
 };
 
 /// The closest triangle to a point.
