@@ -15,6 +15,7 @@
 #include "delta/mesh/primitives.h"
 #include "delta/query/query_mesh.h"
 
+#include "kernels/triangle_pairs.h"
 #include "query/detail/query_mesh_data.h"
 
 namespace delta::detail {
@@ -45,7 +46,7 @@ std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64_t seed
 
 void expectEveryIsaLikeAllTriangles(const Mesh& mesh, const char* name) {
   const QueryMesh query(mesh);
-  const std::vector<Vec3> points = probes(mesh, 300, 3);
+  const std::vector<Vec3> points = probes(mesh, testing::scaledCount(300), 3);
   for (kernels::Isa isa : kernels::supportedIsas()) {
     for (const Vec3& p : points) {
       double expected = std::numeric_limits<double>::infinity();
