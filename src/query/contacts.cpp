@@ -205,12 +205,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   std::vector<std::vector<ContactPoint>> perGroup(groups.size() - 1);
   parallelFor(0, groups.size() - 1, 1, [&](std::size_t begin, std::size_t end) {
     kernels::PairResults results(kBlock);
-    TriangleSoA batch;
-    std::vector<Triangle> candidates;
-    std::vector<std::uint32_t> candidateIds;
+    // A group's candidate pairs, all its first triangles' together, go to the kernels in one
+    // batch of pairs: a first triangle has a few partners, which would leave most of a batch's
+    // lanes idle.
+    std::vector<Triangle> firsts, seconds;
+    std::vector<std::uint32_t> firstIds, secondIds;
+    TriangleSoA firstBatch, secondBatch;
     std::vector<std::uint32_t> partners;  // slots of the group's second triangles near its leaf
     for (std::size_t g = begin; g < end; ++g) {
-      std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
       const std::uint32_t firstLeaf = pairs[groups[g]].first;
       const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
       const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
@@ -224,30 +226,36 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
           if (partnerIds[slot] != kNoPartner && !apart(firstLeafBox, partnerBoxes[slot], reach))
             partners.push_back(static_cast<std::uint32_t>(slot));  // most leaf neighbours are not
       }
+      firsts.clear();
+      seconds.clear();
+      firstIds.clear();
+      secondIds.clear();
       for (std::size_t i = firstBegin; i < firstEnd && !partners.empty(); ++i) {
         const Triangle one = a.sorted.triangle(i);
         const Aabb box = one.bounds();
         const detail::SeparatingPlane plane = detail::separatingPlane(one);
-        candidates.clear();
-        candidateIds.clear();
         for (const std::uint32_t slot : partners) {
           if (apart(box, partnerBoxes[slot], reach) ||
               detail::separated(plane, partnerTriangles[slot], partnerPlanes[slot].magnitude,
                                 reach) ||
               detail::separated(partnerPlanes[slot], one, plane.magnitude, reach))
             continue;
-          candidates.push_back(partnerTriangles[slot]);
-          candidateIds.push_back(partnerIds[slot]);
+          firsts.push_back(one);
+          seconds.push_back(partnerTriangles[slot]);
+          firstIds.push_back(a.order[i]);
+          secondIds.push_back(partnerIds[slot]);
         }
-        if (candidates.empty()) continue;
-        batch.assign(candidates);
-        results.reserve(batch.size());  // the kernels fill at most the capacity
-        kernels::distances(solver, one, batch, 0, batch.size(), results);
-        for (std::size_t k = 0; k < results.size(); ++k)
-          if (results.distanceSquared(k) < reach * reach)
-            out.push_back(contactPoint(one, candidates[k], results.p(k), results.q(k),
-                                       results.intersect(k), a.order[i], candidateIds[k]));
       }
+      if (firsts.empty()) continue;
+      firstBatch.assign(firsts);
+      secondBatch.assign(seconds);
+      results.reserve(firsts.size());  // the kernels fill at most the capacity
+      kernels::distances(solver, firstBatch, secondBatch, results);
+      std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
+      for (std::size_t k = 0; k < results.size(); ++k)
+        if (results.distanceSquared(k) < reach * reach)
+          out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
+                                     results.intersect(k), firstIds[k], secondIds[k]));
       perGroup[g] = std::move(out);
     }
   });
