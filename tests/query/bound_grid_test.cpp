@@ -20,16 +20,14 @@
 #include "delta/query/query_mesh.h"
 
 #include "kernels/triangle_pairs.h"
+#include "query/probe_points.h"
 
 namespace delta::detail {
 namespace {
 
-const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
+using testing::unit;
 
-/// Uniform in [0, 1) from the generator's raw bits (the same on every platform).
-double unit(std::mt19937_64& random) {
-  return static_cast<double>(random() >> 11) * 0x1p-53;
-}
+const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
 /// The reference: the smallest squared distance the kernel computes over all triangles.
 double bruteForceSquared(const TriangleSoA& triangles, const Vec3& point) {

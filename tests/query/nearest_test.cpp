@@ -17,36 +17,14 @@
 
 #include "kernels/triangle_pairs.h"
 #include "query/detail/query_mesh_data.h"
+#include "query/probe_points.h"
 
 namespace delta::detail {
 namespace {
 
-double unit(std::mt19937_64& random) {
-  return static_cast<double>(random() >> 11) * 0x1p-53;
-}
-
-/// Points uniform in the box grown by 10%, and on and next to vertices, edges and faces.
-std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64_t seed) {
-  std::mt19937_64 random(seed);
-  const Aabb box = mesh.bounds();
-  const Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;
-  std::vector<Vec3> points;
-  for (std::size_t i = 0; i < count; ++i)
-    points.push_back(lower +
-                     Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)});
-  for (std::size_t i = 0; i < count / 4; ++i) {
-    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
-    const Vec3 normal = normalized(t.areaVector()) * (1e-7 * box.diagonal());
-    for (const Vec3& on : {t.a, (t.b + t.c) * 0.5, t.centroid()})
-      for (const Vec3& p : {on, on + normal, on - normal})
-        points.push_back(p);
-  }
-  return points;
-}
-
 void expectEveryIsaLikeAllTriangles(const Mesh& mesh, const char* name) {
   const QueryMesh query(mesh);
-  const std::vector<Vec3> points = probes(mesh, testing::scaledCount(300), 3);
+  const std::vector<Vec3> points = testing::probes(mesh, testing::scaledCount(300), 3);
   for (kernels::Isa isa : kernels::supportedIsas()) {
     for (const Vec3& p : points) {
       double expected = std::numeric_limits<double>::infinity();

@@ -17,15 +17,15 @@
 #include "delta/query/contacts.h"
 #include "delta/query/winding_number.h"
 
+#include "query/probe_points.h"
+
 namespace delta::contactdetection {
 namespace {
 
-const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
+using testing::probes;
+using testing::unit;
 
-/// Uniform in [0, 1) from the generator's raw bits (the same on every platform).
-double unit(std::mt19937_64& random) {
-  return static_cast<double>(random() >> 11) * 0x1p-53;
-}
+const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
 /// The reference: every triangle in id order, a strictly smaller distance replaces the best.
 PointDistance byAllTriangles(const Mesh& mesh, const Vec3& point) {
@@ -41,29 +41,6 @@ PointDistance byAllTriangles(const Mesh& mesh, const Vec3& point) {
     }
   }
   return best;
-}
-
-/// Random points in the box grown by 10% per side, points near the surface (vertices, edge
-/// midpoints and centroids nudged by ±1e-6 of the size and exactly on them), and far points.
-std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64_t seed) {
-  std::mt19937_64 random(seed);
-  const Aabb box = mesh.bounds();
-  const Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;
-  std::vector<Vec3> points;
-  for (std::size_t i = 0; i < count; ++i)
-    points.push_back(lower +
-                     Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)});
-  const double nudge = 1e-6 * box.diagonal();
-  for (std::size_t i = 0; i < count / 4; ++i) {
-    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
-    const Vec3 normal = normalized(t.areaVector());
-    for (const Vec3& on : {t.a, (t.a + t.b) * 0.5, t.centroid()})
-      for (double side : {-1.0, 0.0, 1.0})
-        points.push_back(on + normal * (side * nudge));
-  }
-  points.push_back(box.center() + Vec3{1e3, -2e3, 5e2} * box.diagonal());
-  points.push_back(box.center());
-  return points;
 }
 
 void expectSameAsAllTriangles(const Mesh& mesh, const std::vector<Vec3>& points, const char* name) {

@@ -14,20 +14,14 @@
 #include "delta/query/minimum_distance.h"
 #include "delta/query/point_distance.h"
 
+#include "query/probe_points.h"
+
 namespace delta::contactdetection {
 namespace {
 
-double unit(std::mt19937_64& random) {
-  return static_cast<double>(random() >> 11) * 0x1p-53;
-}
-
 std::vector<Vec3> pointsAround(const Aabb& box, std::size_t count, std::uint64_t seed) {
   std::mt19937_64 random(seed);
-  const Vec3 lower = box.lower - box.extent() * 0.2, size = box.extent() * 1.4;
-  std::vector<Vec3> points(count);
-  for (Vec3& p : points)
-    p = lower + Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)};
-  return points;
+  return testing::uniformAround(box, count, 0.2, random);
 }
 
 const RigidTransform kFirstMotion{Quaternion::fromAxisAngle({1, 2, 3}, 0.9), {1e3, -20, 7}};
