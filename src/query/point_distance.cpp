@@ -60,7 +60,8 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
-  if (data.boundGrid.lowerBoundSquared(point) > limit) return {};  // the seed's early "no contact"
+  // The seed's early "no contact" (for an unlimited search there is nothing to reject).
+  if (std::isfinite(limit) && data.boundGrid.lowerBoundSquared(point) > limit) return {};
   const auto grown = [](double distanceSquared) {
     return std::nextafter(distanceSquared * kBoundGrowth, std::numeric_limits<double>::infinity());
   };

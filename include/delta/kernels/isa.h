@@ -32,7 +32,8 @@ bool isSupported(Isa isa) noexcept;
 /// Every supported ISA, narrowest first (always starts with Scalar). Allocates.
 std::vector<Isa> supportedIsas();
 
-/// The ISA the batched kernels use when none is named: the widest supported one, chosen once
+/// The ISA the batched kernels (and the point queries' leaf bounds and descent) use when none is
+/// named: the widest supported one, chosen once
 /// (on the first call). The environment variable DELTA_ISA=scalar|sse2|avx2|avx512, read at that
 /// moment, lowers it for tests and benchmarks; a name this CPU cannot run, or an unknown one,
 /// is ignored.
