@@ -17,6 +17,7 @@
 #include "delta/query/contacts.h"
 #include "delta/query/winding_number.h"
 
+#include "kernels/triangle_pairs.h"
 #include "query/probe_points.h"
 
 namespace delta::contactdetection {
@@ -177,21 +178,30 @@ TEST(PointDistance, EpsilonIsStrict) {
 }
 
 TEST(PointDistance, WithinEpsilonAgreesWithTheFullQuery) {
+  // Batches over several of the grid sieve's blocks, with the mesh where it was built and moved
+  // (the sieve reads the grid in the mesh's frame).
   const Mesh mesh = io::load(kMeshes / "fandisk.off");
-  const QueryMesh query(mesh);
-  const std::vector<Vec3> points = probes(mesh, 2000, 5);
-  const double epsilon = 0.01 * mesh.bounds().diagonal();
-  const std::vector<PointDistance> all = distances(query, points);
-  const std::vector<PointDistance> near = distances(query, points, {.epsilon = epsilon});
-  std::size_t within = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    ASSERT_EQ(near[i].found(), all[i].distance < epsilon) << i;
-    if (!near[i].found()) continue;
-    ++within;
-    EXPECT_EQ(near[i].distance, all[i].distance);
-    EXPECT_EQ(near[i].triangle, all[i].triangle);
+  QueryMesh moved(mesh);
+  moved.transform(
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({3, 1, 2}, 0.7), {0.5, -0.2, 0.1}));
+  for (const QueryMesh& query : {QueryMesh(mesh), moved}) {
+    std::vector<Vec3> points = probes(mesh, testing::scaledCount(6000), 5);
+    for (Vec3& p : points)
+      p = query.pose().apply(p);
+    const double epsilon = 0.01 * mesh.bounds().diagonal();
+    const std::vector<PointDistance> all = distances(query, points);
+    const std::vector<PointDistance> near = distances(query, points, {.epsilon = epsilon});
+    std::size_t within = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      ASSERT_EQ(near[i].found(), all[i].distance < epsilon) << i;
+      if (!near[i].found()) continue;
+      ++within;
+      EXPECT_EQ(near[i].distance, all[i].distance);
+      EXPECT_EQ(near[i].triangle, all[i].triangle);
+      EXPECT_EQ(near[i].closest, all[i].closest);
+    }
+    EXPECT_GT(within, points.size() / 4);  // the nudged points at least
   }
-  EXPECT_GT(within, points.size() / 4);  // the nudged points at least
 }
 
 /// Inside by the generalized winding number over all triangles.
@@ -299,6 +309,18 @@ TEST(PointDistance, BadInputThrows) {
     EXPECT_NE(std::string(e.what()).find("point 1 "), std::string::npos) << e.what();
   }
   EXPECT_THROW(distance(box, {0, INFINITY, 0}), Error);
+  // A large batch (sieved by the grid in blocks when ε is finite) names its first bad point.
+  std::vector<Vec3> many(20000, Vec3{2, 0, 0});
+  many[17000].z = INFINITY;
+  many[9000].y = std::nan("");
+  for (double epsilon : {0.5, std::numeric_limits<double>::infinity()}) {
+    try {
+      distances(box, many, {.epsilon = epsilon});
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("point 9000 "), std::string::npos) << e.what();
+    }
+  }
   const std::vector<double> x = {0, 1}, y = {0, 1}, z = {0};
   EXPECT_THROW(distances(box, x, y, z), Error);
   std::vector<PointDistance> small(1);

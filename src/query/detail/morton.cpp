@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "delta/core/aabb.h"
+#include "delta/core/parallel.h"
 
 namespace delta::detail {
 namespace {
@@ -21,26 +22,37 @@ std::uint64_t spreadBits(std::uint64_t x) noexcept {
 
 std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const void*, std::size_t),
                                        const void* context) {
+  // The box and the keys in parallel blocks (the radix sort after them is a third of the time).
+  constexpr std::size_t kBlock = std::size_t{1} << 14;
+  const std::size_t blocks = (count + kBlock - 1) / kBlock;
+  std::vector<Aabb> blockBoxes(blocks);
+  parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
+    for (std::size_t block = firstBlock; block < endBlock; ++block)
+      for (std::size_t i = block * kBlock; i < std::min(count, (block + 1) * kBlock); ++i)
+        blockBoxes[block].extend(pointAt(context, i));
+  });
   Aabb box;
-  for (std::size_t i = 0; i < count; ++i)
-    box.extend(pointAt(context, i));
+  for (const Aabb& blockBox : blockBoxes)
+    box.extend(blockBox);
   // Keys: a 30-bit code (1024 cells an axis: finer buys no locality) above the 32-bit index,
   // sorted by three passes of a 10-bit radix sort, least significant digit first. The index in
   // the low half makes ties (repeated points, one cell) come out in index order.
   constexpr double kCells = 1023.0;
   std::vector<std::uint64_t> keys(count), buffer(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    const Vec3 point = pointAt(context, i);
-    std::uint64_t code = 0;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      const double extent = box.upper[axis] - box.lower[axis];
-      double unit = extent > 0.0 ? (point[axis] - box.lower[axis]) / extent : 0.0;
-      if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
-      const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
-      code |= spreadBits(cell) << axis;
+  parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
+    for (std::size_t i = firstBlock * kBlock; i < std::min(count, endBlock * kBlock); ++i) {
+      const Vec3 point = pointAt(context, i);
+      std::uint64_t code = 0;
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const double extent = box.upper[axis] - box.lower[axis];
+        double unit = extent > 0.0 ? (point[axis] - box.lower[axis]) / extent : 0.0;
+        if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
+        const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
+        code |= spreadBits(cell) << axis;
+      }
+      keys[i] = code << 32 | i;
     }
-    keys[i] = code << 32 | i;
-  }
+  });
   constexpr std::size_t kDigits = 1024;
   for (int shift = 32; shift < 62; shift += 10) {
     std::vector<std::size_t> start(kDigits + 1, 0);

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "delta/kernels/detail/batch_dispatch.h"
@@ -31,6 +32,15 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
          (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
 }
 
+/// Bit i set where bounds[i] ≤ best (never for NaN).
+[[gnu::always_inline]] inline unsigned nearMask(const double (&bounds)[kFanout],
+                                                double best) noexcept {
+  unsigned mask = 0;
+  for (std::size_t i = 0; i < kFanout; ++i)
+    mask |= static_cast<unsigned>(bounds[i] <= best) << i;
+  return mask;
+}
+
 /// What a descent reads besides the tree: the sorted triangles as plain streams, and the ISA's
 /// bounds of a point against a leaf's eight triangles.
 struct Leaves {
@@ -59,8 +69,8 @@ struct Leaves {
   }
   std::uint32_t candidates[kFanout];
   std::size_t count = 0;
-  for (std::uint32_t i = 0; i < kFanout; ++i) {
-    if (!(bounds[i] <= best.distanceSquared)) continue;
+  for (unsigned rest = nearMask(bounds, best.distanceSquared); rest != 0; rest &= rest - 1) {
+    const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
     std::size_t at = count++;  // insertion into ascending order
     for (; at > 0 && bounds[candidates[at - 1]] > bounds[i]; --at)
       candidates[at] = candidates[at - 1];
@@ -104,18 +114,18 @@ struct Leaves {
     double bounds[kFanout];
     distancesSquared(mesh.childOctets[entry.level() - 1][entry.index()], point, bounds);
     const std::uint32_t first = entry.index() * static_cast<std::uint32_t>(kFanout);
-    Pending near[kFanout];
-    std::size_t count = 0;
-    for (std::uint32_t i = 0; i < kFanout; ++i) {
-      if (bounds[i] > best.distanceSquared) continue;  // also the empty slots
-      // Insertion into descending order, so the nearest child is pushed last.
-      std::size_t at = count++;
-      for (; at > 0 && near[at - 1].bound < bounds[i]; --at)
-        near[at] = near[at - 1];
-      near[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
+    // The children not beyond the best (never the empty slots) go onto the stack in descending
+    // order of distance, so the nearest is popped next. The mask is made without branches: a
+    // branch per child mispredicted often enough to cost 4% of an ε-limited query.
+    const unsigned near = nearMask(bounds, best.distanceSquared);
+    const std::size_t base = top;
+    for (unsigned rest = near; rest != 0; rest &= rest - 1) {
+      const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
+      std::size_t at = top++;
+      for (; at > base && stack[at - 1].bound < bounds[i]; --at)
+        stack[at] = stack[at - 1];
+      stack[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
     }
-    for (std::size_t c = 0; c < count; ++c)
-      stack[top++] = near[c];
   }
   return best;
 }
