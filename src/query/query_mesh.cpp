@@ -1,6 +1,7 @@
 #include "delta/query/query_mesh.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -84,13 +85,21 @@ std::vector<std::vector<Aabb>> buildLevels(const TriangleSoA& sorted, double sla
   return levels;
 }
 
+/// The float one step from `f` (finite, or an infinity stepping inward) towards −∞ (`down`) or
+/// +∞: std::nextafter's result, without its library call (the contact queries round a few
+/// thousand moved boxes a query).
+float stepped(float f, bool down) noexcept {
+  if (f == 0.0f) return down ? -std::numeric_limits<float>::denorm_min()
+                             : std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>((f > 0.0f) == down ? bits - 1 : bits + 1);
+}
+
 /// A double rounded to a float no larger (`down`) or no smaller than it.
 float roundedOutward(double value, bool down) noexcept {
   const float f = static_cast<float>(value);
-  if (down && static_cast<double>(f) > value)
-    return std::nextafter(f, -std::numeric_limits<float>::infinity());
-  if (!down && static_cast<double>(f) < value)
-    return std::nextafter(f, std::numeric_limits<float>::infinity());
+  if (down && static_cast<double>(f) > value) return stepped(f, true);
+  if (!down && static_cast<double>(f) < value) return stepped(f, false);
   return f;
 }
 
