@@ -68,24 +68,6 @@ ContactPoint contactPoint(const Triangle& first, const Triangle& second, const V
   return contact;
 }
 
-/// Bit i set where box i of `boxes` is not `gap` apart from `box` along any axis (apart() for
-/// eight boxes at once; never for an empty slot). Without branches: called a few thousand times
-/// a query, its short-circuit form took a quarter of a contact query in mispredictions.
-[[gnu::always_inline]] inline unsigned notApartMask(const detail::BoxOctet& boxes, const Aabb& box,
-                                                    double gap) noexcept {
-  unsigned mask = 0;
-  for (std::size_t i = 0; i < detail::kFanout; ++i) {
-    const bool near = static_cast<int>(double{boxes.lowerX[i]} - box.upper.x < gap) &
-                      static_cast<int>(box.lower.x - double{boxes.upperX[i]} < gap) &
-                      static_cast<int>(double{boxes.lowerY[i]} - box.upper.y < gap) &
-                      static_cast<int>(box.lower.y - double{boxes.upperY[i]} < gap) &
-                      static_cast<int>(double{boxes.lowerZ[i]} - box.upper.z < gap) &
-                      static_cast<int>(box.lower.z - double{boxes.upperZ[i]} < gap);
-    mask |= static_cast<unsigned>(near) << i;
-  }
-  return mask;
-}
-
 /// One unit of parallel work: a triangle of the first mesh against a block of the second.
 struct Task {
   std::uint32_t triangle;
@@ -259,7 +241,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       partners.clear();
       for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
         const std::size_t j = rankOf[pairs[p].second];
-        for (unsigned rest = notApartMask(partnerOctets[j], firstLeafBox, reach); rest != 0;
+        for (unsigned rest = detail::notApartMask(partnerOctets[j], firstLeafBox, reach); rest != 0;
              rest &= rest - 1)
           partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
                              static_cast<std::uint32_t>(std::countr_zero(rest)));
@@ -280,7 +262,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       }
       const detail::BoxOctet& leafBoxes = a.leafOctets[firstLeaf];
       for (const std::uint32_t slot : partners) {
-        for (unsigned rest = notApartMask(leafBoxes, partnerBoxes[slot], reach); rest != 0;
+        for (unsigned rest = detail::notApartMask(leafBoxes, partnerBoxes[slot], reach); rest != 0;
              rest &= rest - 1) {
           const auto i = static_cast<std::size_t>(std::countr_zero(rest));
           const Triangle& one = leafTriangles[i];

@@ -350,26 +350,41 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   LeafCache firstLeaves(a, nullptr), secondLeaves(b, moved ? &motion : nullptr);
   Triangle candidates[detail::kFanout];
   std::uint32_t ids[detail::kFanout];
+  // A node opens into its eight children at once: their boxes from the trees' octets (the
+  // second's moved eight at a time), each pair queued unless farther than the best. (Opening the
+  // nearest child next without the queue measured slower: it runs ahead of pairs nearer still.)
+  const auto open8 = [&](const double(&bounds)[detail::kFanout], std::size_t count,
+                         const auto& entryOf) {
+    for (std::size_t c = 0; c < count; ++c)
+      if (!(bounds[c] > bestSquared)) open.push(entryOf(c));
+  };
   while (!open.empty()) {
     const Entry entry = open.top();
     open.pop();
     if (entry.bound > bestSquared) break;
+    double bounds[detail::kFanout];
     if (entry.firstLevel > 0 && (entry.secondLevel == 0 || entry.firstLevel >= entry.secondLevel)) {
+      const std::uint32_t level = entry.firstLevel - 1;
+      detail::distancesSquared(a.childOctets[level][entry.firstNode],
+                               secondTree.box(entry.secondLevel, entry.secondNode), bounds);
       const std::size_t begin = std::size_t{entry.firstNode} * detail::kFanout;
-      const std::size_t end =
-          std::min(begin + detail::kFanout, a.levels[entry.firstLevel - 1].size());
-      for (std::size_t c = begin; c < end; ++c)
-        push(entry.firstLevel - 1, static_cast<std::uint32_t>(c), entry.secondLevel,
-             entry.secondNode);
+      const std::size_t count = std::min(detail::kFanout, a.levels[level].size() - begin);
+      open8(bounds, count, [&](std::size_t c) {
+        return Entry{bounds[c], level, static_cast<std::uint32_t>(begin + c), entry.secondLevel,
+                     entry.secondNode};
+      });
       continue;
     }
     if (entry.secondLevel > 0) {
+      const std::uint32_t level = entry.secondLevel - 1;
+      detail::distancesSquared(secondTree.moved(b.childOctets[level][entry.secondNode]),
+                               a.levels[entry.firstLevel][entry.firstNode], bounds);
       const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
-      const std::size_t end =
-          std::min(begin + detail::kFanout, secondTree.nodeCount(entry.secondLevel - 1));
-      for (std::size_t c = begin; c < end; ++c)
-        push(entry.firstLevel, entry.firstNode, entry.secondLevel - 1,
-             static_cast<std::uint32_t>(c));
+      const std::size_t count = std::min(detail::kFanout, secondTree.nodeCount(level) - begin);
+      open8(bounds, count, [&](std::size_t c) {
+        return Entry{bounds[c], entry.firstLevel, entry.firstNode, level,
+                     static_cast<std::uint32_t>(begin + c)};
+      });
       continue;
     }
     // Two leaves: each triangle of the first against those of the second's (at most) eight

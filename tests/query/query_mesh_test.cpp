@@ -10,6 +10,7 @@
 #include "delta/core/error.h"
 #include "delta/io/mesh_io.h"
 #include "delta/mesh/primitives.h"
+#include "delta/mesh/triangle_soa.h"
 #include "delta/query/contacts.h"
 #include "delta/query/minimum_distance.h"
 #include "delta/query/point_distance.h"
@@ -92,6 +93,44 @@ TEST(QueryMesh, MovedMeshesGiveTheContactsOfTheMovedMeshes) {
   b.transform(RigidTransform::translationBy({3, 0, 0}));  // apart now
   EXPECT_TRUE(contacts(a, b, epsilon).empty());
   EXPECT_GT(minimumDistance(a, b).distance, 1.0);
+}
+
+TEST(QueryMesh, MovedMeshesGiveTheMinimumDistanceOfTheMovedMeshes) {
+  // Both trees moved (the second's boxes and octets carried into the first's frame), at gaps
+  // from touching to a third of the size: the pruned descent of the prepared trees against the
+  // flattened moved meshes' blocks.
+  const Mesh mesh = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
+  const double size = mesh.bounds().diagonal();
+  const QueryMesh prepared(mesh);
+  std::mt19937_64 random(17);
+  for (double gap : {1e-3, 2e-2, 0.3}) {
+    const RigidTransform placeA{
+        Quaternion::fromAxisAngle({testing::unit(random), 1, 0.5}, 3.0 * testing::unit(random)),
+        {40, -3, 8}};
+    const RigidTransform turn{
+        Quaternion::fromAxisAngle({1, testing::unit(random), -1}, 2.0 * testing::unit(random)), {}};
+    // The second copy moved along x until its gap to the first is about `gap` (bisection).
+    const auto placed = [&](double shift) {
+      return RigidTransform::translationBy({shift, 0.1 * size, 0}) * placeA * turn;
+    };
+    const TriangleSoA first = flatten(Mesh(mesh).transform(placeA));
+    double low = 0.0, high = 2.0 * size;
+    for (int step = 0; step < 40; ++step) {
+      const double middle = 0.5 * (low + high);
+      const double at =
+          minimumDistance(first, flatten(Mesh(mesh).transform(placed(middle)))).distance;
+      (at < gap * size ? low : high) = middle;
+    }
+    QueryMesh a = prepared, b = prepared;
+    a.setPose(placeA);
+    b.setPose(placed(high));
+    const MinimumDistance moved = minimumDistance(a, b);
+    const MinimumDistance flat =
+        minimumDistance(first, flatten(Mesh(mesh).transform(placed(high))));
+    EXPECT_GT(flat.distance, 0.5 * gap * size) << gap;
+    EXPECT_NEAR(moved.distance, flat.distance, 1e-12 * size) << gap;
+    EXPECT_NEAR(distance(moved.p, flat.p), 0.0, 1e-6 * size) << gap;
+  }
 }
 
 TEST(QueryMesh, RejectsNonFiniteMotionsAndEmptyMeshes) {
