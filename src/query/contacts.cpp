@@ -20,6 +20,8 @@ namespace {
 
 /// Triangles of the second mesh handed to the kernels at once, and pruned as one box.
 constexpr std::size_t kBlock = 64;
+/// First leaves whose candidate pairs go to the kernels in one batch (QueryMesh contacts).
+constexpr std::size_t kGroupsPerBatch = 16;
 /// Triangle ids are 32-bit (ContactPoint).
 constexpr std::size_t kMaxTriangles = std::size_t{1} << 32;
 /// Tasks (one triangle against one block, at most kBlock kernel pairs, a few µs) per parallel
@@ -204,7 +206,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const std::size_t slots = secondLeaves.size() * detail::kFanout;
   std::vector<Triangle> partnerTriangles(slots);
   std::vector<Aabb> partnerBoxes(slots);
-  detail::BoxOctets partnerOctets(secondLeaves.size());
+  std::vector<detail::MovedOctet> partnerOctets(secondLeaves.size());
   std::vector<detail::SeparatingPlane> partnerPlanes(slots);
   std::vector<std::uint32_t> partnerIds(slots, kNoPartner);
   parallelFor(0, secondLeaves.size(), 64, [&](std::size_t begin, std::size_t end) {
@@ -219,61 +221,75 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
         partnerPlanes[slot] = detail::separatingPlane(other);
         partnerIds[slot] = b.order[k];
       }
-      partnerOctets[j] = detail::octetOf(partnerBoxes, j * detail::kFanout);
+      detail::MovedOctet& octet = partnerOctets[j];  // the same boxes, eight side by side
+      for (std::size_t i = 0; i < detail::kFanout; ++i) {
+        const Aabb& box = partnerBoxes[j * detail::kFanout + i];  // empty past a last leaf's end
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          octet.lower[axis][i] = box.lower[axis];
+          octet.upper[axis][i] = box.upper[axis];
+        }
+      }
     }
   });
 
-  std::vector<std::vector<ContactPoint>> perGroup(groups.size() - 1);
-  parallelFor(0, groups.size() - 1, 1, [&](std::size_t begin, std::size_t end) {
+  // The candidate pairs of a run of kGroupsPerBatch first leaves go to the kernels in one batch
+  // of pairs: a first leaf has a few (nearly parallel surfaces: two), which would leave most of
+  // a batch's lanes idle and pay a call each. Runs are fixed by index, so the batches (and the
+  // bits of the hybrid solver, which can depend on a batch's other pairs) are the same for any
+  // number of threads.
+  const std::size_t groupCount = groups.size() - 1;
+  const std::size_t runs = (groupCount + kGroupsPerBatch - 1) / kGroupsPerBatch;
+  std::vector<std::vector<ContactPoint>> perRun(runs);
+  parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
     kernels::PairResults results(kBlock);
-    // A group's candidate pairs, all its first triangles' together, go to the kernels in one
-    // batch of pairs: a first triangle has a few partners, which would leave most of a batch's
-    // lanes idle.
     std::vector<Triangle> firsts, seconds;
     std::vector<std::uint32_t> firstIds, secondIds;
     TriangleSoA firstBatch, secondBatch;
     std::vector<std::uint32_t> partners;  // slots of the group's second triangles near its leaf
-    for (std::size_t g = begin; g < end; ++g) {
-      const std::uint32_t firstLeaf = pairs[groups[g]].first;
-      const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
-      const std::size_t firstEnd = std::min(firstBegin + detail::kFanout, a.sorted.size());
-      const Aabb firstLeafBox = a.levels[0][firstLeaf];
-      partners.clear();
-      for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
-        const std::size_t j = rankOf[pairs[p].second];
-        for (unsigned rest = detail::notApartMask(partnerOctets[j], firstLeafBox, reach); rest != 0;
-             rest &= rest - 1)
-          partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
-                             static_cast<std::uint32_t>(std::countr_zero(rest)));
-      }
+    for (std::size_t run = firstRun; run < endRun; ++run) {
       firsts.clear();
       seconds.clear();
       firstIds.clear();
       secondIds.clear();
-      if (partners.empty()) continue;
-      // The leaf's triangles and planes once; then per partner the eight triangle boxes at once
-      // (the leaf's octet: outward-rounded, grown by the slack, so no pair is lost), the planes
-      // for those left. The contacts are sorted at the end: the batch's order does not matter.
-      Triangle leafTriangles[detail::kFanout];
-      detail::SeparatingPlane leafPlanes[detail::kFanout];
-      for (std::size_t i = firstBegin; i < firstEnd; ++i) {
-        leafTriangles[i - firstBegin] = a.sorted.triangle(i);
-        leafPlanes[i - firstBegin] = detail::separatingPlane(leafTriangles[i - firstBegin]);
-      }
-      const detail::BoxOctet& leafBoxes = a.leafOctets[firstLeaf];
-      for (const std::uint32_t slot : partners) {
-        for (unsigned rest = detail::notApartMask(leafBoxes, partnerBoxes[slot], reach); rest != 0;
-             rest &= rest - 1) {
-          const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-          const Triangle& one = leafTriangles[i];
-          if (detail::separated(leafPlanes[i], partnerTriangles[slot],
-                                partnerPlanes[slot].magnitude, reach) ||
-              detail::separated(partnerPlanes[slot], one, leafPlanes[i].magnitude, reach))
-            continue;
-          firsts.push_back(one);
-          seconds.push_back(partnerTriangles[slot]);
-          firstIds.push_back(a.order[firstBegin + i]);
-          secondIds.push_back(partnerIds[slot]);
+      for (std::size_t g = run * kGroupsPerBatch;
+           g < std::min(groupCount, (run + 1) * kGroupsPerBatch); ++g) {
+        const std::uint32_t firstLeaf = pairs[groups[g]].first;
+        const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
+        const Aabb firstLeafBox = a.levels[0][firstLeaf];
+        partners.clear();
+        for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
+          const std::size_t j = rankOf[pairs[p].second];
+          for (unsigned rest = detail::notApartMask(partnerOctets[j], firstLeafBox, reach);
+               rest != 0; rest &= rest - 1)
+            partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
+                               static_cast<std::uint32_t>(std::countr_zero(rest)));
+        }
+        // Per partner the leaf's eight triangle boxes at once (its octet: outward-rounded, grown
+        // by the slack, so no pair is lost), then the planes, a leaf triangle's made on its
+        // first use. The contacts are sorted at the end: the batch's order does not matter.
+        Triangle leafTriangles[detail::kFanout];
+        detail::SeparatingPlane leafPlanes[detail::kFanout];
+        unsigned made = 0;
+        const detail::BoxOctet& leafBoxes = a.leafOctets[firstLeaf];
+        for (const std::uint32_t slot : partners) {
+          for (unsigned rest = detail::notApartMask(leafBoxes, partnerBoxes[slot], reach);
+               rest != 0; rest &= rest - 1) {
+            const auto i = static_cast<std::size_t>(std::countr_zero(rest));
+            if (!(made & 1u << i)) {
+              made |= 1u << i;
+              leafTriangles[i] = a.sorted.triangle(firstBegin + i);
+              leafPlanes[i] = detail::separatingPlane(leafTriangles[i]);
+            }
+            const Triangle& one = leafTriangles[i];
+            if (detail::separated(leafPlanes[i], partnerTriangles[slot],
+                                  partnerPlanes[slot].magnitude, reach) ||
+                detail::separated(partnerPlanes[slot], one, leafPlanes[i].magnitude, reach))
+              continue;
+            firsts.push_back(one);
+            seconds.push_back(partnerTriangles[slot]);
+            firstIds.push_back(a.order[firstBegin + i]);
+            secondIds.push_back(partnerIds[slot]);
+          }
         }
       }
       if (firsts.empty()) continue;
@@ -286,11 +302,11 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
         if (results.distanceSquared(k) < reach * reach)
           out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
                                      results.intersect(k), firstIds[k], secondIds[k]));
-      perGroup[g] = std::move(out);
+      perRun[run] = std::move(out);
     }
   });
   std::vector<ContactPoint> found;
-  for (const std::vector<ContactPoint>& some : perGroup)
+  for (const std::vector<ContactPoint>& some : perRun)
     found.insert(found.end(), some.begin(), some.end());
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;

@@ -22,6 +22,7 @@
 #include "delta/mesh/mesh.h"
 #include "delta/query/contacts.h"
 #include "delta/query/minimum_distance.h"
+#include "delta/query/query_mesh.h"
 
 #include "kernels/triangle_pairs.h"
 
@@ -313,6 +314,19 @@ TEST(RealMeshContacts, SameResultsForOneAndTwoThreads) {
       expectBitwiseEqual(parallel, serial, label);
       expectBitwiseEqual(parallelMinimum, serialMinimum, label);
     }
+    // The prepared meshes (their contacts batch the pairs of runs of first leaves, fixed by
+    // index, whatever the threads), the second moved a little so that its tree is carried.
+    const QueryMesh preparedFirst(scene.first);
+    QueryMesh preparedSecond(scene.second);
+    preparedSecond.transform(RigidTransform::translationBy(Vec3{1, -2, 3} * (0.1 * scene.epsilon)));
+    omp_set_num_threads(1);
+    const std::vector<ContactPoint> serial = contacts(preparedFirst, preparedSecond, scene.epsilon);
+    omp_set_num_threads(2);
+    const std::vector<ContactPoint> parallel =
+        contacts(preparedFirst, preparedSecond, scene.epsilon);
+    omp_set_num_threads(threads);
+    EXPECT_FALSE(serial.empty()) << scene.name;
+    expectBitwiseEqual(parallel, serial, scene.name + ", QueryMesh");
   }
 }
 
