@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -276,6 +277,7 @@ class LeafCache {
     const Aabb* boxes;
     const detail::SeparatingPlane* planes;
     const std::uint32_t* ids;
+    const detail::MovedOctet* octet;  ///< the boxes again, side by side
     std::size_t count;
   };
 
@@ -287,6 +289,7 @@ class LeafCache {
     const std::size_t count = std::min(begin + detail::kFanout, mesh_.sorted.size()) - begin;
     if (slot_[index] == kNone) {
       slot_[index] = static_cast<std::uint32_t>(triangles_.size());
+      detail::MovedOctet& octet = octets_.emplace_back();
       for (std::size_t k = begin; k < begin + count; ++k) {
         const Triangle t =
             motion_ ? motion_->apply(mesh_.sorted.triangle(k)) : mesh_.sorted.triangle(k);
@@ -294,10 +297,24 @@ class LeafCache {
         boxes_.push_back(t.bounds().grown(mesh_.slack));
         planes_.push_back(detail::separatingPlane(t));
         ids_.push_back(mesh_.order[k]);
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          octet.lower[axis][k - begin] = boxes_.back().lower[axis];
+          octet.upper[axis][k - begin] = boxes_.back().upper[axis];
+        }
       }
+      for (std::size_t i = count; i < detail::kFanout; ++i)  // empty slots lie infinitely far
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          octet.lower[axis][i] = std::numeric_limits<double>::infinity();
+          octet.upper[axis][i] = -std::numeric_limits<double>::infinity();
+        }
     }
     const std::size_t at = slot_[index];
-    return {&triangles_[at], &boxes_[at], &planes_[at], &ids_[at], count};
+    return {&triangles_[at],
+            &boxes_[at],
+            &planes_[at],
+            &ids_[at],
+            &octets_[at / detail::kFanout],
+            count};
   }
 
  private:
@@ -309,6 +326,7 @@ class LeafCache {
   std::vector<Aabb> boxes_;
   std::vector<detail::SeparatingPlane> planes_;
   std::vector<std::uint32_t> ids_;
+  std::vector<detail::MovedOctet> octets_;
 };
 
 }  // namespace
@@ -396,14 +414,17 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
       if (distanceSquared(one.boxes[i], secondBox) > bestSquared) continue;
       const double reach = std::sqrt(bestSquared);  // +∞ before the first pair
       std::size_t kept = 0;
-      for (std::size_t k = 0; k < other.count; ++k)
-        if (!(distanceSquared(one.boxes[i], other.boxes[k]) > bestSquared) &&
-            !detail::separated(one.planes[i], other.triangles[k], other.planes[k].magnitude,
+      double gaps[detail::kFanout];  // the second's eight boxes at once
+      detail::distancesSquared(*other.octet, one.boxes[i], gaps);
+      for (unsigned near = detail::notAboveMask(gaps, bestSquared); near != 0; near &= near - 1) {
+        const auto k = static_cast<std::size_t>(std::countr_zero(near));
+        if (!detail::separated(one.planes[i], other.triangles[k], other.planes[k].magnitude,
                                reach) &&
             !detail::separated(other.planes[k], one.triangles[i], one.planes[i].magnitude, reach)) {
           candidates[kept] = other.triangles[k];
           ids[kept++] = other.ids[k];
         }
+      }
       if (kept == 0) continue;
       batch.assign(std::span(candidates, kept));
       kernels::distances(solver, one.triangles[i], batch, 0, kept, results);
