@@ -1,7 +1,8 @@
-// The point queries' leaf bounds (kernels/detail/point_lanes.h): for every ISA, a bound never
-// above the exact kernel's squared distance (which decides every answer), on every adversarial
-// triangle family, and close to it for well-shaped triangles (a bound of 0 everywhere would be
-// correct and useless: the tightness check catches it).
+// The point queries' leaf bounds (kernels/detail/point_lanes.h): for every ISA, a lower bound
+// never above and an upper bound never below the exact kernel's squared distance (which decides
+// every answer), on every adversarial triangle family, and both close to it for well-shaped
+// triangles (a lower bound of 0 or an upper bound of +∞ everywhere would be correct and useless:
+// the tightness checks catch it).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,8 +22,9 @@ namespace {
 
 /// Eight triangles and a point; the bounds of every supported ISA against the exact kernel.
 struct Checked {
-  int below = 0;   ///< bounds that were ≤ the exact squared distance (all must be)
-  int tight = 0;   ///< well-shaped lanes whose bound is within 1e-6 of it
+  int below = 0;   ///< lower bounds that were ≤ the exact squared distance (all must be)
+  int above = 0;   ///< upper bounds that were ≥ it (all must be)
+  int tight = 0;   ///< well-shaped lanes whose two bounds are within 1e-6 of it
   int shaped = 0;  ///< well-shaped lanes
 };
 
@@ -37,15 +39,19 @@ void check(Isa isa, const std::vector<Triangle>& eight, const Vec3& p, Checked& 
   TriangleSoA soa;
   soa.assign(eight);
   const detail::SoaView view = detail::soaView(soa);
-  double bounds[8];
-  detail::batchKernels(isa).pointTriangleBounds(view, 0, {p.x, p.y, p.z}, bounds);
+  double bounds[8], upper[8];
+  detail::batchKernels(isa).pointTriangleBounds(view, 0, {p.x, p.y, p.z}, bounds, upper);
   for (std::size_t i = 0; i < eight.size(); ++i) {
     const double exact = closestPointOnTriangle(p, eight[i]).distanceSquared;
     // NaN is allowed (nothing known) but must not occur for these finite, moderate inputs.
     ASSERT_FALSE(std::isnan(bounds[i])) << name(isa) << ", " << family;
+    ASSERT_FALSE(std::isnan(upper[i])) << name(isa) << ", " << family;
     ASSERT_LE(bounds[i], exact) << name(isa) << ", " << family << ", lane " << i << ": p = (" << p.x
                                 << ", " << p.y << ", " << p.z << ")";
+    ASSERT_GE(upper[i], exact) << name(isa) << ", " << family << ", lane " << i << ": p = (" << p.x
+                               << ", " << p.y << ", " << p.z << ")";
     ++checked.below;
+    ++checked.above;
     if (wellShaped(eight[i])) {
       ++checked.shaped;
       const Vec3 a = eight[i].a;
@@ -53,7 +59,7 @@ void check(Isa isa, const std::vector<Triangle>& eight, const Vec3& p, Checked& 
                                     distance(eight[i].b, eight[i].c), distance(p, a)});
       const double scale =
           size * (size + std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}));
-      if (bounds[i] >= exact - 1e-6 * scale) ++checked.tight;
+      if (bounds[i] >= exact - 1e-6 * scale && upper[i] <= exact + 1e-6 * scale) ++checked.tight;
     }
   }
 }
@@ -103,11 +109,18 @@ TEST(PointLanes, SliversAndZeroAreaGetNoBound) {
     check(isa, eight, p, checked, "degenerate");
     TriangleSoA soa;
     soa.assign(eight);
-    double bounds[8];
-    detail::batchKernels(isa).pointTriangleBounds(detail::soaView(soa), 0, {p.x, p.y, p.z}, bounds);
-    for (int i : {0, 1, 2, 4, 5, 6})
+    double bounds[8], upper[8];
+    detail::batchKernels(isa).pointTriangleBounds(detail::soaView(soa), 0, {p.x, p.y, p.z}, bounds,
+                                                  upper);
+    for (int i : {0, 1, 2, 4, 5, 6}) {
       EXPECT_EQ(bounds[i], 0.0) << name(isa) << ", lane " << i;
+      // The nearest edge's distance, which is the triangle's for these (no face to be nearer).
+      const double exact = closestPointOnTriangle(p, eight[i]).distanceSquared;
+      EXPECT_GE(upper[i], exact) << name(isa) << ", lane " << i;
+      EXPECT_LE(upper[i], exact + 1e-5) << name(isa) << ", lane " << i;  // the margin
+    }
     EXPECT_GT(bounds[3], 0.9 * closestPointOnTriangle(p, fine).distanceSquared) << name(isa);
+    EXPECT_LT(upper[3], 1.1 * closestPointOnTriangle(p, fine).distanceSquared) << name(isa);
   }
 }
 
@@ -131,13 +144,14 @@ TEST(PointLanes, NeedlesInAnyDirectionStayBelow) {
       check(isa, eight, t.a + (t.b - t.a) * 0.9 + normal * 0.5, checked, "needles");
     }
     EXPECT_EQ(checked.below, 1600);
+    EXPECT_EQ(checked.above, 1600);
   }
 }
 
 TEST(PointLanes, FarFromTheOriginTheMarginGrowsWithTheCoordinates) {
   // A small triangle at 1e6 and a point 1e-3 above it: the local differences carry rounding of
-  // ε·1e6, so the bound must drop below the exact distance by at least that much, yet stay
-  // below it for every ISA (and for a point exactly on the triangle, at most 0).
+  // ε·1e6, so the bounds must stand off the exact distance by at least that much, yet stay on
+  // their sides of it for every ISA (and for a point exactly on the triangle, lower at most 0).
   const Vec3 at{1e6, -2e6, 3e6};
   const Triangle t{at, at + Vec3{1e-3, 0, 0}, at + Vec3{0, 1e-3, 0}};
   const std::vector<Triangle> eight(8, t);
@@ -146,6 +160,7 @@ TEST(PointLanes, FarFromTheOriginTheMarginGrowsWithTheCoordinates) {
     for (const Vec3& p : {t.centroid() + Vec3{0, 0, 1e-3}, t.centroid(), t.a, t.b + Vec3{1, 1, 1}})
       check(isa, eight, p, checked, "far");
     EXPECT_EQ(checked.below, 32);
+    EXPECT_EQ(checked.above, 32);
   }
 }
 

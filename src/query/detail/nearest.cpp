@@ -45,48 +45,89 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
 /// bounds of a point against a leaf's eight triangles.
 struct Leaves {
   SoaView triangles;
-  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8]) noexcept;
+  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8],
+                 double (&)[8]) noexcept;
 };
 
-/// The triangles of leaf `leaf`, nearest first: most are farther than the best already found by
-/// their own box (grown by the slack), and, where two or more boxes are not, by a vector bound
-/// of the eight distances (kernels/detail/point_lanes.h), so that the exact kernel runs on the
-/// few triangles that can still win.
+/// Triangles held back from the exact kernel: at most this many wait at once.
+constexpr std::size_t kDeferred = 32;
+
+/// A search's state. The exact kernel, which decides every answer, runs only on triangles whose
+/// lower bound is not above the least upper bound seen (`prune`): the vector bounds give both
+/// (kernels/detail/point_lanes.h), so a leaf's triangles tighten the pruning at once and their
+/// kernels wait until the descent ends, when almost all of them have fallen behind. (Running the
+/// kernel on each leaf's candidates as it came ran it 7 times a far point; most lost later.)
+///
+/// Why the answer is still the loop over all triangles: the winner's computed distance is at
+/// most every computed distance, so at most every upper bound, so at most `prune` at any time;
+/// its lower bound and its boxes' distances are at most that distance; so no box holding it is
+/// skipped and it waits with the others, all of which the kernel decides in the end.
+struct Search {
+  Nearest best;  ///< the best the exact kernel has found (the limit before)
+  double prune;  ///< min(best, the upper bounds of the triangles seen)
+  double lower[kDeferred];
+  std::uint32_t deferred[kDeferred];  ///< sorted triangle indices
+  std::size_t count = 0;
+};
+
+/// The exact kernel on sorted triangle `k`.
+[[gnu::always_inline]] inline void exactly(const QueryMeshData& mesh, const Vec3& point,
+                                           std::size_t k, Search& search) noexcept {
+  const kernels::PointTriangleResult r =
+      kernels::closestPointOnTriangle(point, mesh.sorted.triangle(k));
+  if (better(r.distanceSquared, mesh.order[k], search.best)) {
+    search.best.distanceSquared = r.distanceSquared;
+    search.best.triangle = mesh.order[k];
+    search.best.sorted = static_cast<std::uint32_t>(k);
+    search.best.closest = r;
+    search.prune = std::min(search.prune, r.distanceSquared);
+  }
+}
+
+/// The kernel on the waiting triangles, nearest lower bound first, until the next is farther
+/// than the best.
+void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexcept {
+  std::size_t kept = 0;  // those still not beyond the pruning bound, in ascending order
+  for (std::size_t c = 0; c < search.count; ++c) {
+    const double lower = search.lower[c];
+    if (!(lower <= search.prune)) continue;
+    const std::uint32_t k = search.deferred[c];
+    std::size_t at = kept++;
+    for (; at > 0 && search.lower[at - 1] > lower; --at) {
+      search.lower[at] = search.lower[at - 1];
+      search.deferred[at] = search.deferred[at - 1];
+    }
+    search.lower[at] = lower;
+    search.deferred[at] = k;
+  }
+  for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared); ++c)
+    exactly(mesh, point, search.deferred[c], search);
+  search.count = 0;
+}
+
+/// The triangles of leaf `leaf`: most are farther than the pruning bound by their own box (grown
+/// by the slack); a lone survivor meets the exact kernel at once; where two or more boxes are
+/// not, the vector bounds of the eight tighten the pruning and the survivors wait (Search).
 [[gnu::always_inline]] inline void visitLeaf(const QueryMeshData& mesh, const Leaves& leaves,
                                              const Vec3& point, std::size_t leaf,
-                                             Nearest& best) noexcept {
+                                             Search& search) noexcept {
   double bounds[kFanout];
   distancesSquared(mesh.leafOctets[leaf], point, bounds);
-  int near = 0;
-  for (std::size_t i = 0; i < kFanout; ++i)
-    near += bounds[i] <= best.distanceSquared;  // not the empty slots past the last triangle
+  const unsigned near = nearMask(bounds, search.prune);  // never the empty slots
   if (near == 0) return;
-  if (near > 1) {
-    double triangles[kFanout];
-    leaves.bounds(leaves.triangles, leaf * kFanout, {point.x, point.y, point.z}, triangles);
-    for (std::size_t i = 0; i < kFanout; ++i)  // the larger bound; the box's where NaN
-      if (triangles[i] > bounds[i]) bounds[i] = triangles[i];
+  double lower[kFanout], upper[kFanout];
+  leaves.bounds(leaves.triangles, leaf * kFanout, {point.x, point.y, point.z}, lower, upper);
+  for (unsigned rest = near; rest != 0; rest &= rest - 1) {
+    const auto i = static_cast<std::size_t>(std::countr_zero(rest));
+    if (upper[i] < search.prune) search.prune = upper[i];  // not NaN
   }
-  std::uint32_t candidates[kFanout];
-  std::size_t count = 0;
-  for (unsigned rest = nearMask(bounds, best.distanceSquared); rest != 0; rest &= rest - 1) {
-    const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
-    std::size_t at = count++;  // insertion into ascending order
-    for (; at > 0 && bounds[candidates[at - 1]] > bounds[i]; --at)
-      candidates[at] = candidates[at - 1];
-    candidates[at] = i;
-  }
-  for (std::size_t c = 0; c < count; ++c) {
-    if (bounds[candidates[c]] > best.distanceSquared) break;
-    const std::size_t k = leaf * kFanout + candidates[c];
-    const kernels::PointTriangleResult r =
-        kernels::closestPointOnTriangle(point, mesh.sorted.triangle(k));
-    if (better(r.distanceSquared, mesh.order[k], best)) {
-      best.distanceSquared = r.distanceSquared;
-      best.triangle = mesh.order[k];
-      best.sorted = static_cast<std::uint32_t>(k);
-      best.closest = r;
-    }
+  for (unsigned rest = near; rest != 0; rest &= rest - 1) {
+    const auto i = static_cast<std::size_t>(std::countr_zero(rest));
+    const double bound = lower[i] > bounds[i] ? lower[i] : bounds[i];  // the box's where NaN
+    if (!(bound <= search.prune)) continue;
+    if (search.count == kDeferred) settle(mesh, point, search);
+    search.lower[search.count] = bound;
+    search.deferred[search.count++] = static_cast<std::uint32_t>(leaf * kFanout + i);
   }
 }
 
@@ -94,11 +135,12 @@ struct Leaves {
 /// tests the compiler turns into eight-lane code where it may use AVX-512.
 [[gnu::always_inline]] inline Nearest descend(const QueryMeshData& mesh, const Leaves& leaves,
                                               const Vec3& point, double limitSquared) noexcept {
-  Nearest best;
-  best.distanceSquared = limitSquared;
+  Search search;
+  search.best.distanceSquared = limitSquared;
+  search.prune = limitSquared;
   // Nearest-first, depth first: children are pushed farthest first, and every entry is checked
-  // against the best distance again when it is popped. A node is skipped only when its box is
-  // strictly farther than the best, so ties still reach the smaller id.
+  // against the pruning bound again when it is popped. A node is skipped only when its box is
+  // strictly farther than the bound, so ties still reach the smaller id.
   constexpr std::size_t kCapacity = 16 * kFanout;  // depth ≤ 11 for 2³² triangles
   Pending stack[kCapacity];
   std::size_t top = 0;
@@ -106,18 +148,18 @@ struct Leaves {
   stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), nodeKey(rootLevel, 0)};
   while (top > 0) {
     const Pending entry = stack[--top];
-    if (entry.bound > best.distanceSquared) continue;
+    if (entry.bound > search.prune) continue;
     if (entry.level() == 0) {
-      visitLeaf(mesh, leaves, point, entry.index(), best);
+      visitLeaf(mesh, leaves, point, entry.index(), search);
       continue;
     }
     double bounds[kFanout];
     distancesSquared(mesh.childOctets[entry.level() - 1][entry.index()], point, bounds);
     const std::uint32_t first = entry.index() * static_cast<std::uint32_t>(kFanout);
-    // The children not beyond the best (never the empty slots) go onto the stack in descending
+    // The children not beyond the bound (never the empty slots) go onto the stack in descending
     // order of distance, so the nearest is popped next. The mask is made without branches: a
     // branch per child mispredicted often enough to cost 4% of an ε-limited query.
-    const unsigned near = nearMask(bounds, best.distanceSquared);
+    const unsigned near = nearMask(bounds, search.prune);
     const std::size_t base = top;
     for (unsigned rest = near; rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -127,7 +169,8 @@ struct Leaves {
       stack[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
     }
   }
-  return best;
+  settle(mesh, point, search);
+  return search.best;
 }
 
 Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
@@ -150,7 +193,7 @@ Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const V
 /// The descent and leaf bounds of `isa` (lowered to a supported one).
 struct Descent {
   Nearest (*descend)(const QueryMeshData&, const Leaves&, const Vec3&, double) noexcept;
-  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8]) noexcept;
+  decltype(Leaves::bounds) bounds;
 };
 
 Descent descentFor(kernels::Isa isa) noexcept {

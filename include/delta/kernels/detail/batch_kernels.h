@@ -51,8 +51,8 @@ template <int W, template <int> class Kernel>
 
 template <int W>
 [[gnu::flatten]] void pointBounds(const SoaView& block, std::size_t first, const double (&point)[3],
-                                  double (&out)[8]) noexcept {
-  pointTriangleBounds8<Shape<W>::H>(block.streams, first, point, out);
+                                  double (&lower)[8], double (&upper)[8]) noexcept {
+  pointTriangleBounds8<Shape<W>::H>(block.streams, first, point, lower, upper);
 }
 
 template <int W>

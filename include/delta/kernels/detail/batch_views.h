@@ -49,10 +49,10 @@ struct BatchKernels {
   /// failures: `converged` is 0 where the scalar brute force must recompute the pair.
   void (*exhaustiveBlocks)(const SoaView& first, const SoaView& second, std::size_t count,
                            const PairStreams& out) noexcept;
-  /// Lower bounds of the squared distances from `point` to the eight triangles [first,
-  /// first + 8) of `block` (point_lanes.h), for the point queries' leaves.
+  /// Lower and upper bounds of the squared distances from `point` to the eight triangles
+  /// [first, first + 8) of `block` (point_lanes.h), for the point queries' leaves.
   void (*pointTriangleBounds)(const SoaView& block, std::size_t first, const double (&point)[3],
-                              double (&out)[8]) noexcept;
+                              double (&lower)[8], double (&upper)[8]) noexcept;
 };
 
 /// The tables, one per translation unit compiled with that ISA's flags. Only call one whose ISA

@@ -1,20 +1,22 @@
 #pragma once
 
-// A point against the eight triangles of a tree leaf at once: lower bounds of the squared
-// distances, for the point queries to skip the exact scalar kernel on triangles that cannot beat
-// the best distance found so far. Eight lanes as Pack<H, 8 / H> (H doubles a register of the
-// ISA: 1, 2, 4 or 8), instantiated once per ISA like the other batched kernels.
+// A point against the eight triangles of a tree leaf at once: lower and upper bounds of the
+// squared distances, for the point queries to skip the exact scalar kernel on triangles that
+// cannot beat the best distance found so far, and to prune with the upper bounds before any
+// exact kernel runs. Eight lanes as Pack<H, 8 / H> (H doubles a register of the ISA: 1, 2, 4 or
+// 8), instantiated once per ISA like the other batched kernels.
 //
-// Why a bound and not the distance itself: the answers of the point queries are, bit for bit,
+// Why bounds and not the distance itself: the answers of the point queries are, bit for bit,
 // those of kernels::closestPointOnTriangle, which the vector code does not reproduce (other
 // operation order, a plain normal). So it computes the same closest point approximately and
-// subtracts a margin far above its rounding error; the scalar kernel then decides among the
-// triangles the bounds leave in doubt.
+// subtracts and adds a margin far above its rounding error; the scalar kernel then decides among
+// the triangles the bounds leave in doubt.
 //
 // Error: in the frame of vertex a, r = p − a and the edges are rounded by ε·(|p| + |a|), and the
 // rest is a short chain of products of magnitude ≤ s = |r| + L (L the longest edge) with a
 // relative error of a few ε, except the face distance, whose plain normal is off by ε / sin α
-// (α the angle at a). Lanes with sin α < 2⁻¹⁰ (slivers, zero-area triangles) get bound 0, so
+// (α the angle at a). Lanes with sin α < 2⁻¹⁰ (slivers, zero-area triangles) get lower bound 0
+// and their edges' upper bound (the distance to an edge is never below the triangle's), so
 // the total error stays below about 40·2¹⁰·ε·s·(s + |a| + |p − a|) = 9·10⁻¹²·s·(s + …), which
 // the margin 2⁻²⁶·3·s∞·(s∞ + A∞) (max-norms, 3 ≥ the ratio of the squared norms) exceeds
 // 1,600-fold.
@@ -25,14 +27,17 @@
 
 namespace delta::detail {
 
-/// Squared-distance bounds below which the eight triangles [first, first + 8) of `block` may
-/// be: out[i] ≤ kernels::closestPointOnTriangle(point, triangle first + i).distanceSquared, or
-/// NaN where nothing is known (overflow beyond about 1e77). A triangle may be skipped only when
-/// its bound compares greater than the best distance. Padding triangles give NaN or 0: the
+/// Squared-distance bounds of the eight triangles [first, first + 8) of `block`: lower[i] ≤
+/// kernels::closestPointOnTriangle(point, triangle first + i).distanceSquared ≤ upper[i], or NaN
+/// where nothing is known (overflow beyond about 1e77). A triangle may be skipped only when its
+/// lower bound compares greater than the best distance; an upper bound may lower the best
+/// distance a search prunes with before any exact kernel runs. The upper bound of a sliver is
+/// its nearest edge's (edges need no normal). Padding triangles give NaN or anything: the
 /// caller excludes them by their boxes.
 template <int H>
 inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t first,
-                                 const double (&point)[3], double (&out)[8]) noexcept {
+                                 const double (&point)[3], double (&lower)[8],
+                                 double (&upper)[8]) noexcept {
   constexpr int U = 8 / H;
   using P = Pack<H, U>;
   using M = MaskPack<H, U>;
@@ -67,8 +72,8 @@ inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t 
     return ex * ex + ey * ey + ez * ez;
   };
   const P wx = vx - ux, wy = vy - uy, wz = vz - uz;  // c − b
-  P best = min(segment(rx, ry, rz, ux, uy, uz), segment(rx, ry, rz, vx, vy, vz));
-  best = min(best, segment(rx - ux, ry - uy, rz - uz, wx, wy, wz));
+  P edges = min(segment(rx, ry, rz, ux, uy, uz), segment(rx, ry, rz, vx, vy, vz));
+  edges = min(edges, segment(rx - ux, ry - uy, rz - uz, wx, wy, wz));
 
   // The face: p projects inside when it lies on the inner side of all three edges.
   const P nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
@@ -84,15 +89,17 @@ inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t 
                    (side(-vx, -vy, -vz, rx - vx, ry - vy, rz - vz) >= 0.0);
   const P height = nx * rx + ny * ry + nz * rz;
   const P face = height * height / select(wellShaped, nn, one);
-  best = select(inside, min(best, face), best);
+  const P best = select(inside, min(edges, face), edges);
 
   // The margin (see the top of this file), with max-norms.
   const P s = max(max(abs(rx), abs(ry)), abs(rz)) +
               max(max(max(abs(ux), abs(uy)), max(abs(uz), abs(vx))), max(abs(vy), abs(vz)));
   const P reach = s + max(max(abs(ax), abs(ay)), abs(az));
-  best = best - broadcast<H, U>(3.0 * 0x1p-26) * s * reach;
-  best = select(wellShaped, best, zero);
-  __builtin_memcpy(out, &best.v[0], sizeof out);
+  const P margin = broadcast<H, U>(3.0 * 0x1p-26) * s * reach;
+  const P below = select(wellShaped, best - margin, zero);
+  const P above = select(wellShaped, best, edges) + margin;
+  __builtin_memcpy(lower, &below.v[0], sizeof lower);
+  __builtin_memcpy(upper, &above.v[0], sizeof upper);
 }
 
 }  // namespace delta::detail
