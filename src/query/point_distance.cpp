@@ -104,10 +104,12 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
 constexpr std::size_t kSieveBlock = 16 * kGrain;
 
 /// The points of a batch that the distance-bound grid leaves in doubt (not beyond ε), gathered
-/// (as given, in the world frame) in input order with their indices.
+/// (as given, in the world frame) in input order with their indices, and the order in which to
+/// search them: along a Morton curve of the mesh's box.
 struct Survivors {
   std::vector<std::uint32_t> indices;
   std::vector<Vec3> points;
+  std::vector<std::uint32_t> order;
 };
 
 /// The seed's early "no contact" for a whole batch: streams through the points once, in
@@ -143,10 +145,13 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
     if (firstBad[block] != count) throwNonFinite(firstBad[block], pointAt(firstBad[block]));
   for (std::size_t block = 0; block < blocks; ++block)
     kept[block + 1] += kept[block];
-  // Second pass: each block gathers its survivors at its offset.
+  // Second pass: each block gathers its survivors at its offset, with their Morton keys (in the
+  // mesh's box: a survivor lies within ε of it).
   Survivors survivors;
   survivors.indices.resize(kept[blocks]);
   survivors.points.resize(kept[blocks]);
+  std::vector<std::uint64_t> keys(kept[blocks]);
+  const Aabb& box = mesh.data().bounds;
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
     for (std::size_t block = firstBlock; block < endBlock; ++block) {
       const std::size_t end = std::min(count, (block + 1) * kSieveBlock);
@@ -154,23 +159,26 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
       for (std::size_t i = block * kSieveBlock; i < end; ++i)
         if (inDoubt[i]) {
           survivors.indices[at] = static_cast<std::uint32_t>(i);
-          survivors.points[at++] = pointAt(i);
+          survivors.points[at] = pointAt(i);
+          keys[at] = detail::mortonCode(local(i), box) << 32 | at;
+          ++at;
         }
     }
   });
+  survivors.order = detail::orderOfKeys(keys);
   return survivors;
 }
 
-/// Answers the points `pointAt(k)` (world frame), k < count, into out[indexOf(k)], with the
+/// Answers the points `pointAt(k)` (world frame), k in `order`, into out[indexOf(k)], with the
 /// upper bounds `boundOf(indexOf(k))`. Along a Morton curve, consecutive points descend to the
 /// same nodes and triangles, which the previous descents left in the cache: scattered input (a
 /// user's points in any order) runs as fast as sorted input. Each answer is that point's alone,
 /// so the order changes no result.
 template <typename PointAt, typename IndexOf, typename BoundOf>
-void searchInMortonOrder(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
-                         const IndexOf& indexOf, const BoundOf& boundOf, const PointQuery& query,
-                         bool screened, std::span<PointDistance> out) {
-  const std::vector<std::uint32_t> order = detail::mortonOrder(count, pointAt);
+void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& order,
+                   const PointAt& pointAt, const IndexOf& indexOf, const BoundOf& boundOf,
+                   const PointQuery& query, bool screened, std::span<PointDistance> out) {
+  const std::size_t count = order.size();
   // Each run of kGrain points is gathered before and its answers scattered after the searches:
   // the scattered reads and writes then overlap in tight loops instead of each stalling a search.
   parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
@@ -210,14 +218,15 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
     // The points the grid puts beyond ε are answered first, in input order (one cell read each,
     // streaming through the input and output); only the others are searched.
     const Survivors survivors = sieve(mesh, count, pointAt, limit, out);
-    searchInMortonOrder(
-        mesh, survivors.points.size(), [&survivors](std::size_t k) { return survivors.points[k]; },
+    searchInOrder(
+        mesh, survivors.order, [&survivors](std::size_t k) { return survivors.points[k]; },
         [&survivors](std::size_t k) { return std::size_t{survivors.indices[k]}; }, boundOf, query,
         true, out);
   } else {
     validatePoints(count, pointAt);
-    searchInMortonOrder(
-        mesh, count, pointAt, [](std::size_t k) { return k; }, boundOf, query, false, out);
+    searchInOrder(
+        mesh, detail::mortonOrder(count, pointAt), pointAt, [](std::size_t k) { return k; },
+        boundOf, query, false, out);
   }
 }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "delta/core/aabb.h"
 #include "delta/core/parallel.h"
 
 namespace delta::detail {
@@ -20,6 +19,40 @@ std::uint64_t spreadBits(std::uint64_t x) noexcept {
 
 }  // namespace
 
+std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept {
+  constexpr double kCells = 1023.0;  // 1024 cells an axis: finer buys no locality
+  std::uint64_t code = 0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const double extent = box.upper[axis] - box.lower[axis];
+    double unit = extent > 0.0 ? (point[axis] - box.lower[axis]) / extent : 0.0;
+    if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
+    const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
+    code |= spreadBits(cell) << axis;
+  }
+  return code;
+}
+
+std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys) {
+  // Three passes of a 10-bit radix sort over the code (bits 32–61), least significant digit
+  // first: stable, so equal codes keep their index order.
+  constexpr std::size_t kDigits = 1024;
+  std::vector<std::uint64_t> buffer(keys.size());
+  for (int shift = 32; shift < 62; shift += 10) {
+    std::size_t start[kDigits + 1] = {};
+    for (const std::uint64_t key : keys)
+      ++start[(key >> shift & (kDigits - 1)) + 1];
+    for (std::size_t d = 0; d < kDigits; ++d)
+      start[d + 1] += start[d];
+    for (const std::uint64_t key : keys)
+      buffer[start[key >> shift & (kDigits - 1)]++] = key;
+    keys.swap(buffer);
+  }
+  std::vector<std::uint32_t> order(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    order[i] = static_cast<std::uint32_t>(keys[i]);
+  return order;
+}
+
 std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const void*, std::size_t),
                                        const void* context) {
   // The box and the keys in parallel blocks (the radix sort after them is a third of the time).
@@ -34,40 +67,12 @@ std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const 
   Aabb box;
   for (const Aabb& blockBox : blockBoxes)
     box.extend(blockBox);
-  // Keys: a 30-bit code (1024 cells an axis: finer buys no locality) above the 32-bit index,
-  // sorted by three passes of a 10-bit radix sort, least significant digit first. The index in
-  // the low half makes ties (repeated points, one cell) come out in index order.
-  constexpr double kCells = 1023.0;
-  std::vector<std::uint64_t> keys(count), buffer(count);
+  std::vector<std::uint64_t> keys(count);
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
-    for (std::size_t i = firstBlock * kBlock; i < std::min(count, endBlock * kBlock); ++i) {
-      const Vec3 point = pointAt(context, i);
-      std::uint64_t code = 0;
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const double extent = box.upper[axis] - box.lower[axis];
-        double unit = extent > 0.0 ? (point[axis] - box.lower[axis]) / extent : 0.0;
-        if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent infinite
-        const auto cell = static_cast<std::uint64_t>(std::min(unit, 1.0) * kCells);
-        code |= spreadBits(cell) << axis;
-      }
-      keys[i] = code << 32 | i;
-    }
+    for (std::size_t i = firstBlock * kBlock; i < std::min(count, endBlock * kBlock); ++i)
+      keys[i] = mortonCode(pointAt(context, i), box) << 32 | i;
   });
-  constexpr std::size_t kDigits = 1024;
-  for (int shift = 32; shift < 62; shift += 10) {
-    std::vector<std::size_t> start(kDigits + 1, 0);
-    for (const std::uint64_t key : keys)
-      ++start[(key >> shift & (kDigits - 1)) + 1];
-    for (std::size_t d = 0; d < kDigits; ++d)
-      start[d + 1] += start[d];
-    for (const std::uint64_t key : keys)
-      buffer[start[key >> shift & (kDigits - 1)]++] = key;
-    keys.swap(buffer);
-  }
-  std::vector<std::uint32_t> order(count);
-  for (std::size_t i = 0; i < count; ++i)
-    order[i] = static_cast<std::uint32_t>(keys[i]);
-  return order;
+  return orderOfKeys(keys);
 }
 
 }  // namespace delta::detail

@@ -4,9 +4,18 @@
 #include <cstdint>
 #include <vector>
 
+#include "delta/core/aabb.h"
 #include "delta/core/vec3.h"
 
 namespace delta::detail {
+
+/// The 30-bit Morton (Z-curve) code of `point` in `box`, 10 bits an axis (1024 cells; a point
+/// outside the box takes the nearest cell).
+std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept;
+
+/// The indices in the low halves of `keys` (each a code, mortonCode, above a 32-bit index), in
+/// ascending order of the codes, ties in index order. Sorts `keys`.
+std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys);
 
 /// The indices [0, count) in Morton (Z-curve) order of `pointAt(i)` within the points' bounding
 /// box, 10 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
