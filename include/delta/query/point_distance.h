@@ -70,7 +70,8 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
                                      const PointQuery& query = {});
 
 /// The same, written into `out` (as long as `points`) without allocating: for codes that query
-/// batch after batch (new grid vertices each refinement step).
+/// batch after batch (new grid vertices each refinement step). When it throws for a bad point,
+/// `out` may already hold some answers (the points are validated while the batch is screened).
 void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQuery& query,
                std::span<PointDistance> out);
 
