@@ -89,8 +89,9 @@ std::vector<std::vector<Aabb>> buildLevels(const TriangleSoA& sorted, double sla
 /// +∞: std::nextafter's result, without its library call (the contact queries round a few
 /// thousand moved boxes a query).
 float stepped(float f, bool down) noexcept {
-  if (f == 0.0f) return down ? -std::numeric_limits<float>::denorm_min()
-                             : std::numeric_limits<float>::denorm_min();
+  if (f == 0.0f)
+    return down ? -std::numeric_limits<float>::denorm_min()
+                : std::numeric_limits<float>::denorm_min();
   const auto bits = std::bit_cast<std::uint32_t>(f);
   return std::bit_cast<float>((f > 0.0f) == down ? bits - 1 : bits + 1);
 }

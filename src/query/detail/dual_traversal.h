@@ -86,15 +86,6 @@ template <class Octet>
   return mask;
 }
 
-/// Bit i set where values[i] ≤ limit (never for NaN), made without a branch.
-[[gnu::always_inline]] inline unsigned notAboveMask(const double (&values)[kFanout],
-                                                    double limit) noexcept {
-  unsigned mask = 0;
-  for (std::size_t i = 0; i < kFanout; ++i)
-    mask |= static_cast<unsigned>(values[i] <= limit) << i;
-  return mask;
-}
-
 /// A tree's node boxes as seen from another frame, moved on demand: a query that visits a few
 /// nodes of a large tree (a particle near a big obstacle) pays for those, not for the whole tree.
 /// A moved box is the box of the moved box (centre moved, half extents through |R|), so it

@@ -32,15 +32,6 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
          (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
 }
 
-/// Bit i set where bounds[i] ≤ best (never for NaN).
-[[gnu::always_inline]] inline unsigned nearMask(const double (&bounds)[kFanout],
-                                                double best) noexcept {
-  unsigned mask = 0;
-  for (std::size_t i = 0; i < kFanout; ++i)
-    mask |= static_cast<unsigned>(bounds[i] <= best) << i;
-  return mask;
-}
-
 /// What a descent reads besides the tree: the sorted triangles as plain streams, and the ISA's
 /// bounds of a point against a leaf's eight triangles.
 struct Leaves {
@@ -113,7 +104,7 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
                                              Search& search) noexcept {
   double bounds[kFanout];
   distancesSquared(mesh.leafOctets[leaf], point, bounds);
-  const unsigned near = nearMask(bounds, search.prune);  // never the empty slots
+  const unsigned near = notAboveMask(bounds, search.prune);  // never the empty slots
   if (near == 0) return;
   double lower[kFanout], upper[kFanout];
   leaves.bounds(leaves.triangles, leaf * kFanout, {point.x, point.y, point.z}, lower, upper);
@@ -159,7 +150,7 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
     // The children not beyond the bound (never the empty slots) go onto the stack in descending
     // order of distance, so the nearest is popped next. The mask is made without branches: a
     // branch per child mispredicted often enough to cost 4% of an ε-limited query.
-    const unsigned near = nearMask(bounds, search.prune);
+    const unsigned near = notAboveMask(bounds, search.prune);
     const std::size_t base = top;
     for (unsigned rest = near; rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));

@@ -53,6 +53,16 @@ inline void distancesSquared(const BoxOctet& boxes, const Vec3& point,
   }
 }
 
+/// Bit i set where values[i] ≤ limit (never for NaN), made without a branch: the descents test
+/// eight children or triangles at once, whose outcomes a branch apiece would mispredict.
+[[gnu::always_inline]] inline unsigned notAboveMask(const double (&values)[kFanout],
+                                                    double limit) noexcept {
+  unsigned mask = 0;
+  for (std::size_t i = 0; i < kFanout; ++i)
+    mask |= static_cast<unsigned>(values[i] <= limit) << i;
+  return mask;
+}
+
 /// The angle-weighted pseudonormals of a closed mesh's vertices and edges (not normalised), each
 /// stored once: 72 bytes a triangle where a copy per triangle took 144.
 struct Pseudonormals {
