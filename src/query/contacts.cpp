@@ -166,7 +166,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
   const double reach = 2.0 * epsilon;
-  std::vector<detail::LeafPair> pairs = detail::leafPairsWithin(a.levels, secondTree, reach);
+  std::vector<detail::LeafPair> pairs = detail::leafPairsWithin(a, b, secondTree, reach);
 
   // Grouped by the first leaf (a counting sort, then each group by second leaf): each of its
   // triangles then meets the triangles of all its second leaves in one kernel batch (the batched

@@ -376,10 +376,18 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
     for (std::size_t c = 0; c < count; ++c)
       if (!(bounds[c] > bestSquared)) open.push(entryOf(c));
   };
+  const double slabMargin = a.slack + b.slack;
   while (!open.empty()) {
     const Entry entry = open.top();
     open.pop();
     if (entry.bound > bestSquared) break;
+    // Boxes of curved patches facing each other across a small gap overlap; their slabs often
+    // do not (a third of refined_elephant's pairs end here, and the query takes 0.65 of the time).
+    const double gap = detail::slabGap(
+        a.slabs[entry.firstLevel][entry.firstNode], a.levels[entry.firstLevel][entry.firstNode],
+        secondTree.moved(b.slabs[entry.secondLevel][entry.secondNode]),
+        secondTree.box(entry.secondLevel, entry.secondNode), slabMargin);
+    if (gap > 0.0 && gap * gap > bestSquared) continue;
     double bounds[detail::kFanout];
     if (entry.firstLevel > 0 && (entry.secondLevel == 0 || entry.firstLevel >= entry.secondLevel)) {
       const std::uint32_t level = entry.firstLevel - 1;

@@ -8,6 +8,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/parallel.h"
 #include "delta/mesh/mass_properties.h"
 
 #include "detail/query_mesh_data.h"
@@ -119,6 +120,40 @@ void buildOctets(detail::QueryMeshData& data) {
   data.leafOctets.resize(data.levels[0].size());
   for (std::size_t i = 0; i < data.leafOctets.size(); ++i)
     data.leafOctets[i] = detail::octetOf(triangleBoxes, i * detail::kFanout);
+}
+
+/// Every node's oriented slab (query_mesh_data.h): a node of level l holds the sorted triangles
+/// [i·8^(l+1), (i+1)·8^(l+1)), so each level is one pass over the triangles.
+std::vector<std::vector<detail::NodeSlab>> buildSlabs(const detail::QueryMeshData& data) {
+  std::vector<std::vector<detail::NodeSlab>> slabs(data.levels.size());
+  std::size_t span = detail::kFanout;
+  for (std::size_t l = 0; l < data.levels.size(); ++l, span *= detail::kFanout) {
+    slabs[l].resize(data.levels[l].size());
+    parallelFor(0, slabs[l].size(), std::max<std::size_t>(1, 4096 / span),
+                [&](std::size_t begin, std::size_t end) {
+                  for (std::size_t i = begin; i < end; ++i) {
+                    const std::size_t from = i * span;
+                    const std::size_t to = std::min(from + span, data.sorted.size());
+                    Vec3 area{};
+                    for (std::size_t k = from; k < to; ++k)
+                      area = area + data.sorted.triangle(k).areaVector();
+                    detail::NodeSlab& slab = slabs[l][i];
+                    if (lengthSquared(area) > 0.0) slab.normal = normalized(area);
+                    double low = std::numeric_limits<double>::infinity(), high = -low;
+                    for (std::size_t k = from; k < to; ++k) {
+                      const Triangle t = data.sorted.triangle(k);
+                      for (const Vec3& v : {t.a, t.b, t.c}) {
+                        const double along = dot(slab.normal, v);
+                        low = std::min(low, along);
+                        high = std::max(high, along);
+                      }
+                    }
+                    slab.low = low - data.slack;
+                    slab.high = high + data.slack;
+                  }
+                });
+  }
+  return slabs;
 }
 
 /// The angle of a triangle at corner `from`, between the edges to `next` and `previous`.
@@ -235,6 +270,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
                            data->bounds.diagonal());
   data->levels = buildLevels(data->sorted, data->slack);
   buildOctets(*data);
+  data->slabs = buildSlabs(*data);
   data->boundGrid = detail::BoundGrid(data->sorted, data->bounds);
   data->topology = analyzeTopology(mesh);
   data->closed = data->topology.closed && data->topology.consistentlyOriented;
@@ -299,6 +335,8 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
   for (const detail::BoxOctets& level : data_->childOctets)
     bytes += level.capacity() * sizeof(detail::BoxOctet);
   bytes += data_->leafOctets.capacity() * sizeof(detail::BoxOctet);
+  for (const std::vector<detail::NodeSlab>& level : data_->slabs)
+    bytes += level.capacity() * sizeof(detail::NodeSlab);
   return bytes + data_->boundGrid.memoryBytes();
 }
 

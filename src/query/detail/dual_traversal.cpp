@@ -43,11 +43,20 @@ MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
       magnitude_(r, c) = std::abs(motion->rotation(r, c));
 }
 
-std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firstLevels,
-                                      const MovedTree& second, double reach) {
+std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
+                                      const QueryMeshData& secondMesh, const MovedTree& second,
+                                      double reach) {
   // Pairs are tested when they are found, so that the box that stays (the second one, moved,
   // when the first node splits) is computed once for its eight partners, and only pairs within
-  // reach are stacked.
+  // reach are stacked; a stacked pair and a pair of leaves must also have their slabs within
+  // reach (nearly parallel patches facing each other: boxes overlap, slabs need not).
+  const std::vector<std::vector<Aabb>>& firstLevels = firstMesh.levels;
+  const double margin = firstMesh.slack + secondMesh.slack;
+  const auto slabsApart = [&](std::uint32_t firstLevel, std::uint32_t first, const Aabb& a,
+                              std::uint32_t secondLevel, std::uint32_t secondNode, const Aabb& b) {
+    return slabGap(firstMesh.slabs[firstLevel][first], a,
+                   second.moved(secondMesh.slabs[secondLevel][secondNode]), b, margin) >= reach;
+  };
   std::vector<LeafPair> pairs;
   std::vector<NodePair> stack;
   const auto firstRoot = static_cast<std::uint32_t>(firstLevels.size() - 1);
@@ -61,6 +70,7 @@ std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firs
     stack.pop_back();
     const Aabb& a = firstLevels[pair.firstLevel][pair.first];
     const Aabb b = second.box(pair.secondLevel, pair.second);
+    if (slabsApart(pair.firstLevel, pair.first, a, pair.secondLevel, pair.second, b)) continue;
     const bool splitFirst =
         pair.secondLevel == 0 || (pair.firstLevel > 0 && largestExtent(a) >= largestExtent(b));
     // The children within reach: a pair of leaves is a result at once, others go on the stack.
@@ -73,10 +83,12 @@ std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firs
         mask |= static_cast<unsigned>(near(firstLevels[level][c], b, reach)) << (c - begin);
       for (; mask != 0; mask &= mask - 1) {
         const auto c = static_cast<std::uint32_t>(begin) + std::countr_zero(mask);
-        if (level == 0 && pair.secondLevel == 0)
-          pairs.push_back({c, pair.second});
-        else
+        if (level == 0 && pair.secondLevel == 0) {
+          if (!slabsApart(0, c, firstLevels[0][c], 0, pair.second, b))
+            pairs.push_back({c, pair.second});
+        } else {
           stack.push_back({level, c, pair.secondLevel, pair.second});
+        }
       }
     } else {
       const std::uint32_t level = pair.secondLevel - 1;
@@ -87,10 +99,12 @@ std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firs
         mask |= static_cast<unsigned>(near(a, second.box(level, c), reach)) << (c - begin);
       for (; mask != 0; mask &= mask - 1) {
         const auto c = static_cast<std::uint32_t>(begin) + std::countr_zero(mask);
-        if (level == 0 && pair.firstLevel == 0)
-          pairs.push_back({pair.first, c});
-        else
+        if (level == 0 && pair.firstLevel == 0) {
+          if (!slabsApart(0, pair.first, a, 0, c, second.box(0, c)))
+            pairs.push_back({pair.first, c});
+        } else {
           stack.push_back({pair.firstLevel, pair.first, level, c});
+        }
       }
     }
   }

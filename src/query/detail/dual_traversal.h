@@ -140,6 +140,15 @@ class MovedTree {
       }
     return out;
   }
+  /// A slab of this tree (query_mesh_data.h) as seen from the other frame: its normal turned, its
+  /// extent shifted by the translation along it and widened by the rounding of that shift.
+  NodeSlab moved(const NodeSlab& slab) const noexcept {
+    if (!motion_) return slab;
+    const Vec3 normal = motion_->rotation * slab.normal;
+    const double shift = dot(normal, motion_->translation);
+    const double rounding = 0x1p-40 * (std::abs(shift) + maxAbs(motion_->translation));
+    return {normal, slab.low + shift - rounding, slab.high + shift + rounding};
+  }
   std::size_t levelCount() const noexcept { return levels_.size(); }
   std::size_t nodeCount(std::size_t level) const noexcept { return levels_[level].size(); }
 
@@ -148,6 +157,31 @@ class MovedTree {
   const MatrixMotion* motion_;
   Mat3 magnitude_;  ///< |R| entry by entry
 };
+
+/// A lower bound of the distance between the triangles of two nodes, each given by its slab and
+/// box in one frame, less `margin` (the rounding of these projections, a few ulps of the
+/// coordinates: the caller passes the meshes' slack). Along a's normal, b's points lie in
+///   (n_a·n_b)·[b.low, b.high] + w·c_b ± |w|·h_b,  w = n_a − (n_a·n_b)·n_b
+/// (b's slab bounds the part along n_b, b's box the rest), and a's in [a.low, a.high]; the gap
+/// between the two intervals bounds the distance, and likewise along b's normal. For nearly
+/// parallel patches facing each other, whose boxes overlap, w is small and the bound is the gap.
+inline double slabGap(const NodeSlab& a, const Aabb& boxA, const NodeSlab& b, const Aabb& boxB,
+                      double margin) noexcept {
+  const double cosine = dot(a.normal, b.normal);
+  // The interval of n·x over the points x of a node with slab `slab` and box `box`.
+  const auto along = [cosine](const Vec3& normal, const NodeSlab& slab, const Aabb& box) {
+    const Vec3 w = normal - slab.normal * cosine;
+    const Vec3 centre = box.center(), half = box.extent() * 0.5;
+    const double middle = dot(w, centre);
+    const double radius = std::abs(w.x) * half.x + std::abs(w.y) * half.y + std::abs(w.z) * half.z;
+    const double p = cosine * slab.low, q = cosine * slab.high;
+    return std::pair{std::min(p, q) + middle - radius, std::max(p, q) + middle + radius};
+  };
+  const auto [lowB, highB] = along(a.normal, b, boxB);
+  const auto [lowA, highA] = along(b.normal, a, boxA);
+  const double gap = std::max({lowB - a.high, a.low - highB, lowA - b.high, b.low - highA});
+  return gap - margin;
+}
 
 /// A triangle's plane, for the mesh–mesh queries' cheapest exact early-out: a triangle whose three
 /// vertices lie on one side of it, all farther than the reach, is farther than the reach from
@@ -198,7 +232,8 @@ inline bool separated(const SeparatingPlane& plane, const Triangle& t, double ma
 /// seen from the first's frame. In no particular order; each pair once. (Its children's boxes
 /// taken from the octets, the second's moved eight at once, measured no faster: a moved box is
 /// needed per child either way.)
-std::vector<LeafPair> leafPairsWithin(const std::vector<std::vector<Aabb>>& firstLevels,
-                                      const MovedTree& second, double reach);
+std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
+                                      const QueryMeshData& secondMesh, const MovedTree& second,
+                                      double reach);
 
 }  // namespace delta::detail

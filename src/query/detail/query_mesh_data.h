@@ -63,6 +63,16 @@ inline void distancesSquared(const BoxOctet& boxes, const Vec3& point,
   return mask;
 }
 
+/// A node's oriented slab: the unit mean normal of its triangles (their area vectors' sum) and
+/// the extent of its vertices along it, widened by the slack. A patch nearly flat is thin along
+/// its normal where its axis-aligned box is not: two patches facing each other across a small
+/// gap have overlapping boxes but slabs apart (the mesh–mesh queries' node test, see
+/// dual_traversal.h's slabGap).
+struct NodeSlab {
+  Vec3 normal{0, 0, 1};
+  double low = 0.0, high = 0.0;
+};
+
 /// The angle-weighted pseudonormals of a closed mesh's vertices and edges (not normalised), each
 /// stored once: 72 bytes a triangle where a copy per triangle took 144.
 struct Pseudonormals {
@@ -98,6 +108,8 @@ struct QueryMeshData {
   /// grown by `slack` like the leaves.
   std::vector<BoxOctets> childOctets;
   BoxOctets leafOctets;
+  /// Per node of `levels`, its oriented slab (the same indexing).
+  std::vector<std::vector<NodeSlab>> slabs;
   /// The pseudonormals of the vertices and edges, for signs. Empty unless the mesh is closed.
   Pseudonormals pseudonormals;
   /// Per cell of a uniform grid over the box, a lower bound of the distance to the mesh: the
