@@ -17,7 +17,9 @@ struct QueryMeshData;
 
 /// A mesh prepared for queries: its flattened triangles (in the tree's order, for the kernels), a
 /// bounding-volume tree over them (eight triangles to a leaf, eight nodes to a parent, each node
-/// with its box; built top-down by splits at the median of the centroids along the longest axis),
+/// with its box and an oriented slab — its triangles' mean normal and their extent along it,
+/// which separates nearly parallel patches whose boxes overlap; built top-down by splits at the
+/// median of the centroids along the longest axis),
 /// a uniform grid over its box with a lower bound of the distance to the mesh in every cell (one
 /// byte a cell, about two cells a triangle: queries with a limit ε reject most points farther
 /// than ε with one read, the seed's early "no contact"),
