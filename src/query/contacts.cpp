@@ -70,6 +70,81 @@ ContactPoint contactPoint(const Triangle& first, const Triangle& second, const V
   return contact;
 }
 
+/// A table over a tree's leaves is used where it is small beside the pairs (a sort otherwise):
+/// a particle against a large obstacle pays for the pairs it has, not for the obstacle's size.
+bool tableFits(std::size_t leaves, std::size_t pairs) noexcept {
+  return leaves <= 16 * pairs + 1024;
+}
+
+/// Sorts `pairs` by first leaf, then second, and returns where each first leaf's run starts (and
+/// the end): a counting sort where the table fits (measured: std::sort took a sixth of a contact
+/// query on refined_elephant).
+std::vector<std::size_t> groupByFirst(std::vector<detail::LeafPair>& pairs, std::size_t leaves) {
+  const auto bySecond = [](const detail::LeafPair& x, const detail::LeafPair& y) {
+    return x.second < y.second;
+  };
+  std::vector<std::size_t> groups;
+  if (!tableFits(leaves, pairs.size())) {
+    std::sort(pairs.begin(), pairs.end(), [](const detail::LeafPair& x, const detail::LeafPair& y) {
+      return x.first != y.first ? x.first < y.first : x.second < y.second;
+    });
+    for (std::size_t p = 0; p < pairs.size(); ++p)
+      if (p == 0 || pairs[p].first != pairs[p - 1].first) groups.push_back(p);
+  } else {
+    std::vector<std::size_t> start(leaves + 1, 0);
+    for (const detail::LeafPair& pair : pairs)
+      ++start[pair.first + 1];
+    for (std::size_t leaf = 0; leaf < leaves; ++leaf)
+      start[leaf + 1] += start[leaf];
+    std::vector<detail::LeafPair> grouped(pairs.size());
+    std::vector<std::size_t> at(start.begin(), start.end() - 1);
+    for (const detail::LeafPair& pair : pairs)
+      grouped[at[pair.first]++] = pair;
+    pairs.swap(grouped);
+    for (std::size_t leaf = 0; leaf < leaves; ++leaf)
+      if (start[leaf + 1] > start[leaf]) {
+        groups.push_back(start[leaf]);
+        std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(start[leaf]),
+                  pairs.begin() + static_cast<std::ptrdiff_t>(start[leaf + 1]), bySecond);
+      }
+  }
+  groups.push_back(pairs.size());
+  return groups;
+}
+
+/// The distinct second leaves of `pairs` (ascending) and each pair's rank among them.
+struct SecondLeaves {
+  std::vector<std::uint32_t> leaves;
+  std::vector<std::uint32_t> rankOfPair;
+};
+
+SecondLeaves secondLeavesOf(const std::vector<detail::LeafPair>& pairs, std::size_t leaves) {
+  SecondLeaves result;
+  result.rankOfPair.resize(pairs.size());
+  if (tableFits(leaves, pairs.size())) {
+    std::vector<std::uint32_t> rank(leaves, kNoPartner);
+    for (const detail::LeafPair& pair : pairs)
+      rank[pair.second] = 0;
+    for (std::uint32_t leaf = 0; leaf < leaves; ++leaf)
+      if (rank[leaf] == 0) {
+        rank[leaf] = static_cast<std::uint32_t>(result.leaves.size());
+        result.leaves.push_back(leaf);
+      }
+    for (std::size_t p = 0; p < pairs.size(); ++p)
+      result.rankOfPair[p] = rank[pairs[p].second];
+    return result;
+  }
+  for (const detail::LeafPair& pair : pairs)
+    result.leaves.push_back(pair.second);
+  std::sort(result.leaves.begin(), result.leaves.end());
+  result.leaves.erase(std::unique(result.leaves.begin(), result.leaves.end()), result.leaves.end());
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    result.rankOfPair[p] = static_cast<std::uint32_t>(
+        std::lower_bound(result.leaves.begin(), result.leaves.end(), pairs[p].second) -
+        result.leaves.begin());
+  return result;
+}
+
 /// One unit of parallel work: a triangle of the first mesh against a block of the second.
 struct Task {
   std::uint32_t triangle;
@@ -168,41 +243,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const double reach = 2.0 * epsilon;
   std::vector<detail::LeafPair> pairs = detail::leafPairsWithin(a, b, secondTree, reach);
 
-  // Grouped by the first leaf (a counting sort, then each group by second leaf): each of its
-  // triangles then meets the triangles of all its second leaves in one kernel batch (the batched
-  // solvers want long batches, not eight pairs a call).
-  std::vector<std::size_t> groupStart(a.levels[0].size() + 1, 0);
-  for (const detail::LeafPair& pair : pairs)
-    ++groupStart[pair.first + 1];
-  for (std::size_t leaf = 0; leaf + 1 < groupStart.size(); ++leaf)
-    groupStart[leaf + 1] += groupStart[leaf];
-  {
-    std::vector<detail::LeafPair> grouped(pairs.size());
-    std::vector<std::size_t> at(groupStart.begin(), groupStart.end() - 1);
-    for (const detail::LeafPair& pair : pairs)
-      grouped[at[pair.first]++] = pair;
-    pairs.swap(grouped);
-  }
-  std::vector<std::size_t> groups;  // where each first leaf's run of pairs starts
-  for (std::size_t leaf = 0; leaf + 1 < groupStart.size(); ++leaf)
-    if (groupStart[leaf + 1] > groupStart[leaf]) {
-      groups.push_back(groupStart[leaf]);
-      std::sort(
-          pairs.begin() + static_cast<std::ptrdiff_t>(groupStart[leaf]),
-          pairs.begin() + static_cast<std::ptrdiff_t>(groupStart[leaf + 1]),
-          [](const detail::LeafPair& x, const detail::LeafPair& y) { return x.second < y.second; });
-    }
-  groups.push_back(pairs.size());
-
+  // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
+  // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
+  const std::vector<std::size_t> groups = groupByFirst(pairs, a.levels[0].size());
   // Every second leaf the pairs name, carried into the first's frame once (a leaf meets several
-  // first leaves): its triangles, their boxes (also as an octet) and planes, and ids, at
-  // 8·(its rank, in order of first appearance).
-  std::vector<std::uint32_t> rankOf(b.levels[0].size(), kNoPartner), secondLeaves;
-  for (const detail::LeafPair& pair : pairs)
-    if (rankOf[pair.second] == kNoPartner) {
-      rankOf[pair.second] = static_cast<std::uint32_t>(secondLeaves.size());
-      secondLeaves.push_back(pair.second);
-    }
+  // first leaves): its triangles, their boxes (also side by side) and planes, and ids, at
+  // 8·(its rank among them).
+  const SecondLeaves named = secondLeavesOf(pairs, b.levels[0].size());
+  const std::vector<std::uint32_t>& secondLeaves = named.leaves;
   const std::size_t slots = secondLeaves.size() * detail::kFanout;
   std::vector<Triangle> partnerTriangles(slots);
   std::vector<Aabb> partnerBoxes(slots);
@@ -260,7 +308,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
         const Aabb firstLeafBox = a.levels[0][firstLeaf];
         partners.clear();
         for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
-          const std::size_t j = rankOf[pairs[p].second];
+          const std::size_t j = named.rankOfPair[p];
           for (unsigned rest = detail::notApartMask(partnerOctets[j], firstLeafBox, reach);
                rest != 0; rest &= rest - 1)
             partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +

@@ -133,6 +133,32 @@ TEST(QueryMesh, MovedMeshesGiveTheMinimumDistanceOfTheMovedMeshes) {
   }
 }
 
+TEST(QueryMesh, ASmallParticleOnALargeMeshHasTheFlattenedContacts) {
+  // A few leaf pairs against a tree of thousands of leaves (the contacts then sort their pairs
+  // instead of tabling the large tree's leaves), the particle first and second.
+  const Mesh large = io::load(std::string(DELTA_DATA_DIR) + "/meshes/armadillo.off");
+  const Vec3 on = large.triangle(1000).centroid();
+  Mesh small = primitives::icosphere(2);
+  small.scale(0.01 * large.bounds().diagonal()).translate(on);
+  const QueryMesh preparedLarge(large), preparedSmall(small);
+  const TriangleSoA flatLarge = flatten(large), flatSmall = flatten(small);
+  const double epsilon = 1e-3 * large.bounds().diagonal();
+  for (bool smallFirst : {true, false}) {
+    const std::vector<ContactPoint> prepared =
+        smallFirst ? contacts(preparedSmall, preparedLarge, epsilon)
+                   : contacts(preparedLarge, preparedSmall, epsilon);
+    const std::vector<ContactPoint> flat = smallFirst ? contacts(flatSmall, flatLarge, epsilon)
+                                                      : contacts(flatLarge, flatSmall, epsilon);
+    ASSERT_GT(flat.size(), 10u);
+    ASSERT_EQ(prepared.size(), flat.size()) << smallFirst;
+    for (std::size_t k = 0; k < flat.size(); ++k) {
+      EXPECT_EQ(prepared[k].first, flat[k].first) << smallFirst;
+      EXPECT_EQ(prepared[k].second, flat[k].second) << smallFirst;
+      EXPECT_NEAR(prepared[k].distance, flat[k].distance, 1e-12 * large.bounds().diagonal());
+    }
+  }
+}
+
 TEST(QueryMesh, RejectsNonFiniteMotionsAndEmptyMeshes) {
   QueryMesh box(primitives::box());
   EXPECT_THROW(box.transform(RigidTransform::translationBy({0, NAN, 0})), Error);
