@@ -282,13 +282,15 @@ class LeafCache {
   };
 
   LeafCache(const detail::QueryMeshData& mesh, const detail::MatrixMotion* motion)
-      : mesh_(mesh), motion_(motion), slot_(mesh.levels[0].size(), kNone) {}
+      : mesh_(mesh), motion_(motion), table_(kFirstCapacity, kEmpty) {}
 
   Leaf leaf(std::uint32_t index) {
     const std::size_t begin = std::size_t{index} * detail::kFanout;
     const std::size_t count = std::min(begin + detail::kFanout, mesh_.sorted.size()) - begin;
-    if (slot_[index] == kNone) {
-      slot_[index] = static_cast<std::uint32_t>(triangles_.size());
+    std::uint64_t& entry = find(index);
+    if (entry == kEmpty) {
+      entry = std::uint64_t{index} << 32 | triangles_.size();
+      if (2 * ++used_ > table_.size()) grow();
       detail::MovedOctet& octet = octets_.emplace_back();
       for (std::size_t k = begin; k < begin + count; ++k) {
         const Triangle t =
@@ -308,7 +310,7 @@ class LeafCache {
           octet.upper[axis][i] = -std::numeric_limits<double>::infinity();
         }
     }
-    const std::size_t at = slot_[index];
+    const std::size_t at = find(index) & 0xffffffffu;
     return {&triangles_[at],
             &boxes_[at],
             &planes_[at],
@@ -318,10 +320,29 @@ class LeafCache {
   }
 
  private:
-  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+  static constexpr std::size_t kFirstCapacity = 64;
+
+  /// The table's entry for leaf `index`: (index, where its entries start), or an empty one where
+  /// it goes. Open addressing, linear probing, at most half full.
+  std::uint64_t& find(std::uint32_t index) noexcept {
+    const std::size_t mask = table_.size() - 1;
+    for (std::size_t at = (index * std::size_t{0x9e3779b1}) & mask;; at = (at + 1) & mask)
+      if (table_[at] == kEmpty || table_[at] >> 32 == index) return table_[at];
+  }
+  void grow() {
+    std::vector<std::uint64_t> old(2 * table_.size(), kEmpty);
+    old.swap(table_);
+    for (const std::uint64_t entry : old)
+      if (entry != kEmpty) find(static_cast<std::uint32_t>(entry >> 32)) = entry;
+  }
+
   const detail::QueryMeshData& mesh_;
   const detail::MatrixMotion* motion_;
-  std::vector<std::uint32_t> slot_;  ///< per leaf: where its entries start, or kNone
+  /// The leaves met so far and where their entries start: a hash table, so that a search pays
+  /// for the leaves it meets, not for the tree's size (a particle against a large obstacle).
+  std::vector<std::uint64_t> table_;
+  std::size_t used_ = 0;
   std::vector<Triangle> triangles_;
   std::vector<Aabb> boxes_;
   std::vector<detail::SeparatingPlane> planes_;
