@@ -260,10 +260,10 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   parallelFor(0, secondLeaves.size(), 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t j = begin; j < end; ++j) {
       const std::size_t from = std::size_t{secondLeaves[j]} * detail::kFanout;
-      const std::size_t to = std::min(from + detail::kFanout, b.sorted.size());
+      const std::size_t to = std::min(from + detail::kFanout, b.size());
       for (std::size_t k = from; k < to; ++k) {
         const std::size_t slot = j * detail::kFanout + (k - from);
-        const Triangle other = moved ? motion.apply(b.sorted.triangle(k)) : b.sorted.triangle(k);
+        const Triangle other = moved ? motion.apply(b.triangle(k)) : b.triangle(k);
         partnerTriangles[slot] = other;
         partnerBoxes[slot] = other.bounds();
         partnerPlanes[slot] = detail::separatingPlane(other);
@@ -314,18 +314,21 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
             partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
                                static_cast<std::uint32_t>(std::countr_zero(rest)));
         }
-        // Per partner the leaf's eight triangle boxes at once (its octet: outward-rounded, grown
-        // by the slack, so no pair is lost), then the planes, a leaf triangle's made on its
-        // first use. The contacts are sorted at the end: the batch's order does not matter.
+        // Per partner the leaf's eight triangle boxes at once (grown by the slack, so no pair
+        // is lost), then the planes, a leaf triangle's made on its first use. The contacts are
+        // sorted at the end: the batch's order does not matter.
+        if (partners.empty()) continue;
+        const std::size_t count = std::min(detail::kFanout, a.size() - firstBegin);
+        for (std::size_t i = 0; i < count; ++i)
+          leafTriangles[i] = a.triangle(firstBegin + i);
+        const detail::MovedOctet leafBoxes = detail::boxesOf(leafTriangles, count, a.slack);
         unsigned made = 0;
-        const detail::BoxOctet& leafBoxes = a.leafOctets[firstLeaf];
         for (const std::uint32_t slot : partners) {
           for (unsigned rest = detail::notApartMask(leafBoxes, partnerBoxes[slot], reach);
                rest != 0; rest &= rest - 1) {
             const auto i = static_cast<std::size_t>(std::countr_zero(rest));
             if (!(made & 1u << i)) {
               made |= 1u << i;
-              leafTriangles[i] = a.sorted.triangle(firstBegin + i);
               leafPlanes[i] = detail::separatingPlane(leafTriangles[i]);
             }
             const Triangle& one = leafTriangles[i];
@@ -363,6 +366,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   if (first.closed() && second.closed()) {
     // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
     const double limit = 4.0 * epsilon * epsilon;
+    a.pseudonormals();  // made here, where they may throw, not in the parallel loop
+    b.pseudonormals();
     const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
     const auto inside = [limit](const detail::QueryMeshData& mesh, const Vec3& x) {
       const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);

@@ -286,29 +286,20 @@ class LeafCache {
 
   Leaf leaf(std::uint32_t index) {
     const std::size_t begin = std::size_t{index} * detail::kFanout;
-    const std::size_t count = std::min(begin + detail::kFanout, mesh_.sorted.size()) - begin;
+    const std::size_t count = std::min(begin + detail::kFanout, mesh_.size()) - begin;
     std::uint64_t& entry = find(index);
     if (entry == kEmpty) {
       entry = std::uint64_t{index} << 32 | triangles_.size();
       if (2 * ++used_ > table_.size()) grow();
-      detail::MovedOctet& octet = octets_.emplace_back();
       for (std::size_t k = begin; k < begin + count; ++k) {
-        const Triangle t =
-            motion_ ? motion_->apply(mesh_.sorted.triangle(k)) : mesh_.sorted.triangle(k);
+        const Triangle t = motion_ ? motion_->apply(mesh_.triangle(k)) : mesh_.triangle(k);
         triangles_.push_back(t);
         boxes_.push_back(t.bounds().grown(mesh_.slack));
         planes_.push_back(detail::separatingPlane(t));
         ids_.push_back(mesh_.order[k]);
-        for (std::size_t axis = 0; axis < 3; ++axis) {
-          octet.lower[axis][k - begin] = boxes_.back().lower[axis];
-          octet.upper[axis][k - begin] = boxes_.back().upper[axis];
-        }
       }
-      for (std::size_t i = count; i < detail::kFanout; ++i)  // empty slots lie infinitely far
-        for (std::size_t axis = 0; axis < 3; ++axis) {
-          octet.lower[axis][i] = std::numeric_limits<double>::infinity();
-          octet.upper[axis][i] = -std::numeric_limits<double>::infinity();
-        }
+      octets_.push_back(
+          detail::boxesOf(&triangles_[triangles_.size() - count], count, mesh_.slack));
     }
     const std::size_t at = find(index) & 0xffffffffu;
     return {&triangles_[at],

@@ -30,6 +30,7 @@ void validate(const QueryMesh& mesh, const PointQuery& query) {
   if (query.signedDistance && !mesh.closed())
     throw Error("signed distance needs a closed, consistently oriented mesh; this one has " +
                 describeDefects(mesh.topology()));
+  if (query.signedDistance) mesh.data().pseudonormals();  // made here, where it may throw
 }
 
 [[noreturn]] void throwNonFinite(std::size_t index, const Vec3& point) {
@@ -80,8 +81,8 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   const double reach = hint ? hint->distance + length(point - hint->point) : 0.0;
   if (hint && hint->sorted != kNoTriangle && reach * reach < first)
     first = std::min(
-        first, grown(kernels::closestPointOnTriangle(point, data.sorted.triangle(hint->sorted))
-                         .distanceSquared));
+        first,
+        grown(kernels::closestPointOnTriangle(point, data.triangle(hint->sorted)).distanceSquared));
   detail::Nearest nearest = detail::nearestTriangle(data, point, first);
   if (!nearest.found() && first < limit) nearest = detail::nearestTriangle(data, point, limit);
   PointDistance result;

@@ -69,13 +69,13 @@ std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
 }
 
 /// Leaf boxes over the sorted triangles, then parents of kFanout children up to one root.
-std::vector<std::vector<Aabb>> buildLevels(const TriangleSoA& sorted, double slack) {
+std::vector<std::vector<Aabb>> buildLevels(const detail::QueryMeshData& data) {
   std::vector<std::vector<Aabb>> levels(1);
-  levels[0].resize((sorted.size() + detail::kFanout - 1) / detail::kFanout);
-  for (std::size_t k = 0; k < sorted.size(); ++k)
-    levels[0][k / detail::kFanout].extend(sorted.triangle(k).bounds());
+  levels[0].resize((data.size() + detail::kFanout - 1) / detail::kFanout);
+  for (std::size_t k = 0; k < data.size(); ++k)
+    levels[0][k / detail::kFanout].extend(data.triangle(k).bounds());
   for (Aabb& leaf : levels[0])
-    leaf = leaf.grown(slack);
+    leaf = leaf.grown(data.slack);
   while (levels.back().size() > 1) {
     const std::vector<Aabb>& children = levels.back();
     std::vector<Aabb> parents((children.size() + detail::kFanout - 1) / detail::kFanout);
@@ -106,7 +106,7 @@ float roundedOutward(double value, bool down) noexcept {
 }
 
 /// The point queries' copy of the tree (query_mesh_data.h): per inner node its children's
-/// boxes, per leaf its triangles' boxes grown by the slack.
+/// boxes.
 void buildOctets(detail::QueryMeshData& data) {
   data.childOctets.resize(data.levels.size() - 1);
   for (std::size_t l = 0; l + 1 < data.levels.size(); ++l) {
@@ -114,18 +114,13 @@ void buildOctets(detail::QueryMeshData& data) {
     for (std::size_t i = 0; i < data.levels[l + 1].size(); ++i)
       data.childOctets[l][i] = detail::octetOf(data.levels[l], i * detail::kFanout);
   }
-  std::vector<Aabb> triangleBoxes(data.sorted.size());
-  for (std::size_t k = 0; k < triangleBoxes.size(); ++k)
-    triangleBoxes[k] = data.sorted.triangle(k).bounds().grown(data.slack);
-  data.leafOctets.resize(data.levels[0].size());
-  for (std::size_t i = 0; i < data.leafOctets.size(); ++i)
-    data.leafOctets[i] = detail::octetOf(triangleBoxes, i * detail::kFanout);
 }
 
 /// Every node's oriented slab (query_mesh_data.h): a node of level l holds the sorted triangles
 /// [i·8^(l+1), (i+1)·8^(l+1)), so each level is one pass over the triangles.
 std::vector<std::vector<detail::NodeSlab>> buildSlabs(const detail::QueryMeshData& data) {
   std::vector<std::vector<detail::NodeSlab>> slabs(data.levels.size());
+  const std::size_t size = data.size();
   std::size_t span = detail::kFanout;
   for (std::size_t l = 0; l < data.levels.size(); ++l, span *= detail::kFanout) {
     slabs[l].resize(data.levels[l].size());
@@ -133,15 +128,15 @@ std::vector<std::vector<detail::NodeSlab>> buildSlabs(const detail::QueryMeshDat
                 [&](std::size_t begin, std::size_t end) {
                   for (std::size_t i = begin; i < end; ++i) {
                     const std::size_t from = i * span;
-                    const std::size_t to = std::min(from + span, data.sorted.size());
+                    const std::size_t to = std::min(from + span, size);
                     Vec3 area{};
                     for (std::size_t k = from; k < to; ++k)
-                      area = area + data.sorted.triangle(k).areaVector();
+                      area = area + data.triangle(k).areaVector();
                     detail::NodeSlab& slab = slabs[l][i];
                     if (lengthSquared(area) > 0.0) slab.normal = normalized(area);
                     double low = std::numeric_limits<double>::infinity(), high = -low;
                     for (std::size_t k = from; k < to; ++k) {
-                      const Triangle t = data.sorted.triangle(k);
+                      const Triangle t = data.triangle(k);
                       for (const Vec3& v : {t.a, t.b, t.c}) {
                         const double along = dot(slab.normal, v);
                         low = std::min(low, along);
@@ -162,56 +157,47 @@ double cornerAngle(const Vec3& from, const Vec3& next, const Vec3& previous) noe
   return std::atan2(length(cross(e1, e2)), dot(e1, e2));
 }
 
-/// Angle-weighted vertex pseudonormals and edge pseudonormals (sum of the two faces' unit
-/// normals), stored once each and named per triangle in tree order. For a closed, consistently
-/// oriented mesh every edge of a triangle with three distinct indices has exactly one partner.
-detail::Pseudonormals pseudonormals(const Mesh& mesh, const std::vector<std::uint32_t>& order) {
-  const std::size_t n = mesh.triangleCount();
-  std::vector<Vec3> faceNormal(n);
+/// Angle-weighted vertex pseudonormals, and per triangle the triangles across its edges: for a
+/// closed, consistently oriented mesh every edge of a triangle with three distinct corners has
+/// exactly one partner. The vertex sums run in the mesh's triangle order.
+detail::Pseudonormals pseudonormals(const detail::QueryMeshData& data) {
+  const std::size_t n = data.size();
   detail::Pseudonormals result;
-  result.vertices.assign(mesh.vertexCount(), Vec3{});
+  result.vertices.assign(data.vertices.size(), Vec3{});
+  result.across.assign(n, {detail::Pseudonormals::kNone, detail::Pseudonormals::kNone,
+                           detail::Pseudonormals::kNone});
   struct EdgeUse {
     std::uint64_t key;
-    std::uint32_t triangle;
+    std::uint32_t triangle;  // sorted
     std::uint32_t slot;
     auto operator<=>(const EdgeUse&) const = default;
   };
   std::vector<EdgeUse> edges;
   edges.reserve(3 * n);
+  std::vector<std::uint32_t> position(n);  // mesh id → tree order
+  for (std::size_t k = 0; k < n; ++k)
+    position[data.order[k]] = static_cast<std::uint32_t>(k);
   for (std::size_t t = 0; t < n; ++t) {
-    const TriangleIndices& v = mesh.triangles()[t];
-    const Triangle triangle = mesh.triangle(t);
-    faceNormal[t] = normalized(triangle.areaVector());
+    const std::uint32_t k = position[t];
+    const TriangleIndices& v = data.corners[k];
+    const Triangle triangle = data.triangle(k);
+    const Vec3 faceNormal = normalized(triangle.areaVector());
     const Vec3 corners[3] = {triangle.a, triangle.b, triangle.c};
-    for (std::size_t k = 0; k < 3; ++k)
-      result.vertices[v[k]] +=
-          cornerAngle(corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]) * faceNormal[t];
+    for (std::size_t c = 0; c < 3; ++c)
+      result.vertices[v[c]] +=
+          cornerAngle(corners[c], corners[(c + 1) % 3], corners[(c + 2) % 3]) * faceNormal;
     if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;  // a fold: no edges (topology.h)
     for (std::uint32_t slot = 0; slot < 3; ++slot) {
       const std::uint32_t from = v[slot], to = v[(slot + 1) % 3];
       const std::uint64_t key = std::uint64_t{std::min(from, to)} << 32 | std::max(from, to);
-      edges.push_back({key, static_cast<std::uint32_t>(t), slot});
+      edges.push_back({key, k, slot});
     }
   }
   std::sort(edges.begin(), edges.end());
-
-  std::vector<std::uint32_t> position(n);  // mesh id → tree order
-  for (std::size_t k = 0; k < n; ++k)
-    position[order[k]] = static_cast<std::uint32_t>(k);
-  result.ofTriangle.assign(n, {});  // edges without a partner (a fold's) name edges[0] = 0
-  for (std::size_t t = 0; t < n; ++t) {
-    const TriangleIndices& v = mesh.triangles()[t];
-    for (std::size_t k = 0; k < 3; ++k)
-      result.ofTriangle[position[t]][k] = v[k];
-  }
-  result.edges.reserve(edges.size() / 2 + 1);
-  result.edges.assign(1, Vec3{});
   for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
     if (edges[e].key != edges[e + 1].key) continue;
-    const auto index = static_cast<std::uint32_t>(result.edges.size());
-    result.edges.push_back(faceNormal[edges[e].triangle] + faceNormal[edges[e + 1].triangle]);
-    result.ofTriangle[position[edges[e].triangle]][3 + edges[e].slot] = index;
-    result.ofTriangle[position[edges[e + 1].triangle]][3 + edges[e + 1].slot] = index;
+    result.across[edges[e].triangle][edges[e].slot] = edges[e + 1].triangle;
+    result.across[edges[e + 1].triangle][edges[e + 1].slot] = edges[e].triangle;
     ++e;
   }
   return result;
@@ -223,13 +209,30 @@ namespace detail {
 
 const TriangleSoA& QueryMeshData::meshOrder() const {
   std::call_once(meshOrderOnce_, [this] {
-    std::vector<Triangle> inMeshOrder(sorted.size());
-    for (std::size_t k = 0; k < sorted.size(); ++k)
-      inMeshOrder[order[k]] = sorted.triangle(k);
+    std::vector<Triangle> inMeshOrder(size());
+    for (std::size_t k = 0; k < size(); ++k)
+      inMeshOrder[order[k]] = triangle(k);
     meshOrder_.assign(inMeshOrder);
     meshOrderMade_.store(true, std::memory_order_release);
   });
   return meshOrder_;
+}
+
+const Pseudonormals& QueryMeshData::pseudonormals() const {
+  std::call_once(pseudonormalsOnce_, [this] {
+    pseudonormals_ = delta::pseudonormals(*this);
+    pseudonormalsMade_.store(true, std::memory_order_release);
+  });
+  return pseudonormals_;
+}
+
+Vec3 QueryMeshData::pseudonormal(std::uint32_t sorted, std::size_t slot) const {
+  const Pseudonormals& normals = pseudonormals();
+  if (slot < 3) return normals.vertices[corners[sorted][slot]];
+  // The sum of the two faces' unit normals (an edge's two angles are both π).
+  const std::uint32_t other = normals.across[sorted][slot - 3];
+  if (other == Pseudonormals::kNone) return {};
+  return normalized(triangle(sorted).areaVector()) + normalized(triangle(other).areaVector());
 }
 
 BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first) noexcept {
@@ -257,27 +260,41 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   auto data = std::make_shared<detail::QueryMeshData>();
   data->bounds = mesh.bounds();
   data->order = treeOrder(mesh);
-  std::vector<TriangleIndices> sortedIndices(mesh.triangleCount());
-  for (std::size_t k = 0; k < sortedIndices.size(); ++k)
-    sortedIndices[k] = mesh.triangles()[data->order[k]];
-  const Mesh sortedMesh(std::vector<Vec3>(mesh.vertices().begin(), mesh.vertices().end()),
-                        std::move(sortedIndices));
-  data->sorted = flatten(sortedMesh);
+  // The corners in tree order, the vertices renumbered in the order they first appear there.
+  constexpr std::uint32_t kUnseen = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> renumbered(mesh.vertexCount(), kUnseen);
+  data->corners.resize(mesh.triangleCount());
+  for (std::size_t k = 0; k < data->corners.size(); ++k)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::uint32_t v = mesh.triangles()[data->order[k]][c];
+      if (renumbered[v] == kUnseen) {
+        renumbered[v] = static_cast<std::uint32_t>(data->vertices.size());
+        data->vertices.push_back(mesh.vertices()[v]);
+      }
+      data->corners[k][c] = renumbered[v];
+    }
+  data->vertices.shrink_to_fit();
+  const auto triangleAt = [&data = *data](std::size_t k) { return data.triangle(k); };
+  data->lanes = detail::floatTriangles(data->size(), triangleAt, data->bounds.center());
   // Boxes grow by far more than the rounding of a box distance or a point–triangle distance
   // (a few ulps of the coordinates and the distance), so pruning by box never drops a triangle
   // whose computed distance would win.
   data->slack = 0x1p-36 * (std::max(maxAbs(data->bounds.lower), maxAbs(data->bounds.upper)) +
                            data->bounds.diagonal());
-  data->levels = buildLevels(data->sorted, data->slack);
+  data->levels = buildLevels(*data);
   buildOctets(*data);
   data->slabs = buildSlabs(*data);
-  data->boundGrid = detail::BoundGrid(data->sorted, data->bounds);
+  {  // the grid reads plain triangles: a copy for its build only
+    std::vector<Triangle> sorted(data->size());
+    for (std::size_t k = 0; k < sorted.size(); ++k)
+      sorted[k] = data->triangle(k);
+    TriangleSoA soa;
+    soa.assign(sorted);
+    data->boundGrid = detail::BoundGrid(soa, data->bounds);
+  }
   data->topology = analyzeTopology(mesh);
   data->closed = data->topology.closed && data->topology.consistentlyOriented;
-  if (data->closed) {
-    data->pseudonormals = pseudonormals(mesh, data->order);
-    data->orientation = signedVolume(mesh) < 0.0 ? -1.0 : 1.0;
-  }
+  if (data->closed) data->orientation = signedVolume(mesh) < 0.0 ? -1.0 : 1.0;
   data_ = std::move(data);
 }
 
@@ -310,7 +327,7 @@ QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
 }
 
 std::size_t QueryMesh::size() const noexcept {
-  return data_->sorted.size();
+  return data_->size();
 }
 const TriangleSoA& QueryMesh::triangles() const {
   return data_->meshOrder();
@@ -326,18 +343,19 @@ const Aabb& QueryMesh::bounds() const noexcept {
 }
 
 std::size_t QueryMesh::memoryBytes() const noexcept {
-  std::size_t bytes = (data_->meshOrderMade() ? data_->meshOrder().memoryBytes() : 0) +
-                      data_->sorted.memoryBytes() +
-                      data_->order.capacity() * sizeof(std::uint32_t) +
-                      data_->pseudonormals.memoryBytes();
-  for (const std::vector<Aabb>& level : data_->levels)
+  const detail::QueryMeshData& data = *data_;
+  std::size_t bytes = (data.meshOrderMade() ? data.meshOrder().memoryBytes() : 0) +
+                      (data.pseudonormalsMade() ? data.pseudonormals().memoryBytes() : 0) +
+                      data.vertices.capacity() * sizeof(Vec3) +
+                      data.corners.capacity() * sizeof(TriangleIndices) +
+                      data.order.capacity() * sizeof(std::uint32_t) + data.lanes.memoryBytes();
+  for (const std::vector<Aabb>& level : data.levels)
     bytes += level.capacity() * sizeof(Aabb);
-  for (const detail::BoxOctets& level : data_->childOctets)
+  for (const detail::BoxOctets& level : data.childOctets)
     bytes += level.capacity() * sizeof(detail::BoxOctet);
-  bytes += data_->leafOctets.capacity() * sizeof(detail::BoxOctet);
-  for (const std::vector<detail::NodeSlab>& level : data_->slabs)
+  for (const std::vector<detail::NodeSlab>& level : data.slabs)
     bytes += level.capacity() * sizeof(detail::NodeSlab);
-  return bytes + data_->boundGrid.memoryBytes();
+  return bytes + data.boundGrid.memoryBytes();
 }
 
 }  // namespace delta

@@ -16,6 +16,7 @@
 #include "delta/mesh/triangle_soa.h"
 
 #include "kernels/triangle_pairs.h"
+#include "query/detail/query_mesh_data.h"
 
 namespace delta::kernels {
 namespace {
@@ -26,6 +27,7 @@ struct Checked {
   int above = 0;   ///< upper bounds that were ≥ it (all must be)
   int tight = 0;   ///< well-shaped lanes whose two bounds are within 1e-6 of it
   int shaped = 0;  ///< well-shaped lanes
+  int boxed = 0;   ///< calls that stopped at the boxes (all eight beyond the pruning bound)
 };
 
 /// sin² of the angle at a ≥ 2⁻¹⁸: comfortably above the kernel's 2⁻²⁰ sliver cut.
@@ -34,13 +36,38 @@ bool wellShaped(const Triangle& t) {
   return lengthSquared(cross(u, v)) > 0x1p-18 * lengthSquared(u) * lengthSquared(v);
 }
 
+/// The eight triangles as the point queries' leaves hold them: in single precision, less the
+/// centre of their box.
+detail::FloatTriangles lanesOf(const std::vector<Triangle>& eight) {
+  Aabb box;
+  for (const Triangle& t : eight)
+    box.extend(t.bounds());
+  return detail::floatTriangles(
+      eight.size(), [&eight](std::size_t k) { return eight[k]; }, box.center());
+}
+
+/// Whether the bounds were made (false: the boxes put all eight beyond `prune`).
+bool boundsOf(Isa isa, const detail::FloatTriangles& lanes, const Vec3& p, double (&lower)[8],
+              double (&upper)[8], double prune = INFINITY) {
+  const Vec3 local = p - lanes.origin;
+  return detail::batchKernels(isa).pointTriangleBounds(lanes.view(), 0, {local.x, local.y, local.z},
+                                                       prune, lower, upper);
+}
+
 void check(Isa isa, const std::vector<Triangle>& eight, const Vec3& p, Checked& checked,
            const char* family) {
-  TriangleSoA soa;
-  soa.assign(eight);
-  const detail::SoaView view = detail::soaView(soa);
+  const detail::FloatTriangles lanes = lanesOf(eight);
   double bounds[8], upper[8];
-  detail::batchKernels(isa).pointTriangleBounds(view, 0, {p.x, p.y, p.z}, bounds, upper);
+  ASSERT_TRUE(boundsOf(isa, lanes, p, bounds, upper));
+  // A pruning bound below every distance may stop at the triangles' boxes; one at the nearest
+  // distance or above must not.
+  double nearest = INFINITY;
+  for (const Triangle& t : eight)
+    nearest = std::min(nearest, closestPointOnTriangle(p, t).distanceSquared);
+  double unused[8], unusedToo[8];
+  for (const double prune : {0.0, 0.5 * nearest, 0.999 * nearest})
+    checked.boxed += !boundsOf(isa, lanes, p, unused, unusedToo, prune);
+  ASSERT_TRUE(boundsOf(isa, lanes, p, unused, unusedToo, nearest)) << name(isa) << ", " << family;
   for (std::size_t i = 0; i < eight.size(); ++i) {
     const double exact = closestPointOnTriangle(p, eight[i]).distanceSquared;
     // NaN is allowed (nothing known) but must not occur for these finite, moderate inputs.
@@ -57,9 +84,11 @@ void check(Isa isa, const std::vector<Triangle>& eight, const Vec3& p, Checked& 
       const Vec3 a = eight[i].a;
       const double size = std::max({distance(a, eight[i].b), distance(a, eight[i].c),
                                     distance(eight[i].b, eight[i].c), distance(p, a)});
-      const double scale =
-          size * (size + std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}));
-      if (bounds[i] >= exact - 1e-6 * scale && upper[i] <= exact + 1e-6 * scale) ++checked.tight;
+      // The margin's share, and the single-precision vertices' (δ in the distance).
+      const double tolerance =
+          1e-6 * size * (size + std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)})) +
+          10.0 * size * lanes.rounding + 2.0 * lanes.rounding * lanes.rounding;
+      if (bounds[i] >= exact - tolerance && upper[i] <= exact + tolerance) ++checked.tight;
     }
   }
 }
@@ -88,16 +117,19 @@ TEST(PointLanes, BoundsNeverExceedTheExactKernelOnEveryFamily) {
           check(isa, eight, p, checked, testing::name(family));
       }
     }
-    std::printf("[ stats    ] %-6s %d lanes checked, %d of %d well-shaped lanes tight\n", name(isa),
-                checked.below, checked.tight, checked.shaped);
+    std::printf(
+        "[ stats    ] %-6s %d lanes checked, %d of %d well-shaped lanes tight, %d calls "
+        "stopped at the boxes\n",
+        name(isa), checked.below, checked.tight, checked.shaped, checked.boxed);
     EXPECT_GT(checked.shaped, 1000);
+    EXPECT_GT(checked.boxed, 1000);
     EXPECT_EQ(checked.tight, checked.shaped) << name(isa);
   }
 }
 
-TEST(PointLanes, SliversAndZeroAreaGetNoBound) {
-  // A needle: its angle at a is far below the cut, so the bound must be 0 (the plain normal's
-  // direction is off by ε/sin α there, and the face distance with it).
+TEST(PointLanes, SliversAndZeroAreaAreBoundedByTheirBoxes) {
+  // A needle: its angle at a is far below the cut, so its lower bound must be its box's (the
+  // plain normal's direction is off by ε/sin α there, and the face distance with it).
   const Triangle needle{{0, 0, 0}, {1, 0, 0}, {1, 1e-12, 0}};
   const Triangle point{{2, 2, 2}, {2, 2, 2}, {2, 2, 2}};
   const Triangle segment{{0, 0, 1}, {1, 0, 1}, {2, 0, 1}};
@@ -107,13 +139,13 @@ TEST(PointLanes, SliversAndZeroAreaGetNoBound) {
   for (Isa isa : supportedIsas()) {
     Checked checked;
     check(isa, eight, p, checked, "degenerate");
-    TriangleSoA soa;
-    soa.assign(eight);
     double bounds[8], upper[8];
-    detail::batchKernels(isa).pointTriangleBounds(detail::soaView(soa), 0, {p.x, p.y, p.z}, bounds,
-                                                  upper);
+    boundsOf(isa, lanesOf(eight), p, bounds, upper);
     for (int i : {0, 1, 2, 4, 5, 6}) {
-      EXPECT_EQ(bounds[i], 0.0) << name(isa) << ", lane " << i;
+      const Aabb box = eight[static_cast<std::size_t>(i)].bounds();
+      const Vec3 gap = max(max(box.lower - p, p - box.upper), Vec3{0, 0, 0});
+      EXPECT_LE(bounds[i], lengthSquared(gap)) << name(isa) << ", lane " << i;
+      EXPECT_GE(bounds[i], 0.99 * lengthSquared(gap)) << name(isa) << ", lane " << i;
       // The nearest edge's distance, which is the triangle's for these (no face to be nearer).
       const double exact = closestPointOnTriangle(p, eight[i]).distanceSquared;
       EXPECT_GE(upper[i], exact) << name(isa) << ", lane " << i;
@@ -121,6 +153,46 @@ TEST(PointLanes, SliversAndZeroAreaGetNoBound) {
     }
     EXPECT_GT(bounds[3], 0.9 * closestPointOnTriangle(p, fine).distanceSquared) << name(isa);
     EXPECT_LT(upper[3], 1.1 * closestPointOnTriangle(p, fine).distanceSquared) << name(isa);
+  }
+}
+
+TEST(PointLanes, SinglePrecisionVerticesWidenTheBounds) {
+  // Eight triangles spread over 10³ about the origin of their lanes, with vertices that are no
+  // floats (a float there is off by up to 3·10⁻⁵), and points 0.1 to 3 from one of them: the
+  // float triangles' squared distances are off by up to 2·d·δ, several times the margin, and only
+  // the widening by δ keeps the bounds on their sides. (With δ = 0 this fails.)
+  testing::PairRandom random(59);
+  for (Isa isa : supportedIsas()) {
+    Checked checked;
+    for (int round = 0; round < 300; ++round) {
+      std::vector<Triangle> eight;
+      for (int i = 0; i < 8; ++i) {
+        const Vec3 a = random.inCube(1e3);
+        eight.push_back({a, a + random.inCube(2.0), a + random.inCube(2.0)});
+      }
+      const Triangle& t = eight[static_cast<std::size_t>(round % 8)];
+      const Vec3 normal = normalized(cross(t.b - t.a, t.c - t.a));
+      const Vec3 on = t.a + (t.b - t.a) * 0.3 + (t.c - t.a) * 0.2;
+      for (const Vec3& p : {on + normal * 0.1, on - normal * 3.0, t.b + random.inCube(1.0), on})
+        check(isa, eight, p, checked, "beside single-precision vertices");
+    }
+    EXPECT_EQ(checked.below, 300 * 4 * 8);
+  }
+}
+
+TEST(PointLanes, NaNOrNothingBeyondSinglePrecision) {
+  // Triangles 10³⁹ from the origin of their lanes: no float holds them, δ is infinite, and no
+  // lower bound may exceed 0 nor any upper bound be finite.
+  const std::vector<Triangle> eight(8, Triangle{{-1e39, 0, 0}, {1e39, 1, 0}, {0, 1e39, 1}});
+  for (Isa isa : supportedIsas()) {
+    const detail::FloatTriangles lanes = lanesOf(eight);
+    EXPECT_TRUE(std::isinf(lanes.rounding));
+    double bounds[8], upper[8];
+    boundsOf(isa, lanes, {0.5, 0.25, 3.0}, bounds, upper);
+    for (int i = 0; i < 8; ++i) {
+      EXPECT_FALSE(bounds[i] > 0.0) << name(isa) << ", lane " << i;
+      EXPECT_FALSE(upper[i] < INFINITY) << name(isa) << ", lane " << i;
+    }
   }
 }
 

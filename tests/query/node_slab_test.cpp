@@ -26,7 +26,7 @@ std::pair<std::size_t, std::size_t> rangeOf(const QueryMeshData& data, std::size
   std::size_t span = kFanout;
   for (std::size_t l = 0; l < level; ++l)
     span *= kFanout;
-  return {node * span, std::min((node + 1) * span, data.sorted.size())};
+  return {node * span, std::min((node + 1) * span, data.size())};
 }
 
 TEST(NodeSlab, GapNeverExceedsTheTrianglesDistance) {
@@ -52,10 +52,9 @@ TEST(NodeSlab, GapNeverExceedsTheTrianglesDistance) {
       double nearest = std::numeric_limits<double>::infinity();
       for (std::size_t i = fa; i < ta; ++i)
         for (std::size_t j = fb; j < tb; ++j)
-          nearest = std::min(nearest,
-                             std::sqrt(kernels::triangleDistanceBruteForce(
-                                           a.sorted.triangle(i), motion.apply(b.sorted.triangle(j)))
-                                           .distanceSquared));
+          nearest = std::min(nearest, std::sqrt(kernels::triangleDistanceBruteForce(
+                                                    a.triangle(i), motion.apply(b.triangle(j)))
+                                                    .distanceSquared));
       ASSERT_LE(gap, nearest) << "shift " << shift << ", nodes " << la << ":" << na << ", " << lb
                               << ":" << nb;
       ++pairs;

@@ -194,27 +194,25 @@ TEST(QueryMesh, ManyThreadsQueryCopiesWithTheirOwnPoses) {
 }
 
 TEST(QueryMesh, MemoryPerTriangle) {
-  // What the parts take a triangle: the triangles once, in tree order (72 bytes, padded), the
-  // tree's boxes and octets (about 35), the bound grid (about 2) and, for a closed mesh, the
-  // pseudonormals stored once per vertex and edge with six indices a triangle (about 72: 24 + 12
-  // + 36). A second copy of the triangles or of the pseudonormals (a copy per triangle took 144)
-  // breaks the upper bound; the mesh-order triangles appear once triangles() is called.
+  // What the parts take a triangle: the vertices (24 bytes each, about half a vertex a triangle)
+  // and three corner indices (12), the single-precision copy for the leaf bounds (36), the tree
+  // order (4), the tree's boxes, octets and slabs (about 16) and the bound grid (about 2): about
+  // 82. A copy of the triangles in double (72) breaks the upper bound. The pseudonormals (24:
+  // 12 for the vertices, 12 for each triangle's neighbours) appear with the first signed query,
+  // the mesh-order triangles (72) once triangles() is called.
   const Mesh closed = primitives::icosphere(5);  // 20,480 triangles
   const auto perTriangle = [](const QueryMesh& query) {
     return static_cast<double>(query.memoryBytes()) / static_cast<double>(query.size());
   };
   const QueryMesh query(closed);
   const double prepared = perTriangle(query);
-  EXPECT_GT(prepared, 72.0 + 72.0);
-  EXPECT_LT(prepared, 200.0);
+  EXPECT_GT(prepared, 12.0 + 12.0 + 36.0 + 4.0);
+  EXPECT_LT(prepared, 90.0);
+  const PointDistance outside = distance(query, {2, 0, 0}, {.signedDistance = true});
+  EXPECT_FALSE(outside.inside);
+  EXPECT_NEAR(perTriangle(query), prepared + 24.0, 0.5);
   ASSERT_EQ(query.triangles().size(), closed.triangleCount());
-  EXPECT_NEAR(perTriangle(query), prepared + 72.0, 1.0);
-  Mesh open = primitives::icosphere(5);
-  open = Mesh(std::vector<Vec3>(open.vertices().begin(), open.vertices().end()),
-              std::vector<TriangleIndices>(open.triangles().begin() + 1, open.triangles().end()));
-  const QueryMesh openQuery(open);
-  EXPECT_FALSE(openQuery.closed());
-  EXPECT_LT(perTriangle(openQuery), prepared - 60.0);  // no pseudonormals for an open mesh
+  EXPECT_NEAR(perTriangle(query), prepared + 24.0 + 72.0, 1.0);
 }
 
 TEST(QueryMesh, MeshOrderTrianglesMadeOnceForManyThreads) {
@@ -239,6 +237,40 @@ TEST(QueryMesh, MeshOrderTrianglesMadeOnceForManyThreads) {
     ASSERT_EQ(found.b, expected.b) << i;
     ASSERT_EQ(found.c, expected.c) << i;
   }
+}
+
+TEST(QueryMesh, PseudonormalsMadeOnceForManyThreads) {
+  // The first signed queries of eight threads at once, on copies of one prepared mesh, make its
+  // pseudonormals once (ThreadSanitizer checks the race) and every thread signs as a mesh that
+  // made them alone does.
+  const Mesh mesh = primitives::granulate(4, {1, 2, 0.5}, 300);
+  const QueryMesh query(mesh), alone(mesh);
+  std::vector<Vec3> points(64);
+  std::mt19937_64 random(3);
+  std::uniform_real_distribution<double> unit(-1.5, 1.5);
+  for (Vec3& p : points)
+    p = {unit(random), 2.0 * unit(random), 0.5 * unit(random)};
+  std::vector<std::vector<PointDistance>> answers(8);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < answers.size(); ++t)
+    threads.emplace_back([&, t] {
+      const QueryMesh copy = query;
+      for (const Vec3& p : points)
+        answers[t].push_back(distance(copy, p, {.signedDistance = true}));
+    });
+  for (std::thread& thread : threads)
+    thread.join();
+  int inside = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const PointDistance expected = distance(alone, points[i], {.signedDistance = true});
+    inside += expected.inside;
+    for (const std::vector<PointDistance>& some : answers) {
+      ASSERT_EQ(some[i].distance, expected.distance) << i;
+      ASSERT_EQ(some[i].inside, expected.inside) << i;
+    }
+  }
+  EXPECT_GT(inside, 5);
+  EXPECT_LT(inside, 60);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #pragma once
 
+#include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 #include "delta/mesh/triangle_soa.h"
 
@@ -20,6 +21,11 @@ namespace delta {
 ///
 /// O(triangles). Threading: reads the mesh only; safe to call from any number of threads.
 double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept;
+
+/// The signed solid angle that triangle `t` subtends at `point` (Van Oosterom and Strackee):
+/// positive where the point sees its vertices a, b, c counter-clockwise, in (−2π, 2π], 0 for a
+/// degenerate triangle. windingNumber is their sum over 4π.
+double solidAngle(const Triangle& t, const Vec3& point) noexcept;
 
 /// windingNumber(mesh, point) > ½: inside a closed, outward-oriented mesh (on its surface: no
 /// robust answer, see above).

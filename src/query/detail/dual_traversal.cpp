@@ -34,6 +34,18 @@ MatrixMotion matrixMotion(const RigidTransform& motion) {
   return {Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix(), motion.translation};
 }
 
+MovedOctet boxesOf(const Triangle* triangles, std::size_t count, double slack) noexcept {
+  MovedOctet octet;
+  for (std::size_t i = 0; i < kFanout; ++i) {
+    const Aabb box = i < count ? triangles[i].bounds().grown(slack) : Aabb{};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      octet.lower[axis][i] = box.lower[axis];
+      octet.upper[axis][i] = box.upper[axis];
+    }
+  }
+  return octet;
+}
+
 MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
                      const MatrixMotion* motion) noexcept
     : levels_(levels), motion_(motion) {

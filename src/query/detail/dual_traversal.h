@@ -38,6 +38,10 @@ struct MovedOctet {
   double upper[3][kFanout];
 };
 
+/// The boxes of `count` (≤ kFanout) triangles grown by `slack`, side by side; the slots past
+/// `count` empty (+∞, −∞: infinitely far).
+MovedOctet boxesOf(const Triangle* triangles, std::size_t count, double slack) noexcept;
+
 /// Lane i of an octet's boxes along `axis`.
 inline double lowerOf(const MovedOctet& boxes, std::size_t axis, std::size_t i) noexcept {
   return boxes.lower[axis][i];

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <numbers>
 
 #include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/query/winding_number.h"
@@ -32,11 +33,12 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
          (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
 }
 
-/// What a descent reads besides the tree: the sorted triangles as plain streams, and the ISA's
-/// bounds of a point against a leaf's eight triangles.
+/// What a descent reads besides the tree: the sorted triangles in single precision, the point
+/// less their origin, and the ISA's bounds of a point against a leaf's eight triangles.
 struct Leaves {
-  SoaView triangles;
-  void (*bounds)(const SoaView&, std::size_t, const double (&)[3], double (&)[8],
+  FloatSoaView triangles;
+  double point[3];
+  bool (*bounds)(const FloatSoaView&, std::size_t, const double (&)[3], double, double (&)[8],
                  double (&)[8]) noexcept;
 };
 
@@ -64,8 +66,7 @@ struct Search {
 /// The exact kernel on sorted triangle `k`.
 [[gnu::always_inline]] inline void exactly(const QueryMeshData& mesh, const Vec3& point,
                                            std::size_t k, Search& search) noexcept {
-  const kernels::PointTriangleResult r =
-      kernels::closestPointOnTriangle(point, mesh.sorted.triangle(k));
+  const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, mesh.triangle(k));
   if (better(r.distanceSquared, mesh.order[k], search.best)) {
     search.best.distanceSquared = r.distanceSquared;
     search.best.triangle = mesh.order[k];
@@ -96,28 +97,24 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
   search.count = 0;
 }
 
-/// The triangles of leaf `leaf`: most are farther than the pruning bound by their own box (grown
-/// by the slack); a lone survivor meets the exact kernel at once; where two or more boxes are
-/// not, the vector bounds of the eight tighten the pruning and the survivors wait (Search).
+/// The triangles of leaf `leaf`: the vector bounds of the eight tighten the pruning with their
+/// upper bounds, and those whose lower bound is not beyond it wait (Search).
 [[gnu::always_inline]] inline void visitLeaf(const QueryMeshData& mesh, const Leaves& leaves,
                                              const Vec3& point, std::size_t leaf,
                                              Search& search) noexcept {
-  double bounds[kFanout];
-  distancesSquared(mesh.leafOctets[leaf], point, bounds);
-  const unsigned near = notAboveMask(bounds, search.prune);  // never the empty slots
-  if (near == 0) return;
   double lower[kFanout], upper[kFanout];
-  leaves.bounds(leaves.triangles, leaf * kFanout, {point.x, point.y, point.z}, lower, upper);
-  for (unsigned rest = near; rest != 0; rest &= rest - 1) {
-    const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-    if (upper[i] < search.prune) search.prune = upper[i];  // not NaN
+  if (!leaves.bounds(leaves.triangles, leaf * kFanout, leaves.point, search.prune, lower, upper))
+    return;
+  const std::size_t count = std::min(kFanout, mesh.size() - leaf * kFanout);
+  const unsigned present = (1u << count) - 1;  // not the padding
+  for (std::size_t i = 0; i < kFanout; ++i) {
+    if (upper[i] < search.prune && (present >> i & 1)) search.prune = upper[i];  // not NaN
+    lower[i] = lower[i] > 0.0 ? lower[i] : 0.0;  // NaN (nothing known): in doubt
   }
-  for (unsigned rest = near; rest != 0; rest &= rest - 1) {
+  for (unsigned rest = notAboveMask(lower, search.prune) & present; rest != 0; rest &= rest - 1) {
     const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-    const double bound = lower[i] > bounds[i] ? lower[i] : bounds[i];  // the box's where NaN
-    if (!(bound <= search.prune)) continue;
     if (search.count == kDeferred) settle(mesh, point, search);
-    search.lower[search.count] = bound;
+    search.lower[search.count] = lower[i];
     search.deferred[search.count++] = static_cast<std::uint32_t>(leaf * kFanout + i);
   }
 }
@@ -198,7 +195,9 @@ Descent descentFor(kernels::Isa isa) noexcept {
 
 Nearest nearestWith(const Descent& descent, const QueryMeshData& mesh, const Vec3& point,
                     double limitSquared) noexcept {
-  return descent.descend(mesh, {soaView(mesh.sorted), descent.bounds}, point, limitSquared);
+  const Vec3 local = point - mesh.lanes.origin;
+  return descent.descend(mesh, {mesh.lanes.view(), {local.x, local.y, local.z}, descent.bounds},
+                         point, limitSquared);
 }
 
 }  // namespace
@@ -222,17 +221,19 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
                 static_cast<int>(kernels::TriangleFeature::EdgeAB) == 3 &&
                 static_cast<int>(kernels::TriangleFeature::EdgeCA) == 5);
   const kernels::TriangleFeature feature = nearest.closest.feature;
-  const Vec3 normal =
-      feature == kernels::TriangleFeature::Face
-          ? mesh.sorted.triangle(nearest.sorted).areaVector()
-          : mesh.pseudonormals.of(nearest.sorted, static_cast<std::size_t>(feature));
+  const Vec3 normal = feature == kernels::TriangleFeature::Face
+                          ? mesh.triangle(nearest.sorted).areaVector()
+                          : mesh.pseudonormal(nearest.sorted, static_cast<std::size_t>(feature));
   const Vec3 offset = point - nearest.closest.closest;
   const double side = dot(offset, normal) * mesh.orientation;
   // Exactly, the side is positive outside and negative inside (Bærentzen and Aanæs); where it
   // is within rounding of zero (a degenerate triangle's zero normal, a point almost tangent to
   // the surface) the winding number, O(n) but robust, decides.
   if (std::abs(side) > 1e-9 * length(offset) * length(normal)) return side < 0.0;
-  return windingNumber(mesh.sorted, point) * mesh.orientation > 0.5;
+  double solidAngles = 0.0;
+  for (std::size_t k = 0; k < mesh.size(); ++k)
+    solidAngles += solidAngle(mesh.triangle(k), point);
+  return solidAngles / (4.0 * std::numbers::pi) * mesh.orientation > 0.5;
 }
 
 }  // namespace delta::detail

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <mutex>
@@ -11,8 +12,10 @@
 #include "delta/core/aabb.h"
 #include "delta/core/aligned_allocator.h"
 #include "delta/core/vec3.h"
+#include "delta/kernels/detail/batch_views.h"
 #include "delta/kernels/isa.h"
 #include "delta/kernels/point_triangle.h"
+#include "delta/mesh/mesh.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
 
@@ -73,45 +76,86 @@ struct NodeSlab {
   double low = 0.0, high = 0.0;
 };
 
-/// The angle-weighted pseudonormals of a closed mesh's vertices and edges (not normalised), each
-/// stored once: 72 bytes a triangle where a copy per triangle took 144.
-struct Pseudonormals {
-  std::vector<Vec3> vertices;  ///< per mesh vertex
-  std::vector<Vec3> edges;     ///< per edge shared by two triangles; edges[0] = 0 (no partner)
-  /// Per sorted triangle: its vertices a, b, c (into `vertices`), then its edges ab, bc, ca (into
-  /// `edges`).
-  std::vector<std::array<std::uint32_t, 6>> ofTriangle;
+/// The sorted triangles in single precision, less the mesh box's centre, as nine streams
+/// (FloatSoaView): what the point queries' leaf bounds read, 36 bytes a triangle where the doubles
+/// took 72 (point_lanes.h widens the bounds by `rounding`). Padding triangles are NaN.
+struct FloatTriangles {
+  std::vector<float, AlignedAllocator<float, 64>> coordinates;
+  std::size_t paddedSize = 0;  ///< floats per stream: the triangles, rounded up to 16
+  Vec3 origin;
+  double rounding = 0.0;  ///< δ: no vertex is farther from its double (less the origin)
 
-  /// The pseudonormal of feature `slot` (0–2 vertices a, b, c; 3–5 edges ab, bc, ca) of sorted
-  /// triangle `sorted`.
-  const Vec3& of(std::uint32_t sorted, std::size_t slot) const noexcept {
-    const std::uint32_t index = ofTriangle[sorted][slot];
-    return slot < 3 ? vertices[index] : edges[index];
+  FloatSoaView view() const noexcept {
+    FloatSoaView view{};
+    for (std::size_t stream = 0; stream < 9; ++stream)
+      view.streams[stream] = coordinates.data() + stream * paddedSize;
+    view.rounding = rounding;
+    view.offset = maxAbs(origin);
+    return view;
   }
+  std::size_t memoryBytes() const noexcept { return coordinates.capacity() * sizeof(float); }
+};
+
+/// `count` triangles, triangleAt(k), in single precision less `origin`.
+template <typename TriangleAt>
+FloatTriangles floatTriangles(std::size_t count, const TriangleAt& triangleAt, const Vec3& origin) {
+  FloatTriangles result;
+  result.paddedSize = (count + 15) / 16 * 16;
+  result.origin = origin;
+  result.coordinates.assign(9 * result.paddedSize, std::numeric_limits<float>::quiet_NaN());
+  double largest = 0.0;  // the largest coordinate less the origin
+  for (std::size_t k = 0; k < count; ++k) {
+    const Triangle t = triangleAt(k);
+    const Vec3 corners[3] = {t.a - origin, t.b - origin, t.c - origin};
+    for (std::size_t vertex = 0; vertex < 3; ++vertex)
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const double value = corners[vertex][axis];
+        largest = std::max(largest, std::abs(value));
+        result.coordinates[(3 * vertex + axis) * result.paddedSize + k] = static_cast<float>(value);
+      }
+  }
+  // Per coordinate the subtraction rounds by 2⁻⁵³ and the float by 2⁻²⁴ of it (or 2⁻¹⁵⁰ where
+  // subnormal); √3 of that a vertex. Beyond single precision nothing is known.
+  result.rounding =
+      largest < 1e38 ? 0x1p-22 * largest + 0x1p-140 : std::numeric_limits<double>::infinity();
+  return result;
+}
+
+/// The angle-weighted pseudonormals of a closed mesh's vertices (not normalised), and per
+/// triangle its neighbours, whose face normals make the edge pseudonormals: 24 bytes a triangle.
+struct Pseudonormals {
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<Vec3> vertices;  ///< per vertex of QueryMeshData::vertices
+  /// Per sorted triangle: the sorted triangle across its edges ab, bc, ca, or kNone (a fold's
+  /// edges, which have no partner).
+  std::vector<std::array<std::uint32_t, 3>> across;
+
   std::size_t memoryBytes() const noexcept {
-    return (vertices.capacity() + edges.capacity()) * sizeof(Vec3) +
-           ofTriangle.capacity() * sizeof(std::array<std::uint32_t, 6>);
+    return vertices.capacity() * sizeof(Vec3) +
+           across.capacity() * sizeof(std::array<std::uint32_t, 3>);
   }
 };
 
 /// What a QueryMesh holds (see query_mesh.h).
 struct QueryMeshData {
-  TriangleSoA sorted;  ///< tree order: sorted[k] is the mesh's triangle order[k]
+  /// The triangles in tree order: sorted triangle k (the mesh's triangle order[k]) has the
+  /// corners vertices[corners[k][0, 1, 2]]: the mesh's vertices that triangles use, renumbered in
+  /// the order the tree meets them, so a leaf's lie together.
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> corners;
   std::vector<std::uint32_t> order;
+  /// The same triangles in single precision for the point queries' leaf bounds.
+  FloatTriangles lanes;
   /// levels[0]: the leaves' boxes (leaf i holds sorted triangles [8i, 8i + 8)); levels[l]: node i
   /// has the children [8i, 8i + 8) of level l − 1; levels.back() holds the root alone. Boxes are
   /// grown by `slack` on every side, so a box's distance never exceeds a computed triangle
   /// distance inside it (rounding included).
   std::vector<std::vector<Aabb>> levels;
   /// The same tree for the point queries: childOctets[l][i] holds the boxes of node i of level
-  /// l + 1's children (levels[l][8i, 8i + 8)); leafOctets[i] the boxes of leaf i's triangles,
-  /// grown by `slack` like the leaves.
+  /// l + 1's children (levels[l][8i, 8i + 8)).
   std::vector<BoxOctets> childOctets;
-  BoxOctets leafOctets;
   /// Per node of `levels`, its oriented slab (the same indexing).
   std::vector<std::vector<NodeSlab>> slabs;
-  /// The pseudonormals of the vertices and edges, for signs. Empty unless the mesh is closed.
-  Pseudonormals pseudonormals;
   /// Per cell of a uniform grid over the box, a lower bound of the distance to the mesh: the
   /// ε-limited queries reject most points farther than ε with one read (bound_grid.h).
   BoundGrid boundGrid;
@@ -121,17 +165,37 @@ struct QueryMeshData {
   Aabb bounds;
   double slack = 0.0;
 
-  /// The triangles in the mesh's order (QueryMesh::triangles()), made from `sorted` on the first
-  /// call (the queries never need them: most users never pay their 72 bytes a triangle).
-  /// Thread-safe.
+  /// The number of triangles.
+  std::size_t size() const noexcept { return corners.size(); }
+  /// Sorted triangle `k` (< size(), unchecked).
+  Triangle triangle(std::size_t k) const noexcept {
+    const TriangleIndices& c = corners[k];
+    return {vertices[c[0]], vertices[c[1]], vertices[c[2]]};
+  }
+
+  /// The triangles in the mesh's order (QueryMesh::triangles()), made on the first call (the
+  /// queries never need them: most users never pay their 72 bytes a triangle). Thread-safe.
   const TriangleSoA& meshOrder() const;
   /// Whether meshOrder() has been made (then its bytes count in QueryMesh::memoryBytes()).
   bool meshOrderMade() const noexcept { return meshOrderMade_.load(std::memory_order_acquire); }
+
+  /// The pseudonormal of feature `slot` (0–2 vertices a, b, c; 3–5 edges ab, bc, ca) of sorted
+  /// triangle `sorted`, of a closed mesh. The pseudonormals are made on the first call (only
+  /// signed queries need them, 24 bytes a triangle). Thread-safe.
+  Vec3 pseudonormal(std::uint32_t sorted, std::size_t slot) const;
+  /// Whether the pseudonormals have been made (then their bytes count in memoryBytes()).
+  bool pseudonormalsMade() const noexcept {
+    return pseudonormalsMade_.load(std::memory_order_acquire);
+  }
+  const Pseudonormals& pseudonormals() const;
 
  private:
   mutable std::once_flag meshOrderOnce_;
   mutable TriangleSoA meshOrder_;
   mutable std::atomic<bool> meshOrderMade_{false};
+  mutable std::once_flag pseudonormalsOnce_;
+  mutable Pseudonormals pseudonormals_;
+  mutable std::atomic<bool> pseudonormalsMade_{false};
 };
 
 /// The closest triangle to a point.

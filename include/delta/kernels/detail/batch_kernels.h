@@ -50,9 +50,10 @@ template <int W, template <int> class Kernel>
 }
 
 template <int W>
-[[gnu::flatten]] void pointBounds(const SoaView& block, std::size_t first, const double (&point)[3],
-                                  double (&lower)[8], double (&upper)[8]) noexcept {
-  pointTriangleBounds8<Shape<W>::H>(block.streams, first, point, lower, upper);
+[[gnu::flatten]] bool pointBounds(const FloatSoaView& block, std::size_t first,
+                                  const double (&point)[3], double prune, double (&lower)[8],
+                                  double (&upper)[8]) noexcept {
+  return pointTriangleBounds8<Shape<W>::H>(block, first, point, prune, lower, upper);
 }
 
 template <int W>

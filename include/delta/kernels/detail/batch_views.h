@@ -15,6 +15,15 @@ struct SoaView {
   std::size_t paddedSize;  ///< readable doubles in every stream
 };
 
+/// Triangles as nine single-precision streams (the same slots as SoaView's), less an origin:
+/// every vertex lies within `rounding` (Euclidean) of the double vertex less the origin that it
+/// stands for. The point queries' leaf bounds read them (point_lanes.h).
+struct FloatSoaView {
+  const float* streams[9];
+  double rounding;  ///< δ; +∞ where a coordinate is beyond single precision
+  double offset;    ///< the origin's largest absolute coordinate
+};
+
 /// One triangle's nine coordinates (a.x, a.y, a.z, b.x, …, c.z), broadcast to every lane.
 struct TriangleCoordinates {
   double values[9];
@@ -49,10 +58,12 @@ struct BatchKernels {
   /// failures: `converged` is 0 where the scalar brute force must recompute the pair.
   void (*exhaustiveBlocks)(const SoaView& first, const SoaView& second, std::size_t count,
                            const PairStreams& out) noexcept;
-  /// Lower and upper bounds of the squared distances from `point` to the eight triangles
-  /// [first, first + 8) of `block` (point_lanes.h), for the point queries' leaves.
-  void (*pointTriangleBounds)(const SoaView& block, std::size_t first, const double (&point)[3],
-                              double (&lower)[8], double (&upper)[8]) noexcept;
+  /// Lower and upper bounds of the squared distances from `point` (less the block's origin) to
+  /// the eight triangles [first, first + 8) of `block` (point_lanes.h), for the point queries'
+  /// leaves; false, and nothing written, where their boxes alone put all eight beyond `prune`.
+  bool (*pointTriangleBounds)(const FloatSoaView& block, std::size_t first,
+                              const double (&point)[3], double prune, double (&lower)[8],
+                              double (&upper)[8]) noexcept;
 };
 
 /// The tables, one per translation unit compiled with that ISA's flags. Only call one whose ISA

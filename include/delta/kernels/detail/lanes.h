@@ -79,12 +79,15 @@ inline Pack<H, U> apply(const Pack<H, U>& a, const Pack<H, U>& b, F f) noexcept 
   return r;
 }
 
+/// x in every lane: a shuffle of lane 0 (one vbroadcastsd). Filled lane by lane, GCC built
+/// AVX-512 broadcasts of a variable through the stack, 16 bytes at a time, and every use then
+/// stalled on the wide load of narrow stores.
 template <int H, int U>
 inline Pack<H, U> broadcast(double x) noexcept {
+  const typename Register<H>::Real first = {x};
   Pack<H, U> r;
   for (int k = 0; k < U; ++k)
-    for (int i = 0; i < H; ++i)
-      r.v[k][i] = x;
+    r.v[k] = __builtin_shuffle(first, typename Register<H>::Mask{});
   return r;
 }
 

@@ -12,38 +12,61 @@
 // subtracts and adds a margin far above its rounding error; the scalar kernel then decides among
 // the triangles the bounds leave in doubt.
 //
+// The triangles come in single precision, less an origin (FloatSoaView): each vertex within δ
+// (`rounding`) of the double one it stands for, half the bytes of doubles to stream. A triangle
+// whose vertices move by at most δ moves by at most δ (every point of it is the same convex
+// combination), so its distance d from the point and the float triangle's d_f differ by at most
+// δ, and d² lies within 2δ·d_f + δ² of d_f². As d_f ≤ |p − a| ≤ √3·s (s below), the bounds
+// widen by 4δ·s (and the upper one by δ² more): no square root.
+//
 // Error: in the frame of vertex a, r = p − a and the edges are rounded by ε·(|p| + |a|), and the
 // rest is a short chain of products of magnitude ≤ s = |r| + L (L the longest edge) with a
 // relative error of a few ε, except the face distance, whose plain normal is off by ε / sin α
-// (α the angle at a). Lanes with sin α < 2⁻¹⁰ (slivers, zero-area triangles) get lower bound 0
-// and their edges' upper bound (the distance to an edge is never below the triangle's), so
-// the total error stays below about 40·2¹⁰·ε·s·(s + |a| + |p − a|) = 9·10⁻¹²·s·(s + …), which
-// the margin 2⁻²⁶·3·s∞·(s∞ + A∞) (max-norms, 3 ≥ the ratio of the squared norms) exceeds
-// 1,600-fold.
+// (α the angle at a). Lanes with sin α < 2⁻¹⁰ (slivers, zero-area triangles) get their box's
+// distance as the lower bound and their edges' as the upper one (the distance to an edge is
+// never below the triangle's), so the total error stays below about 40·2¹⁰·ε·s·(s + |a| + |p −
+// a|) = 9·10⁻¹²·s·(s + …), which the margin 2⁻²⁶·3·s∞·(s∞ + A∞) (max-norms, 3 ≥ the ratio of the
+// squared norms; A∞ the vertex's coordinates with the origin added back, where the exact kernel
+// works) exceeds 1,600-fold.
 
 #include <cstddef>
 
+#include "delta/kernels/detail/batch_views.h"
 #include "delta/kernels/detail/lanes.h"
 
 namespace delta::detail {
 
 /// Squared-distance bounds of the eight triangles [first, first + 8) of `block`: lower[i] ≤
-/// kernels::closestPointOnTriangle(point, triangle first + i).distanceSquared ≤ upper[i], or NaN
-/// where nothing is known (overflow beyond about 1e77). A triangle may be skipped only when its
-/// lower bound compares greater than the best distance; an upper bound may lower the best
-/// distance a search prunes with before any exact kernel runs. The upper bound of a sliver is
-/// its nearest edge's (edges need no normal). Padding triangles give NaN or anything: the
-/// caller excludes them by their boxes.
+/// kernels::closestPointOnTriangle(point + origin, triangle first + i).distanceSquared ≤
+/// upper[i], for `point` given less the block's origin; NaN or anything where nothing is known
+/// (overflow beyond about 1e77, or δ = ∞): the caller must take a NaN lower bound for 0. A
+/// triangle may be skipped only when its lower bound compares greater than the best distance;
+/// an upper bound may lower the best distance a search prunes with before any exact kernel runs.
+/// False, and nothing written, where the triangles' boxes alone put all eight beyond `prune`
+/// (most leaves a descent reaches). Padding triangles give NaN or anything: the caller excludes
+/// them.
 template <int H>
-inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t first,
-                                 const double (&point)[3], double (&lower)[8],
+inline bool pointTriangleBounds8(const FloatSoaView& block, std::size_t first,
+                                 const double (&point)[3], double prune, double (&lower)[8],
                                  double (&upper)[8]) noexcept {
   constexpr int U = 8 / H;
   using P = Pack<H, U>;
   using M = MaskPack<H, U>;
-  const auto at = [first](const double* stream) {
+  typedef float Floats __attribute__((vector_size(H * sizeof(float))));
+  const auto at = [first](const float* stream) {
     P r;
-    __builtin_memcpy(&r.v[0], stream + first, sizeof r.v);
+    for (int k = 0; k < U; ++k) {
+      Floats f;
+      __builtin_memcpy(&f, stream + first + static_cast<std::size_t>(k * H), sizeof f);
+#if defined(__AVX512F__)
+      if constexpr (H == 8) {  // one vcvtps2pd: GCC 12 converts the halves and joins them
+        r.v[k] = __builtin_ia32_cvtps2pd512_mask(f, typename Register<H>::Real{},
+                                                 static_cast<unsigned char>(0xff), 4);
+        continue;
+      }
+#endif
+      r.v[k] = __builtin_convertvector(f, typename Register<H>::Real);
+    }
     return r;
   };
   const auto select = [](const M& m, const P& a, const P& b) {
@@ -56,11 +79,31 @@ inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t 
   const auto max = [&select](const P& a, const P& b) { return select(a > b, a, b); };
   const auto abs = [&select](const P& a) { return select(a < 0.0, -a, a); };
   const P zero = broadcast<H, U>(0.0), one = broadcast<H, U>(1.0);
+  const auto* const streams = block.streams;
 
   const P ax = at(streams[0]), ay = at(streams[1]), az = at(streams[2]);
   const P ux = at(streams[3]) - ax, uy = at(streams[4]) - ay, uz = at(streams[5]) - az;  // b − a
   const P vx = at(streams[6]) - ax, vy = at(streams[7]) - ay, vz = at(streams[8]) - az;  // c − a
   const P rx = point[0] - ax, ry = point[1] - ay, rz = point[2] - az;                    // p − a
+
+  // The margin (see the top of this file), with max-norms, and the widening by δ.
+  const P s = max(max(abs(rx), abs(ry)), abs(rz)) +
+              max(max(max(abs(ux), abs(uy)), max(abs(uz), abs(vx))), max(abs(vy), abs(vz)));
+  const P reach = s + max(max(abs(ax), abs(ay)), abs(az)) + block.offset;
+  const P margin = (broadcast<H, U>(3.0 * 0x1p-26) * reach + 4.0 * block.rounding) * s;
+  // The box's distance (relative to a: the box spans min(0, u, v) … max(0, u, v) per axis):
+  // where it puts all eight beyond `prune` (most leaves a descent reaches), that is all.
+  const auto axisGap = [&](const P& r, const P& u, const P& v) {
+    return max(max(min(min(u, v), zero) - r, r - max(max(u, v), zero)), zero);
+  };
+  const P gx = axisGap(rx, ux, vx), gy = axisGap(ry, uy, vy), gz = axisGap(rz, uz, vz);
+  const P box = gx * gx + gy * gy + gz * gz;
+  const P boxBelow = box - margin;
+  const M inDoubt = ~(boxBelow > prune);
+  bool any = false;
+  for (int i = 0; i < 8; ++i)
+    any = any || inDoubt.lane(i);
+  if (!any) return false;
 
   // The squared distance to the segment from o (relative to a) along d, for q = r − o.
   const auto segment = [&](const P& qx, const P& qy, const P& qz, const P& dx, const P& dy,
@@ -90,16 +133,11 @@ inline void pointTriangleBounds8(const double* const (&streams)[9], std::size_t 
   const P height = nx * rx + ny * ry + nz * rz;
   const P face = height * height / select(wellShaped, nn, one);
   const P best = select(inside, min(edges, face), edges);
-
-  // The margin (see the top of this file), with max-norms.
-  const P s = max(max(abs(rx), abs(ry)), abs(rz)) +
-              max(max(max(abs(ux), abs(uy)), max(abs(uz), abs(vx))), max(abs(vy), abs(vz)));
-  const P reach = s + max(max(abs(ax), abs(ay)), abs(az));
-  const P margin = broadcast<H, U>(3.0 * 0x1p-26) * s * reach;
-  const P below = select(wellShaped, best - margin, zero);
-  const P above = select(wellShaped, best, edges) + margin;
-  __builtin_memcpy(lower, &below.v[0], sizeof lower);
+  const P low = select(wellShaped, max(best, box), box) - margin;
+  const P above = select(wellShaped, best, edges) + margin + block.rounding * block.rounding;
+  __builtin_memcpy(lower, &low.v[0], sizeof lower);
   __builtin_memcpy(upper, &above.v[0], sizeof upper);
+  return true;
 }
 
 }  // namespace delta::detail
