@@ -14,7 +14,7 @@ void addDistanceCommand(CLI::App& app);
 void addDemCommand(CLI::App& app);
 void addIbCommand(CLI::App& app);
 
-/// Thrown by the ranks other than 0 of a distributed run for an error that rank 0 reports:
+/// Thrown by the ranks of a distributed run for an error that rank 0 has reported already:
 /// main() exits with status 1 and prints nothing.
 struct QuietFailure {};
 

@@ -515,9 +515,19 @@ void runDistributed(const DemOptions& options) {
         simulateDistributed(prepared.scenario, world, prepared.steps, prepared.outputEvery,
                             output.get(), showProgress(options.quiet || options.json));
     if (root) report(options, prepared, summary, output.get());
-  } catch (const Error&) {
-    if (!root) throw QuietFailure{};
-    throw;
+  } catch (const Error& error) {
+    // Every rank meets it; rank 0 reports it before any rank leaves: mpirun stops the others
+    // when one exits with a failure, and rank 0, slower under load, was sometimes stopped
+    // before its line.
+    if (root) {
+      std::string line = error.what();
+      for (char& c : line)
+        if (c == '\n' || c == '\r') c = ' ';
+      std::fprintf(stderr, "delta: %s\n", line.c_str());
+      std::fflush(stderr);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    throw QuietFailure{};
   }
 }
 #endif
