@@ -36,9 +36,9 @@ bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexc
 /// What a descent reads besides the tree: the sorted triangles in single precision, the point
 /// less their origin, and the ISA's bounds of a point against a leaf's eight triangles.
 struct Leaves {
-  FloatSoaView triangles;
+  FloatLeavesView triangles;
   double point[3];
-  bool (*bounds)(const FloatSoaView&, std::size_t, const double (&)[3], double, double (&)[8],
+  bool (*bounds)(const FloatLeavesView&, std::size_t, const double (&)[3], double, double (&)[8],
                  double (&)[8]) noexcept;
 };
 

@@ -76,19 +76,18 @@ struct NodeSlab {
   double low = 0.0, high = 0.0;
 };
 
-/// The sorted triangles in single precision, less the mesh box's centre, as nine streams
-/// (FloatSoaView): what the point queries' leaf bounds read, 36 bytes a triangle where the doubles
-/// took 72 (point_lanes.h widens the bounds by `rounding`). Padding triangles are NaN.
+/// The sorted triangles in single precision, less the mesh box's centre, a leaf's eight in one
+/// block of 288 bytes (FloatLeavesView): what the point queries' leaf bounds read, 36 bytes a
+/// triangle where the doubles took 72 (point_lanes.h widens the bounds by `rounding`). Padding
+/// triangles are NaN.
 struct FloatTriangles {
   std::vector<float, AlignedAllocator<float, 64>> coordinates;
-  std::size_t paddedSize = 0;  ///< floats per stream: the triangles, rounded up to 16
   Vec3 origin;
   double rounding = 0.0;  ///< δ: no vertex is farther from its double (less the origin)
 
-  FloatSoaView view() const noexcept {
-    FloatSoaView view{};
-    for (std::size_t stream = 0; stream < 9; ++stream)
-      view.streams[stream] = coordinates.data() + stream * paddedSize;
+  FloatLeavesView view() const noexcept {
+    FloatLeavesView view{};
+    view.leaves = coordinates.data();
     view.rounding = rounding;
     view.offset = maxAbs(origin);
     return view;
@@ -100,9 +99,8 @@ struct FloatTriangles {
 template <typename TriangleAt>
 FloatTriangles floatTriangles(std::size_t count, const TriangleAt& triangleAt, const Vec3& origin) {
   FloatTriangles result;
-  result.paddedSize = (count + 15) / 16 * 16;
   result.origin = origin;
-  result.coordinates.assign(9 * result.paddedSize, std::numeric_limits<float>::quiet_NaN());
+  result.coordinates.assign((count + 7) / 8 * 72, std::numeric_limits<float>::quiet_NaN());
   double largest = 0.0;  // the largest coordinate less the origin
   for (std::size_t k = 0; k < count; ++k) {
     const Triangle t = triangleAt(k);
@@ -111,7 +109,8 @@ FloatTriangles floatTriangles(std::size_t count, const TriangleAt& triangleAt, c
       for (std::size_t axis = 0; axis < 3; ++axis) {
         const double value = corners[vertex][axis];
         largest = std::max(largest, std::abs(value));
-        result.coordinates[(3 * vertex + axis) * result.paddedSize + k] = static_cast<float>(value);
+        result.coordinates[k / 8 * 72 + (3 * vertex + axis) * 8 + k % 8] =
+            static_cast<float>(value);
       }
   }
   // Per coordinate the subtraction rounds by 2⁻⁵³ and the float by 2⁻²⁴ of it (or 2⁻¹⁵⁰ where

@@ -50,7 +50,7 @@ template <int W, template <int> class Kernel>
 }
 
 template <int W>
-[[gnu::flatten]] bool pointBounds(const FloatSoaView& block, std::size_t first,
+[[gnu::flatten]] bool pointBounds(const FloatLeavesView& block, std::size_t first,
                                   const double (&point)[3], double prune, double (&lower)[8],
                                   double (&upper)[8]) noexcept {
   return pointTriangleBounds8<Shape<W>::H>(block, first, point, prune, lower, upper);

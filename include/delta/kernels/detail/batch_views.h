@@ -15,11 +15,13 @@ struct SoaView {
   std::size_t paddedSize;  ///< readable doubles in every stream
 };
 
-/// Triangles as nine single-precision streams (the same slots as SoaView's), less an origin:
-/// every vertex lies within `rounding` (Euclidean) of the double vertex less the origin that it
-/// stands for. The point queries' leaf bounds read them (point_lanes.h).
-struct FloatSoaView {
-  const float* streams[9];
+/// Triangles in single precision, less an origin, eight at a time: the eight triangles [8i, 8i +
+/// 8) are the 72 floats at leaves + 72i, slot j (3·vertex + axis, as SoaView's streams) at +8j,
+/// so a tree leaf is one contiguous block. Every vertex lies within `rounding` (Euclidean) of the
+/// double vertex less the origin that it stands for. The point queries' leaf bounds read them
+/// (point_lanes.h).
+struct FloatLeavesView {
+  const float* leaves;
   double rounding;  ///< δ; +∞ where a coordinate is beyond single precision
   double offset;    ///< the origin's largest absolute coordinate
 };
@@ -61,7 +63,7 @@ struct BatchKernels {
   /// Lower and upper bounds of the squared distances from `point` (less the block's origin) to
   /// the eight triangles [first, first + 8) of `block` (point_lanes.h), for the point queries'
   /// leaves; false, and nothing written, where their boxes alone put all eight beyond `prune`.
-  bool (*pointTriangleBounds)(const FloatSoaView& block, std::size_t first,
+  bool (*pointTriangleBounds)(const FloatLeavesView& block, std::size_t first,
                               const double (&point)[3], double prune, double (&lower)[8],
                               double (&upper)[8]) noexcept;
 };

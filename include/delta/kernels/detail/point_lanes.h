@@ -12,7 +12,7 @@
 // subtracts and adds a margin far above its rounding error; the scalar kernel then decides among
 // the triangles the bounds leave in doubt.
 //
-// The triangles come in single precision, less an origin (FloatSoaView): each vertex within δ
+// The triangles come in single precision, less an origin (FloatLeavesView): each vertex within δ
 // (`rounding`) of the double one it stands for, half the bytes of doubles to stream. A triangle
 // whose vertices move by at most δ moves by at most δ (every point of it is the same convex
 // combination), so its distance d from the point and the float triangle's d_f differ by at most
@@ -46,18 +46,19 @@ namespace delta::detail {
 /// (most leaves a descent reaches). Padding triangles give NaN or anything: the caller excludes
 /// them.
 template <int H>
-inline bool pointTriangleBounds8(const FloatSoaView& block, std::size_t first,
+inline bool pointTriangleBounds8(const FloatLeavesView& block, std::size_t first,
                                  const double (&point)[3], double prune, double (&lower)[8],
                                  double (&upper)[8]) noexcept {
   constexpr int U = 8 / H;
   using P = Pack<H, U>;
   using M = MaskPack<H, U>;
   typedef float Floats __attribute__((vector_size(H * sizeof(float))));
-  const auto at = [first](const float* stream) {
+  const float* const eight = block.leaves + first / 8 * 72;  // first is a multiple of 8
+  const auto at = [eight](int slot) {
     P r;
     for (int k = 0; k < U; ++k) {
       Floats f;
-      __builtin_memcpy(&f, stream + first + static_cast<std::size_t>(k * H), sizeof f);
+      __builtin_memcpy(&f, eight + slot * 8 + k * H, sizeof f);
 #if defined(__AVX512F__)
       if constexpr (H == 8) {  // one vcvtps2pd: GCC 12 converts the halves and joins them
         r.v[k] = __builtin_ia32_cvtps2pd512_mask(f, typename Register<H>::Real{},
@@ -79,12 +80,11 @@ inline bool pointTriangleBounds8(const FloatSoaView& block, std::size_t first,
   const auto max = [&select](const P& a, const P& b) { return select(a > b, a, b); };
   const auto abs = [&select](const P& a) { return select(a < 0.0, -a, a); };
   const P zero = broadcast<H, U>(0.0), one = broadcast<H, U>(1.0);
-  const auto* const streams = block.streams;
 
-  const P ax = at(streams[0]), ay = at(streams[1]), az = at(streams[2]);
-  const P ux = at(streams[3]) - ax, uy = at(streams[4]) - ay, uz = at(streams[5]) - az;  // b − a
-  const P vx = at(streams[6]) - ax, vy = at(streams[7]) - ay, vz = at(streams[8]) - az;  // c − a
-  const P rx = point[0] - ax, ry = point[1] - ay, rz = point[2] - az;                    // p − a
+  const P ax = at(0), ay = at(1), az = at(2);
+  const P ux = at(3) - ax, uy = at(4) - ay, uz = at(5) - az;           // b − a
+  const P vx = at(6) - ax, vy = at(7) - ay, vz = at(8) - az;           // c − a
+  const P rx = point[0] - ax, ry = point[1] - ay, rz = point[2] - az;  // p − a
 
   // The margin (see the top of this file), with max-norms, and the widening by δ.
   const P s = max(max(abs(rx), abs(ry)), abs(rz)) +
