@@ -1,6 +1,7 @@
 #include "delta/query/query_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -16,56 +17,114 @@
 namespace delta {
 namespace {
 
-/// Orders `ids[begin, end)` so that every aligned run of `size` / kFanout of them (the children
-/// of a node of `size` triangles) is spatially compact: three rounds of binary splits at the
-/// median of the centroids along the longest axis of their box, at run boundaries.
-void splitIntoRuns(std::vector<std::uint32_t>& ids, const std::vector<Vec3>& centroids,
-                   std::size_t begin, std::size_t end, std::size_t run) {
+/// The triangles being ordered: their centroids (the split key) and boxes (the split cost), and
+/// the ids three times, each range of a node sorted by centroid along x, y and z.
+struct TreeBuild {
+  std::vector<Vec3> centroids;
+  std::vector<Aabb> boxes;
+  std::array<std::vector<std::uint32_t>, 3> sorted;
+  std::vector<std::uint8_t> left;      ///< per id: on the left of the split being made
+  std::vector<std::uint32_t> scratch;  ///< for the stable partitions
+};
+
+/// Surface area heuristic: half a box's surface.
+double halfArea(const Aabb& box) noexcept {
+  const Vec3 e = box.extent();
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+/// Orders the range [begin, end) so that every aligned run of `run` ids (the children of a node)
+/// is spatially compact: binary splits at run boundaries, each at the axis and boundary of least
+/// cost Σ area × triangles over its two sides (the surface area heuristic), until the ranges are
+/// single runs. The three sorted lists are split alike (stable), so each stays sorted: O(n) a
+/// split instead of a sort.
+void splitIntoRuns(TreeBuild& build, std::size_t begin, std::size_t end, std::size_t run) {
   if (end - begin <= run) return;
-  Aabb box;
-  for (std::size_t k = begin; k < end; ++k)
-    box.extend(centroids[ids[k]]);
-  const Vec3 extent = box.extent();
-  const std::size_t axis = extent.x >= extent.y && extent.x >= extent.z ? 0
-                           : extent.y >= extent.z                       ? 1
-                                                                        : 2;
   const std::size_t runs = (end - begin + run - 1) / run;
-  const std::size_t middle = begin + (runs + 1) / 2 * run;
-  const auto first = ids.begin() + static_cast<std::ptrdiff_t>(begin);
-  std::nth_element(first, ids.begin() + static_cast<std::ptrdiff_t>(middle),
-                   ids.begin() + static_cast<std::ptrdiff_t>(end),
-                   [&](std::uint32_t i, std::uint32_t j) {
-                     const double ci = centroids[i][axis], cj = centroids[j][axis];
-                     return ci < cj || (ci == cj && i < j);
-                   });
-  splitIntoRuns(ids, centroids, begin, middle, run);
-  splitIntoRuns(ids, centroids, middle, end, run);
+  double bestCost = std::numeric_limits<double>::infinity();
+  std::size_t bestAxis = 0, bestRuns = (runs + 1) / 2;
+  std::array<double, detail::kFanout + 1> leftArea{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const std::vector<std::uint32_t>& ids = build.sorted[axis];
+    Aabb box;
+    for (std::size_t k = 0; k + 1 < runs; ++k) {
+      for (std::size_t t = begin + k * run; t < begin + (k + 1) * run; ++t)
+        box.extend(build.boxes[ids[t]]);
+      leftArea[k + 1] = halfArea(box);
+    }
+    box = Aabb{};
+    for (std::size_t k = runs - 1; k >= 1; --k) {
+      for (std::size_t t = begin + k * run; t < std::min(begin + (k + 1) * run, end); ++t)
+        box.extend(build.boxes[ids[t]]);
+      const double left = static_cast<double>(k * run);
+      const double cost =
+          leftArea[k] * left + halfArea(box) * (static_cast<double>(end - begin) - left);
+      if (cost < bestCost) {
+        bestCost = cost;
+        bestAxis = axis;
+        bestRuns = k;
+      }
+    }
+  }
+  const std::size_t middle = begin + bestRuns * run;
+  for (std::size_t t = begin; t < end; ++t)
+    build.left[build.sorted[bestAxis][t]] = t < middle;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    if (axis == bestAxis) continue;
+    std::vector<std::uint32_t>& ids = build.sorted[axis];
+    std::size_t l = begin, r = 0;
+    for (std::size_t t = begin; t < end; ++t)
+      if (build.left[ids[t]])
+        ids[l++] = ids[t];
+      else
+        build.scratch[r++] = ids[t];
+    std::copy(build.scratch.begin(), build.scratch.begin() + static_cast<std::ptrdiff_t>(r),
+              ids.begin() + static_cast<std::ptrdiff_t>(l));
+  }
+  splitIntoRuns(build, begin, middle, run);
+  splitIntoRuns(build, middle, end, run);
 }
 
 /// Orders the triangles of a node of `size` (a power of kFanout) into kFanout compact children,
 /// and each child likewise, down to leaves of kFanout triangles.
-void buildOrder(std::vector<std::uint32_t>& ids, const std::vector<Vec3>& centroids,
-                std::size_t begin, std::size_t end, std::size_t size) {
+void buildOrder(TreeBuild& build, std::size_t begin, std::size_t end, std::size_t size) {
   if (size <= detail::kFanout) return;
   const std::size_t child = size / detail::kFanout;
-  splitIntoRuns(ids, centroids, begin, end, child);
+  splitIntoRuns(build, begin, end, child);
   for (std::size_t b = begin; b < end; b += child)
-    buildOrder(ids, centroids, b, std::min(b + child, end), child);
+    buildOrder(build, b, std::min(b + child, end), child);
 }
 
 /// Triangle ids in tree order: node i of level l (leaves l = 0) holds the aligned run
-/// [i·8^(l+1), (i + 1)·8^(l+1)), split top-down at centroid medians.
+/// [i·8^(l+1), (i + 1)·8^(l+1)), split top-down by the surface area heuristic.
 std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
-  std::vector<Vec3> centroids(mesh.triangleCount());
-  for (std::size_t i = 0; i < centroids.size(); ++i)
-    centroids[i] = mesh.triangle(i).centroid();
-  std::vector<std::uint32_t> ids(centroids.size());
-  std::iota(ids.begin(), ids.end(), 0u);
+  const std::size_t n = mesh.triangleCount();
+  TreeBuild build;
+  build.centroids.resize(n);
+  build.boxes.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Triangle t = mesh.triangle(i);
+    build.centroids[i] = t.centroid();
+    build.boxes[i] = t.bounds();
+  }
+  parallelFor(0, 3, 1, [&build, n](std::size_t first, std::size_t last) {
+    for (std::size_t axis = first; axis < last; ++axis) {
+      std::vector<std::uint32_t>& ids = build.sorted[axis];
+      ids.resize(n);
+      std::iota(ids.begin(), ids.end(), 0u);
+      std::sort(ids.begin(), ids.end(), [&build, axis](std::uint32_t i, std::uint32_t j) {
+        const double ci = build.centroids[i][axis], cj = build.centroids[j][axis];
+        return ci < cj || (ci == cj && i < j);
+      });
+    }
+  });
+  build.left.resize(n);
+  build.scratch.resize(n);
   std::size_t size = detail::kFanout;
-  while (size < ids.size())
+  while (size < n)
     size *= detail::kFanout;
-  buildOrder(ids, centroids, 0, ids.size(), size);
-  return ids;
+  buildOrder(build, 0, n, size);
+  return std::move(build.sorted[0]);
 }
 
 /// Leaf boxes over the sorted triangles, then parents of kFanout children up to one root.
