@@ -300,6 +300,13 @@ class LeafCache {
       }
       octets_.push_back(
           detail::boxesOf(&triangles_[triangles_.size() - count], count, mesh_.slack));
+      // Every leaf takes kFanout entries, a short last leaf too: a leaf's entries start at
+      // kFanout × its octet's index (a last leaf met first shifted every later leaf's octet).
+      const std::size_t padded = octets_.size() * detail::kFanout;
+      triangles_.resize(padded);
+      boxes_.resize(padded);
+      planes_.resize(padded);
+      ids_.resize(padded);
     }
     const std::size_t at = find(index) & 0xffffffffu;
     return {&triangles_[at],

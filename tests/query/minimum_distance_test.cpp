@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -18,6 +19,8 @@
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/primitives.h"
 #include "delta/query/query_mesh.h"
+
+#include "query/detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -73,6 +76,58 @@ TEST(MinimumDistance, MatchesAllPairsByBruteForce) {
       EXPECT_NEAR(distance(actual.p, actual.q), actual.distance, 1e-12 * size);
     }
   }
+}
+
+/// `mesh` without its first `drop` triangles (its vertices all kept).
+Mesh withoutFirst(const Mesh& mesh, std::size_t drop) {
+  return Mesh(std::vector<Vec3>(mesh.vertices().begin(), mesh.vertices().end()),
+              std::vector<TriangleIndices>(mesh.triangles().begin() + static_cast<long>(drop),
+                                           mesh.triangles().end()));
+}
+
+/// The centroid of the triangles of a prepared mesh's last tree leaf (in the mesh's frame).
+Vec3 lastLeafCentre(const QueryMesh& query, const Mesh& mesh) {
+  const detail::QueryMeshData& data = query.data();
+  const std::size_t first = (data.size() - 1) / detail::kFanout * detail::kFanout;
+  Vec3 sum{};
+  for (std::size_t k = first; k < data.size(); ++k)
+    sum = sum + mesh.triangle(data.order[k]).centroid();
+  return sum * (1.0 / static_cast<double>(data.size() - first));
+}
+
+TEST(MinimumDistance, LastLeavesOfFewerThanEightTrianglesMatchBruteForce) {
+  // 317 and 314 triangles: each tree's last leaf holds 5 or 2. The second is turned and placed
+  // so that its last leaf faces the first's across a small gap, so that the search meets both
+  // last leaves first, and must still find every other leaf's triangles where they are.
+  const Mesh first = withoutFirst(primitives::icosphere(2), 3);
+  const Mesh second = withoutFirst(primitives::icosphere(2, 0.7), 6);
+  const QueryMesh a(first), b(second);
+  ASSERT_EQ(a.size() % detail::kFanout, 5u);
+  ASSERT_EQ(b.size() % detail::kFanout, 2u);
+  const Vec3 centreA = lastLeafCentre(a, first), centreB = lastLeafCentre(b, second);
+  const Vec3 outward = normalized(centreA), facing = normalized(centreB);
+  const Vec3 axis = cross(facing, outward * -1.0);
+  const double angle = std::acos(std::clamp(dot(facing, outward * -1.0), -1.0, 1.0));
+  int rounds = 0;
+  for (const double gap : {0.002, 0.02, 0.1})
+    for (const double spin : {0.0, 0.9, 2.1, 4.0}) {
+      const Quaternion turn =
+          Quaternion::fromAxisAngle(outward, spin) * Quaternion::fromAxisAngle(axis, angle);
+      const Vec3 shift = centreA + outward * gap - turn.rotate(centreB);
+      const RigidTransform pose{turn, shift};
+      QueryMesh moved = b;
+      moved.setPose(pose);
+      Mesh placed = second;
+      placed.transform(pose);
+      const MinimumDistance expected = byAllPairs(first, placed);
+      const MinimumDistance actual = minimumDistance(a, moved);
+      ASSERT_NEAR(actual.distance, expected.distance, 1e-12) << gap << " " << spin;
+      const auto check = kernels::triangleDistanceBruteForce(first.triangle(actual.first),
+                                                             placed.triangle(actual.second));
+      ASSERT_NEAR(std::sqrt(check.distanceSquared), expected.distance, 1e-12) << gap << " " << spin;
+      ++rounds;
+    }
+  EXPECT_EQ(rounds, 12);
 }
 
 TEST(MinimumDistance, SameAnswerForAnyThreadCountAndFromManyThreads) {
