@@ -15,10 +15,8 @@ double solidAngle(const Triangle& t, const Vec3& point) noexcept {
 }
 
 double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept {
-  double solidAngles = 0.0;
-  for (std::size_t i = 0; i < mesh.size(); ++i)
-    solidAngles += solidAngle(mesh.triangle(i), point);
-  return solidAngles / (4.0 * std::numbers::pi);
+  return windingNumber(
+      mesh.size(), [&mesh](std::size_t i) { return mesh.triangle(i); }, point);
 }
 
 }  // namespace delta

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <cstddef>
+#include <numbers>
+
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 #include "delta/mesh/triangle_soa.h"
@@ -26,6 +29,15 @@ double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept;
 /// positive where the point sees its vertices a, b, c counter-clockwise, in (−2π, 2π], 0 for a
 /// degenerate triangle. windingNumber is their sum over 4π.
 double solidAngle(const Triangle& t, const Vec3& point) noexcept;
+
+/// windingNumber for `count` triangles held in another form: triangleAt(i) for i < count.
+template <class TriangleAt>
+double windingNumber(std::size_t count, const TriangleAt& triangleAt, const Vec3& point) noexcept {
+  double solidAngles = 0.0;
+  for (std::size_t i = 0; i < count; ++i)
+    solidAngles += solidAngle(triangleAt(i), point);
+  return solidAngles / (4.0 * std::numbers::pi);
+}
 
 /// windingNumber(mesh, point) > ½: inside a closed, outward-oriented mesh (on its surface: no
 /// robust answer, see above).

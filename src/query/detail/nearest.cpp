@@ -1,7 +1,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <numbers>
 
 #include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/query/winding_number.h"
@@ -230,10 +229,8 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
   // is within rounding of zero (a degenerate triangle's zero normal, a point almost tangent to
   // the surface) the winding number, O(n) but robust, decides.
   if (std::abs(side) > 1e-9 * length(offset) * length(normal)) return side < 0.0;
-  double solidAngles = 0.0;
-  for (std::size_t k = 0; k < mesh.size(); ++k)
-    solidAngles += solidAngle(mesh.triangle(k), point);
-  return solidAngles / (4.0 * std::numbers::pi) * mesh.orientation > 0.5;
+  const auto triangleAt = [&mesh](std::size_t k) { return mesh.triangle(k); };
+  return windingNumber(mesh.size(), triangleAt, point) * mesh.orientation > 0.5;
 }
 
 }  // namespace delta::detail
