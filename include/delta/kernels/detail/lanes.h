@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 namespace delta::detail {
 
@@ -79,6 +80,16 @@ inline Pack<H, U> apply(const Pack<H, U>& a, const Pack<H, U>& b, F f) noexcept 
   return r;
 }
 
+/// A register with lane 0 of `first` in every lane (GCC ≥ 12 and Clang both have the shuffle).
+template <int H, std::size_t... Lane>
+inline typename Register<H>::Real splatFirst(const typename Register<H>::Real& first,
+                                             std::index_sequence<Lane...>) noexcept {
+  if constexpr (H == 1)
+    return first;
+  else
+    return __builtin_shufflevector(first, first, (static_cast<void>(Lane), 0)...);
+}
+
 /// x in every lane: a shuffle of lane 0 (one vbroadcastsd). Filled lane by lane, GCC built
 /// AVX-512 broadcasts of a variable through the stack, 16 bytes at a time, and every use then
 /// stalled on the wide load of narrow stores.
@@ -87,7 +98,7 @@ inline Pack<H, U> broadcast(double x) noexcept {
   const typename Register<H>::Real first = {x};
   Pack<H, U> r;
   for (int k = 0; k < U; ++k)
-    r.v[k] = __builtin_shuffle(first, typename Register<H>::Mask{});
+    r.v[k] = splatFirst<H>(first, std::make_index_sequence<H>{});
   return r;
 }
 

@@ -59,7 +59,7 @@ inline bool pointTriangleBounds8(const FloatLeavesView& block, std::size_t first
     for (int k = 0; k < U; ++k) {
       Floats f;
       __builtin_memcpy(&f, eight + slot * 8 + k * H, sizeof f);
-#if defined(__AVX512F__)
+#if defined(__AVX512F__) && !defined(__clang__)
       if constexpr (H == 8) {  // one vcvtps2pd: GCC 12 converts the halves and joins them
         r.v[k] = __builtin_ia32_cvtps2pd512_mask(f, typename Register<H>::Real{},
                                                  static_cast<unsigned char>(0xff), 4);
