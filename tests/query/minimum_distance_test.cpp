@@ -115,7 +115,7 @@ Vec3 lastLeafCentre(const QueryMesh& query, const Mesh& mesh) {
 }
 
 TEST(MinimumDistance, LastLeavesOfFewerThanEightTrianglesMatchBruteForce) {
-  // 77 and 74 triangles: each tree's last leaf holds 5 or 2. The second is turned and placed
+  // 317 and 314 triangles: each tree's last leaf holds 5 or 2. The second is turned and placed
   // so that its last leaf faces the first's across a small gap, so that the search meets both
   // last leaves first, and must still find every other leaf's triangles where they are.
   const Mesh first = withoutFirst(primitives::icosphere(2), 3);
