@@ -12,6 +12,7 @@
 #include "delta/core/parallel.h"
 #include "delta/mesh/mass_properties.h"
 
+#include "detail/morton.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta {
@@ -24,7 +25,7 @@ struct TreeBuild {
   std::vector<Aabb> boxes;
   std::array<std::vector<std::uint32_t>, 3> sorted;
   std::vector<std::uint8_t> left;      ///< per id: on the left of the split being made
-  std::vector<std::uint32_t> scratch;  ///< for the stable partitions
+  std::vector<std::uint32_t> scratch;  ///< for the stable partitions, at the range's positions
 };
 
 /// Surface area heuristic: half a box's surface.
@@ -44,18 +45,23 @@ void splitIntoRuns(TreeBuild& build, std::size_t begin, std::size_t end, std::si
   double bestCost = std::numeric_limits<double>::infinity();
   std::size_t bestAxis = 0, bestRuns = (runs + 1) / 2;
   std::array<double, detail::kFanout + 1> leftArea{};
+  std::array<Aabb, detail::kFanout> runBoxes;
   for (std::size_t axis = 0; axis < 3; ++axis) {
     const std::vector<std::uint32_t>& ids = build.sorted[axis];
+    for (std::size_t k = 0; k < runs; ++k) {
+      Aabb box;
+      for (std::size_t t = begin + k * run; t < std::min(begin + (k + 1) * run, end); ++t)
+        box.extend(build.boxes[ids[t]]);
+      runBoxes[k] = box;
+    }
     Aabb box;
     for (std::size_t k = 0; k + 1 < runs; ++k) {
-      for (std::size_t t = begin + k * run; t < begin + (k + 1) * run; ++t)
-        box.extend(build.boxes[ids[t]]);
+      box.extend(runBoxes[k]);
       leftArea[k + 1] = halfArea(box);
     }
     box = Aabb{};
     for (std::size_t k = runs - 1; k >= 1; --k) {
-      for (std::size_t t = begin + k * run; t < std::min(begin + (k + 1) * run, end); ++t)
-        box.extend(build.boxes[ids[t]]);
+      box.extend(runBoxes[k]);
       const double left = static_cast<double>(k * run);
       const double cost =
           leftArea[k] * left + halfArea(box) * (static_cast<double>(end - begin) - left);
@@ -72,13 +78,14 @@ void splitIntoRuns(TreeBuild& build, std::size_t begin, std::size_t end, std::si
   for (std::size_t axis = 0; axis < 3; ++axis) {
     if (axis == bestAxis) continue;
     std::vector<std::uint32_t>& ids = build.sorted[axis];
-    std::size_t l = begin, r = 0;
+    std::size_t l = begin, r = begin;
     for (std::size_t t = begin; t < end; ++t)
       if (build.left[ids[t]])
         ids[l++] = ids[t];
       else
         build.scratch[r++] = ids[t];
-    std::copy(build.scratch.begin(), build.scratch.begin() + static_cast<std::ptrdiff_t>(r),
+    std::copy(build.scratch.begin() + static_cast<std::ptrdiff_t>(begin),
+              build.scratch.begin() + static_cast<std::ptrdiff_t>(r),
               ids.begin() + static_cast<std::ptrdiff_t>(l));
   }
   splitIntoRuns(build, begin, middle, run);
@@ -95,6 +102,24 @@ void buildOrder(TreeBuild& build, std::size_t begin, std::size_t end, std::size_
     buildOrder(build, b, std::min(b + child, end), child);
 }
 
+/// A subtree still to be ordered: the range [begin, end) of a node of `size`.
+struct Subtree {
+  std::size_t begin, end, size;
+};
+
+/// Orders the top of the tree (buildOrder) down to subtrees of at most `most` triangles, which it
+/// appends to `rest` unordered.
+void buildTop(TreeBuild& build, const Subtree& node, std::size_t most, std::vector<Subtree>& rest) {
+  if (node.end - node.begin <= most || node.size <= detail::kFanout) {
+    rest.push_back(node);
+    return;
+  }
+  const std::size_t child = node.size / detail::kFanout;
+  splitIntoRuns(build, node.begin, node.end, child);
+  for (std::size_t b = node.begin; b < node.end; b += child)
+    buildTop(build, {b, std::min(b + child, node.end), child}, most, rest);
+}
+
 /// Triangle ids in tree order: node i of level l (leaves l = 0) holds the aligned run
 /// [i·8^(l+1), (i + 1)·8^(l+1)), split top-down by the surface area heuristic.
 std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
@@ -102,20 +127,27 @@ std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
   TreeBuild build;
   build.centroids.resize(n);
   build.boxes.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Triangle t = mesh.triangle(i);
-    build.centroids[i] = t.centroid();
-    build.boxes[i] = t.bounds();
-  }
-  parallelFor(0, 3, 1, [&build, n](std::size_t first, std::size_t last) {
+  parallelFor(0, n, 1 << 14, [&build, &mesh](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Triangle t = mesh.triangle(i);
+      build.centroids[i] = t.centroid();
+      build.boxes[i] = t.bounds();
+    }
+  });
+  // The ids along each axis in order of the centroids, by a radix sort of their 32-bit fixed-
+  // point positions in the mesh's box (ties, centroids within 2⁻³² of the box apart, by id).
+  const Aabb& box = mesh.bounds();
+  parallelFor(0, 3, 1, [&build, &box, n](std::size_t first, std::size_t last) {
+    std::vector<std::uint64_t> keys(n);
     for (std::size_t axis = first; axis < last; ++axis) {
-      std::vector<std::uint32_t>& ids = build.sorted[axis];
-      ids.resize(n);
-      std::iota(ids.begin(), ids.end(), 0u);
-      std::sort(ids.begin(), ids.end(), [&build, axis](std::uint32_t i, std::uint32_t j) {
-        const double ci = build.centroids[i][axis], cj = build.centroids[j][axis];
-        return ci < cj || (ci == cj && i < j);
-      });
+      const double lower = box.lower[axis], extent = box.upper[axis] - box.lower[axis];
+      for (std::size_t i = 0; i < n; ++i) {
+        double unit = extent > 0.0 ? (build.centroids[i][axis] - lower) / extent : 0.0;
+        if (!(unit > 0.0)) unit = 0.0;  // NaN where coordinates near overflow made extent ∞
+        const auto code = static_cast<std::uint64_t>(std::min(unit, 1.0) * 0xffffffffp0);
+        keys[i] = code << 32 | i;
+      }
+      build.sorted[axis] = detail::orderOfKeys(keys, 32);
     }
   });
   build.left.resize(n);
@@ -123,7 +155,14 @@ std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
   std::size_t size = detail::kFanout;
   while (size < n)
     size *= detail::kFanout;
-  buildOrder(build, 0, n, size);
+  // The top splits on this thread, then the subtrees below them on all (they touch disjoint
+  // ranges of the lists and of the scratch, and disjoint ids).
+  std::vector<Subtree> subtrees;
+  buildTop(build, {0, n, size}, std::max<std::size_t>(n / 16, 4096), subtrees);
+  parallelFor(0, subtrees.size(), 1, [&build, &subtrees](std::size_t first, std::size_t last) {
+    for (std::size_t s = first; s < last; ++s)
+      buildOrder(build, subtrees[s].begin, subtrees[s].end, subtrees[s].size);
+  });
   return std::move(build.sorted[0]);
 }
 

@@ -32,12 +32,12 @@ std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept {
   return code;
 }
 
-std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys) {
-  // Three passes of a 10-bit radix sort over the code (bits 32–61), least significant digit
+std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys, int codeBits) {
+  // Passes of a 10-bit radix sort over the code (bits 32 and up), least significant digit
   // first: stable, so equal codes keep their index order.
   constexpr std::size_t kDigits = 1024;
   std::vector<std::uint64_t> buffer(keys.size());
-  for (int shift = 32; shift < 62; shift += 10) {
+  for (int shift = 32; shift < 32 + codeBits; shift += 10) {
     std::size_t start[kDigits + 1] = {};
     for (const std::uint64_t key : keys)
       ++start[(key >> shift & (kDigits - 1)) + 1];

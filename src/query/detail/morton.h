@@ -13,9 +13,10 @@ namespace delta::detail {
 /// outside the box takes the nearest cell).
 std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept;
 
-/// The indices in the low halves of `keys` (each a code, mortonCode, above a 32-bit index), in
-/// ascending order of the codes, ties in index order. Sorts `keys`.
-std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys);
+/// The indices in the low halves of `keys` (each a code of `codeBits` ≤ 32 bits, mortonCode's
+/// 30 by default, above a 32-bit index), in ascending order of the codes, ties in index order.
+/// Sorts `keys` (a radix sort: O(n) a digit of 10 bits).
+std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys, int codeBits = 30);
 
 /// The indices [0, count) in Morton (Z-curve) order of `pointAt(i)` within the points' bounding
 /// box, 10 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
