@@ -19,17 +19,15 @@
 #include "delta/mesh/primitives.h"
 #include "delta/query/winding_number.h"
 
+#include "kernels/triangle_pairs.h"
+
 namespace delta::ib {
 namespace {
 
 const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
 /// The brute-force checks visit every vertex, or every sixteenth in the (slower) sanitizer build.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr std::size_t kEveryVertex = 16;
-#else
-constexpr std::size_t kEveryVertex = 1;
-#endif
+constexpr std::size_t kEveryVertex = testing::kSlowBuild ? 16 : 1;
 
 /// The brute-force reference at a point: the exact minimum of closestPointOnTriangle over all
 /// triangles, signed by the generalized winding number.
@@ -261,7 +259,9 @@ TEST(AdaptiveGrid, MovingBoundaryGivesTheGridOfItsNewPosition) {
       EXPECT_LT(double(statistics.queries),
                 double(grid.vertexCount()) * (band == 0.0 ? 0.35 : 0.6));
       EXPECT_GT(statistics.cellsCreated + statistics.cellsRemoved, 0u);
-      expectSameAsNewGrid(grid);
+      // A new grid to compare with after every step; under the sanitizers (where each costs
+      // seconds) after the first and the last, which still sees the five updates in between.
+      if (!testing::kSlowBuild || t == 0 || t == 5) expectSameAsNewGrid(grid);
     }
     EXPECT_EQ(total.queries, queries);
     EXPECT_GE(total.seconds, total.querySeconds);
