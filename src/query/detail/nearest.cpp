@@ -1,14 +1,18 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 #include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/query/winding_number.h"
 
+#include "exact_lanes.h"
 #include "query_mesh_data.h"
 
 namespace delta::detail {
 namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 /// A node waiting on the stack: its box's distance and, in one word, its level (high half) and
 /// index. (Two 32-bit fields stored apart and loaded as one 64-bit pair stalled every pop on
@@ -39,6 +43,10 @@ struct Leaves {
   double point[3];
   bool (*bounds)(const FloatLeavesView&, std::size_t, const double (&)[3], double, double (&)[8],
                  double (&)[8]) noexcept;
+  /// The exact kernel's squared distances of up to eight sorted triangles at once, bit for bit
+  /// (exact_lanes.h), where the ISA has them; null: one scalar kernel at a time.
+  void (*exact)(const QueryMeshData&, const Vec3&, const std::uint32_t*, std::size_t,
+                double*) noexcept;
 };
 
 /// Triangles held back from the exact kernel: at most this many wait at once.
@@ -75,9 +83,45 @@ struct Search {
   }
 }
 
+/// The squared distances of the waiting triangles [first, first + count) (at most eight) in one
+/// eight-lane kernel; the best of them by (distance, id), whose closest point the scalar kernel
+/// then gives (the same bits: exact_lanes.h). Where a lane is not finite (coordinates near
+/// overflow) the scalar kernel answers them all instead.
+void exactlyEight(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
+                  std::size_t first, std::size_t count, Search& search) noexcept {
+  double distances[kFanout];
+  leaves.exact(mesh, point, search.deferred + first, count, distances);
+  bool finite = true;
+  for (std::size_t i = 0; i < count; ++i)
+    finite = finite && std::isfinite(distances[i]);
+  if (!finite) {
+    for (std::size_t i = 0; i < count; ++i)
+      exactly(mesh, point, search.deferred[first + i], search);
+    return;
+  }
+  std::uint32_t winner = kNone;
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t k = search.deferred[first + i];
+    if (better(distances[i], mesh.order[k], search.best)) {
+      search.best.distanceSquared = distances[i];
+      search.best.triangle = mesh.order[k];
+      winner = k;
+    }
+  }
+  if (winner == kNone) return;
+  search.best.sorted = winner;
+  search.best.closest = kernels::closestPointOnTriangle(point, mesh.triangle(winner));
+  search.prune = std::min(search.prune, search.best.distanceSquared);
+}
+
 /// The kernel on the waiting triangles, nearest lower bound first, until the next is farther
-/// than the best.
-void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexcept {
+/// than the best: one at a time, or, where the ISA has the eight-lane kernel and three or more
+/// wait (most often the triangles around a vertex that a far point is nearest to, whose
+/// distances tie but for rounding), eight at a time, as long as the first of the eight is not
+/// farther than the best. The answer is the same: the best by (distance, id) of more triangles,
+/// whose lower bounds are not above it. (For one or two the scalar kernel is as fast.)
+void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
+            Search& search) noexcept {
   std::size_t kept = 0;  // those still not beyond the pruning bound, in ascending order
   for (std::size_t c = 0; c < search.count; ++c) {
     const double lower = search.lower[c];
@@ -91,8 +135,14 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
     search.lower[at] = lower;
     search.deferred[at] = k;
   }
-  for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared); ++c)
-    exactly(mesh, point, search.deferred[c], search);
+  if (leaves.exact && kept > 2) {
+    for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared);
+         c += kFanout)
+      exactlyEight(mesh, leaves, point, c, std::min(kFanout, kept - c), search);
+  } else {
+    for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared); ++c)
+      exactly(mesh, point, search.deferred[c], search);
+  }
   search.count = 0;
 }
 
@@ -112,7 +162,7 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
   }
   for (unsigned rest = notAboveMask(lower, search.prune) & present; rest != 0; rest &= rest - 1) {
     const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-    if (search.count == kDeferred) settle(mesh, point, search);
+    if (search.count == kDeferred) settle(mesh, leaves, point, search);
     search.lower[search.count] = lower[i];
     search.deferred[search.count++] = static_cast<std::uint32_t>(leaf * kFanout + i);
   }
@@ -134,7 +184,7 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
   const std::uint32_t rootLevel = static_cast<std::uint32_t>(mesh.levels.size() - 1);
   if (rootLevel == 0) {  // one leaf
     visitLeaf(mesh, leaves, point, 0, search);
-    settle(mesh, point, search);
+    settle(mesh, leaves, point, search);
     return search.best;
   }
   stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), nodeKey(rootLevel, 0)};
@@ -172,7 +222,7 @@ void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexce
       stack[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
     }
   }
-  settle(mesh, point, search);
+  settle(mesh, leaves, point, search);
   return search.best;
 }
 
@@ -197,13 +247,17 @@ Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const V
 struct Descent {
   Nearest (*descend)(const QueryMeshData&, const Leaves&, const Vec3&, double) noexcept;
   decltype(Leaves::bounds) bounds;
+  decltype(Leaves::exact) exact;
 };
 
 Descent descentFor(kernels::Isa isa) noexcept {
   const kernels::Isa supported = kernels::supportedIsaAtMost(isa);
-  Descent descent{&descendBaseline, batchKernels(supported).pointTriangleBounds};
+  Descent descent{&descendBaseline, batchKernels(supported).pointTriangleBounds, nullptr};
 #if defined(DELTA_X86_ISAS)
-  if (supported == kernels::Isa::Avx512) descent.descend = &descendAvx512;
+  if (supported == kernels::Isa::Avx512) {
+    descent.descend = &descendAvx512;
+    descent.exact = &exactDistancesSquared8;
+  }
 #endif
   return descent;
 }
@@ -211,8 +265,9 @@ Descent descentFor(kernels::Isa isa) noexcept {
 Nearest nearestWith(const Descent& descent, const QueryMeshData& mesh, const Vec3& point,
                     double limitSquared) noexcept {
   const Vec3 local = point - mesh.lanes.origin;
-  return descent.descend(mesh, {mesh.lanes.view(), {local.x, local.y, local.z}, descent.bounds},
-                         point, limitSquared);
+  return descent.descend(
+      mesh, {mesh.lanes.view(), {local.x, local.y, local.z}, descent.bounds, descent.exact}, point,
+      limitSquared);
 }
 
 }  // namespace
