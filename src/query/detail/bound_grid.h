@@ -38,8 +38,8 @@ inline constexpr std::array<double, 256> kSquaredCellsOfCode = [] {
 /// A point outside the box adds its distance to the box by Pythagoras.
 ///
 /// Cost (one thread, measured on armadillo, 52k triangles, and refined_elephant, 89k, at the
-/// default 2 cells a triangle): built in 4.3 and 7.1 ms (the QueryMesh beside it: 42 and
-/// 76 ms), 2 bytes a triangle, lowerBoundSquared 5.5–6.5 ns a point.
+/// default 2 cells a triangle): built in 4.3 and 7.1 ms (the QueryMesh beside it: 31 and
+/// 51 ms), 2 bytes a triangle, lowerBoundSquared 5.5–6.5 ns a point.
 ///
 /// Threading: built on OpenMP threads (parallelFor; the same grid on any number); immutable
 /// afterwards: any number of threads may call lowerBoundSquared at once.
