@@ -255,49 +255,93 @@ double cornerAngle(const Vec3& from, const Vec3& next, const Vec3& previous) noe
   return std::atan2(length(cross(e1, e2)), dot(e1, e2));
 }
 
+/// The ids [0, count) grouped by key (`keyOf(id)` < keys), in id order within a key: first[k] is
+/// where key k's ids start in `ids`, first[keys] = count (a counting sort).
+struct Buckets {
+  std::vector<std::uint32_t> first;
+  std::vector<std::uint32_t> ids;
+};
+
+template <typename KeyOf>
+Buckets bucketsOf(std::size_t count, std::size_t keys, const KeyOf& keyOf) {
+  Buckets buckets;
+  buckets.first.assign(keys + 1, 0);
+  for (std::size_t id = 0; id < count; ++id)
+    ++buckets.first[keyOf(id) + 1];
+  for (std::size_t k = 0; k < keys; ++k)
+    buckets.first[k + 1] += buckets.first[k];
+  std::vector<std::uint32_t> next(buckets.first.begin(), buckets.first.end() - 1);
+  buckets.ids.resize(count);
+  for (std::size_t id = 0; id < count; ++id)
+    buckets.ids[next[keyOf(id)]++] = static_cast<std::uint32_t>(id);
+  return buckets;
+}
+
 /// Angle-weighted vertex pseudonormals, and per triangle the triangles across its edges: for a
 /// closed, consistently oriented mesh every edge of a triangle with three distinct corners has
-/// exactly one partner. The vertex sums run in the mesh's triangle order.
+/// exactly one partner. Each vertex sums its corners in the mesh's triangle order (the same sums
+/// on any number of threads); the edges meet in buckets of their lower vertex.
 detail::Pseudonormals pseudonormals(const detail::QueryMeshData& data) {
   const std::size_t n = data.size();
   detail::Pseudonormals result;
   result.vertices.assign(data.vertices.size(), Vec3{});
   result.across.assign(n, {detail::Pseudonormals::kNone, detail::Pseudonormals::kNone,
                            detail::Pseudonormals::kNone});
-  struct EdgeUse {
-    std::uint64_t key;
-    std::uint32_t triangle;  // sorted
-    std::uint32_t slot;
-    auto operator<=>(const EdgeUse&) const = default;
-  };
-  std::vector<EdgeUse> edges;
-  edges.reserve(3 * n);
-  std::vector<std::uint32_t> position(n);  // mesh id → tree order
-  for (std::size_t k = 0; k < n; ++k)
-    position[data.order[k]] = static_cast<std::uint32_t>(k);
-  for (std::size_t t = 0; t < n; ++t) {
-    const std::uint32_t k = position[t];
-    const TriangleIndices& v = data.corners[k];
-    const Triangle triangle = data.triangle(k);
-    const Vec3 faceNormal = normalized(triangle.areaVector());
-    const Vec3 corners[3] = {triangle.a, triangle.b, triangle.c};
-    for (std::size_t c = 0; c < 3; ++c)
-      result.vertices[v[c]] +=
-          cornerAngle(corners[c], corners[(c + 1) % 3], corners[(c + 2) % 3]) * faceNormal;
-    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;  // a fold: no edges (topology.h)
-    for (std::uint32_t slot = 0; slot < 3; ++slot) {
-      const std::uint32_t from = v[slot], to = v[(slot + 1) % 3];
-      const std::uint64_t key = std::uint64_t{std::min(from, to)} << 32 | std::max(from, to);
-      edges.push_back({key, k, slot});
+  // Corner 3t + c: corner c of mesh triangle t, its vertex and weighted normal, on all threads
+  // (read in tree order, where neighbours share vertices: the mesh's order may be scattered).
+  std::vector<Vec3> weighted(3 * n);
+  std::vector<std::uint32_t> vertexOf(3 * n);
+  parallelFor(0, n, 4096, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Triangle triangle = data.triangle(k);
+      const Vec3 faceNormal = normalized(triangle.areaVector());
+      const Vec3 corners[3] = {triangle.a, triangle.b, triangle.c};
+      const std::size_t t = data.order[k];
+      for (std::size_t c = 0; c < 3; ++c) {
+        weighted[3 * t + c] =
+            cornerAngle(corners[c], corners[(c + 1) % 3], corners[(c + 2) % 3]) * faceNormal;
+        vertexOf[3 * t + c] = data.corners[k][c];
+      }
     }
-  }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
-    if (edges[e].key != edges[e + 1].key) continue;
-    result.across[edges[e].triangle][edges[e].slot] = edges[e + 1].triangle;
-    result.across[edges[e + 1].triangle][edges[e + 1].slot] = edges[e].triangle;
-    ++e;
-  }
+  });
+  const Buckets cornersOf = bucketsOf(3 * n, data.vertices.size(),
+                                      [&vertexOf](std::size_t corner) { return vertexOf[corner]; });
+  parallelFor(0, data.vertices.size(), 4096, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v)
+      for (std::uint32_t i = cornersOf.first[v]; i < cornersOf.first[v + 1]; ++i)
+        result.vertices[v] += weighted[cornersOf.ids[i]];
+  });
+  // Edge 3k + slot: from corner slot of sorted triangle k to the next (none for a fold, whose
+  // edges have no partner: topology.h). Each bucket of a lower vertex pairs its edges by upper
+  // vertex, in order of (triangle, slot).
+  const auto folded = [&data](std::size_t k) {
+    const TriangleIndices& v = data.corners[k];
+    return v[0] == v[1] || v[1] == v[2] || v[2] == v[0];
+  };
+  const auto ends = [&data](std::size_t edge) {
+    const TriangleIndices& v = data.corners[edge / 3];
+    const std::uint32_t from = v[edge % 3], to = v[(edge + 1) % 3];
+    return std::pair{std::min(from, to), std::max(from, to)};
+  };
+  const Buckets edgesOf = bucketsOf(3 * n, data.vertices.size(),
+                                    [&ends](std::size_t edge) { return ends(edge).first; });
+  parallelFor(0, data.vertices.size(), 4096, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> bucket;  // (upper vertex, edge)
+    for (std::size_t v = begin; v < end; ++v) {
+      bucket.clear();
+      for (std::uint32_t i = edgesOf.first[v]; i < edgesOf.first[v + 1]; ++i)
+        if (!folded(edgesOf.ids[i] / 3))
+          bucket.push_back({ends(edgesOf.ids[i]).second, edgesOf.ids[i]});
+      std::sort(bucket.begin(), bucket.end());
+      for (std::size_t e = 0; e + 1 < bucket.size(); ++e) {
+        if (bucket[e].first != bucket[e + 1].first) continue;
+        const std::uint32_t one = bucket[e].second, other = bucket[e + 1].second;
+        result.across[one / 3][one % 3] = other / 3;
+        result.across[other / 3][other % 3] = one / 3;
+        ++e;
+      }
+    }
+  });
   return result;
 }
 

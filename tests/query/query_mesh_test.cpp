@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <random>
 #include <thread>
@@ -298,6 +299,30 @@ TEST(QueryMesh, TreeBuiltOnManyThreadsIsTheTreeOfOne) {
   for (const Aabb& leaf : parallel.data().levels[0])
     widest = std::max(widest, leaf.diagonal());
   EXPECT_LT(widest, 0.35);  // 0.23 measured; a leaf of far triangles spans about 2
+}
+
+TEST(QueryMesh, PseudonormalsMadeOnManyThreadsAreThoseOfOne) {
+  // The corners' weights, the vertex sums (each in the mesh's triangle order) and the edge
+  // buckets run on all threads: the same bits as on one (ThreadSanitizer checks the sharing).
+  const Mesh mesh = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const QueryMesh serial(mesh);
+  const detail::Pseudonormals& one = serial.data().pseudonormals();
+  omp_set_num_threads(4);
+  const QueryMesh parallel(mesh);
+  const detail::Pseudonormals& many = parallel.data().pseudonormals();
+  omp_set_num_threads(threads);
+  ASSERT_EQ(many.vertices.size(), one.vertices.size());
+  for (std::size_t v = 0; v < one.vertices.size(); ++v)
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(many.vertices[v][axis]),
+                std::bit_cast<std::uint64_t>(one.vertices[v][axis]))
+          << v;
+  ASSERT_EQ(many.across, one.across);
+  for (const std::array<std::uint32_t, 3>& across : one.across)
+    for (const std::uint32_t other : across)
+      ASSERT_NE(other, detail::Pseudonormals::kNone);  // closed: every edge has its partner
 }
 
 }  // namespace
