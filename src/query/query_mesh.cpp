@@ -92,32 +92,25 @@ void splitIntoRuns(TreeBuild& build, std::size_t begin, std::size_t end, std::si
   splitIntoRuns(build, middle, end, run);
 }
 
-/// Orders the triangles of a node of `size` (a power of kFanout) into kFanout compact children,
-/// and each child likewise, down to leaves of kFanout triangles.
-void buildOrder(TreeBuild& build, std::size_t begin, std::size_t end, std::size_t size) {
-  if (size <= detail::kFanout) return;
-  const std::size_t child = size / detail::kFanout;
-  splitIntoRuns(build, begin, end, child);
-  for (std::size_t b = begin; b < end; b += child)
-    buildOrder(build, b, std::min(b + child, end), child);
-}
-
-/// A subtree still to be ordered: the range [begin, end) of a node of `size`.
+/// A subtree to order: the range [begin, end) of a node of `size` (a power of kFanout).
 struct Subtree {
   std::size_t begin, end, size;
 };
 
-/// Orders the top of the tree (buildOrder) down to subtrees of at most `most` triangles, which it
-/// appends to `rest` unordered.
-void buildTop(TreeBuild& build, const Subtree& node, std::size_t most, std::vector<Subtree>& rest) {
-  if (node.end - node.begin <= most || node.size <= detail::kFanout) {
-    rest.push_back(node);
+/// Orders the triangles of `node` into kFanout compact children, and each child likewise, down
+/// to leaves of kFanout triangles; with `rest`, only down to subtrees of at most `most`
+/// triangles, which it appends there unordered.
+void buildOrder(TreeBuild& build, const Subtree& node, std::size_t most = 0,
+                std::vector<Subtree>* rest = nullptr) {
+  if (node.size <= detail::kFanout) return;
+  if (rest && node.end - node.begin <= most) {
+    rest->push_back(node);
     return;
   }
   const std::size_t child = node.size / detail::kFanout;
   splitIntoRuns(build, node.begin, node.end, child);
   for (std::size_t b = node.begin; b < node.end; b += child)
-    buildTop(build, {b, std::min(b + child, node.end), child}, most, rest);
+    buildOrder(build, {b, std::min(b + child, node.end), child}, most, rest);
 }
 
 /// Triangle ids in tree order: node i of level l (leaves l = 0) holds the aligned run
@@ -158,10 +151,10 @@ std::vector<std::uint32_t> treeOrder(const Mesh& mesh) {
   // The top splits on this thread, then the subtrees below them on all (they touch disjoint
   // ranges of the lists and of the scratch, and disjoint ids).
   std::vector<Subtree> subtrees;
-  buildTop(build, {0, n, size}, std::max<std::size_t>(n / 16, 4096), subtrees);
+  buildOrder(build, {0, n, size}, std::max<std::size_t>(n / 16, 4096), &subtrees);
   parallelFor(0, subtrees.size(), 1, [&build, &subtrees](std::size_t first, std::size_t last) {
     for (std::size_t s = first; s < last; ++s)
-      buildOrder(build, subtrees[s].begin, subtrees[s].end, subtrees[s].size);
+      buildOrder(build, subtrees[s]);
   });
   return std::move(build.sorted[0]);
 }
