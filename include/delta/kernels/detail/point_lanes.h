@@ -76,9 +76,41 @@ inline bool pointTriangleBounds8(const FloatLeavesView& block, std::size_t first
       r.v[k] = m.v[k] ? a.v[k] : b.v[k];
     return r;
   };
-  const auto min = [&select](const P& a, const P& b) { return select(a < b, a, b); };
-  const auto max = [&select](const P& a, const P& b) { return select(a > b, a, b); };
-  const auto abs = [&select](const P& a) { return select(a < 0.0, -a, a); };
+  // min and max as x86's minpd and maxpd define them (a < b ? a : b, a > b ? a : b: the second
+  // operand where either is NaN), which GCC 12 leaves as a compare and a blend where it cannot
+  // see the pattern; abs clears the sign bit (one and where the select took three instructions).
+  const auto min = [&select](const P& a, const P& b) {
+#if defined(__AVX512F__) && !defined(__clang__)
+    if constexpr (H == 8) {
+      P r;
+      for (int k = 0; k < U; ++k)
+        r.v[k] = __builtin_ia32_minpd512_mask(a.v[k], b.v[k], a.v[k],
+                                              static_cast<unsigned char>(0xff), 4);
+      return r;
+    }
+#endif
+    return select(a < b, a, b);
+  };
+  const auto max = [&select](const P& a, const P& b) {
+#if defined(__AVX512F__) && !defined(__clang__)
+    if constexpr (H == 8) {
+      P r;
+      for (int k = 0; k < U; ++k)
+        r.v[k] = __builtin_ia32_maxpd512_mask(a.v[k], b.v[k], a.v[k],
+                                              static_cast<unsigned char>(0xff), 4);
+      return r;
+    }
+#endif
+    return select(a > b, a, b);
+  };
+  const auto abs = [](const P& a) {
+    using Bits = typename Register<H>::Mask;
+    using Real = typename Register<H>::Real;
+    P r;
+    for (int k = 0; k < U; ++k)
+      r.v[k] = (Real)((Bits)a.v[k] & 0x7fffffffffffffff);
+    return r;
+  };
   const P zero = broadcast<H, U>(0.0), one = broadcast<H, U>(1.0);
 
   const P ax = at(0), ay = at(1), az = at(2);
@@ -99,11 +131,21 @@ inline bool pointTriangleBounds8(const FloatLeavesView& block, std::size_t first
   const P gx = axisGap(rx, ux, vx), gy = axisGap(ry, uy, vy), gz = axisGap(rz, uz, vz);
   const P box = gx * gx + gy * gy + gz * gz;
   const P boxBelow = box - margin;
-  const M inDoubt = ~(boxBelow > prune);
-  bool any = false;
-  for (int i = 0; i < 8; ++i)
-    any = any || inDoubt.lane(i);
-  if (!any) return false;
+  const M beyond = boxBelow > prune;
+  typename Register<H>::Mask all = beyond.v[0];
+  for (int k = 1; k < U; ++k)
+    all &= beyond.v[k];
+  bool every = true;  // one test of the whole register where the ISA has it
+#if defined(__AVX512F__) && !defined(__clang__)
+  if constexpr (H == 8) {
+    typedef long long Words __attribute__((vector_size(64)));
+    every =
+        __builtin_ia32_ptestnmq512((Words)all, (Words)all, static_cast<unsigned char>(0xff)) == 0;
+  } else
+#endif
+    for (int i = 0; i < H; ++i)
+      every = every && all[i] != 0;
+  if (every) return false;
 
   // The squared distance to the segment from o (relative to a) along d, for q = r − o.
   const auto segment = [&](const P& qx, const P& qy, const P& qz, const P& dx, const P& dy,
