@@ -207,6 +207,56 @@ void buildOctets(detail::QueryMeshData& data) {
   }
 }
 
+/// The cylinders of the leaves of node `node` of level 1 (query_mesh_data.h): each normal is the
+/// leaf's slab's in single precision, each centre that of the leaf's box in the node's octet.
+detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size_t node) {
+  const detail::BoxOctet& boxes = data.childOctets[0][node];
+  detail::CylinderOctet cylinders{};  // empty slots: zeros (their boxes' centres are NaN)
+  for (std::size_t i = 0; i < detail::kFanout; ++i) {
+    const std::size_t leaf = node * detail::kFanout + i;
+    const std::size_t from = leaf * detail::kFanout;
+    const std::size_t to = std::min(from + detail::kFanout, data.size());
+    if (from >= to) break;
+    const Vec3 normal = data.slabs[0][leaf].normal;
+    const float n[3] = {static_cast<float>(normal.x), static_cast<float>(normal.y),
+                        static_cast<float>(normal.z)};
+    const Vec3 axis{n[0], n[1], n[2]};
+    const double inverse = 1.0 / dot(axis, axis);
+    const Vec3 centre{(double{boxes.lowerX[i]} + double{boxes.upperX[i]}) * 0.5,
+                      (double{boxes.lowerY[i]} + double{boxes.upperY[i]}) * 0.5,
+                      (double{boxes.lowerZ[i]} + double{boxes.upperZ[i]}) * 0.5};
+    double low = std::numeric_limits<double>::infinity(), high = -low, radius = 0.0;
+    for (std::size_t k = from; k < to; ++k) {
+      const Triangle t = data.triangle(k);
+      for (const Vec3& v : {t.a, t.b, t.c}) {
+        const Vec3 w = v - centre;
+        const double h = dot(axis, w);
+        low = std::min(low, h);
+        high = std::max(high, h);
+        radius = std::max(radius, length(w - axis * (h * inverse)));
+      }
+    }
+    // The slack covers this rounding and the queries' (far above a few ulps of the box).
+    cylinders.normalX[i] = n[0];
+    cylinders.normalY[i] = n[1];
+    cylinders.normalZ[i] = n[2];
+    cylinders.low[i] = roundedOutward(low - data.slack, true);
+    cylinders.high[i] = roundedOutward(high + data.slack, false);
+    cylinders.radius[i] = roundedOutward(radius + data.slack, false);
+  }
+  return cylinders;
+}
+
+/// The leaves' cylinders, after the octets and the slabs.
+void buildCylinders(detail::QueryMeshData& data) {
+  if (data.childOctets.empty()) return;  // one leaf: no descent
+  data.leafCylinders.resize(data.childOctets[0].size());
+  parallelFor(0, data.leafCylinders.size(), 64, [&data](std::size_t begin, std::size_t end) {
+    for (std::size_t node = begin; node < end; ++node)
+      data.leafCylinders[node] = cylinderOctet(data, node);
+  });
+}
+
 /// Every node's oriented slab (query_mesh_data.h): a node of level l holds the sorted triangles
 /// [i·8^(l+1), (i+1)·8^(l+1)), so each level is one pass over the triangles.
 std::vector<std::vector<detail::NodeSlab>> buildSlabs(const detail::QueryMeshData& data) {
@@ -419,6 +469,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   data->levels = buildLevels(*data);
   buildOctets(*data);
   data->slabs = buildSlabs(*data);
+  buildCylinders(*data);
   {  // the grid reads plain triangles: a copy for its build only
     std::vector<Triangle> sorted(data->size());
     for (std::size_t k = 0; k < sorted.size(); ++k)
@@ -486,6 +537,7 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
                       data.order.capacity() * sizeof(std::uint32_t) + data.lanes.memoryBytes();
   for (const std::vector<Aabb>& level : data.levels)
     bytes += level.capacity() * sizeof(Aabb);
+  bytes += data.leafCylinders.capacity() * sizeof(detail::CylinderOctet);
   for (const detail::BoxOctets& level : data.childOctets)
     bytes += level.capacity() * sizeof(detail::BoxOctet);
   for (const std::vector<detail::NodeSlab>& level : data.slabs)

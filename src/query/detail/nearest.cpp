@@ -7,6 +7,7 @@
 #include "delta/query/winding_number.h"
 
 #include "exact_lanes.h"
+#include "node_bounds.h"
 #include "query_mesh_data.h"
 
 namespace delta::detail {
@@ -148,6 +149,7 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
 
 /// The triangles of leaf `leaf`: the vector bounds of the eight tighten the pruning with their
 /// upper bounds, and those whose lower bound is not beyond it wait (Search).
+template <typename Bounds>
 [[gnu::always_inline]] inline void visitLeaf(const QueryMeshData& mesh, const Leaves& leaves,
                                              const Vec3& point, std::size_t leaf,
                                              Search& search) noexcept {
@@ -156,11 +158,8 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
     return;
   const std::size_t count = std::min(kFanout, mesh.size() - leaf * kFanout);
   const unsigned present = (1u << count) - 1;  // not the padding
-  for (std::size_t i = 0; i < kFanout; ++i) {
-    if (upper[i] < search.prune && (present >> i & 1)) search.prune = upper[i];  // not NaN
-    lower[i] = lower[i] > 0.0 ? lower[i] : 0.0;  // NaN (nothing known): in doubt
-  }
-  for (unsigned rest = notAboveMask(lower, search.prune) & present; rest != 0; rest &= rest - 1) {
+  for (unsigned rest = Bounds::candidates(lower, upper, present, search.prune); rest != 0;
+       rest &= rest - 1) {
     const auto i = static_cast<std::size_t>(std::countr_zero(rest));
     if (search.count == kDeferred) settle(mesh, leaves, point, search);
     search.lower[search.count] = lower[i];
@@ -168,8 +167,16 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
   }
 }
 
-/// The descent, inlined into one function per instruction set below: the same source, whose box
-/// tests the compiler turns into eight-lane code where it may use AVX-512.
+template <typename Block>
+[[gnu::always_inline]] inline void prefetchBlock(const Block* block) noexcept {
+  const char* bytes = reinterpret_cast<const char*>(block);
+  for (std::size_t line = 0; line < sizeof(Block); line += 64)
+    __builtin_prefetch(bytes + line);
+}
+
+/// The descent, inlined into one function per instruction set below: the same source, with the
+/// node bounds of `Bounds` (PlainBounds, or Avx512Bounds where AVX-512 is at hand).
+template <typename Bounds>
 [[gnu::always_inline]] inline Nearest descend(const QueryMeshData& mesh, const Leaves& leaves,
                                               const Vec3& point, double limitSquared) noexcept {
   Search search;
@@ -183,28 +190,31 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
   std::size_t top = 0;
   const std::uint32_t rootLevel = static_cast<std::uint32_t>(mesh.levels.size() - 1);
   if (rootLevel == 0) {  // one leaf
-    visitLeaf(mesh, leaves, point, 0, search);
+    visitLeaf<Bounds>(mesh, leaves, point, 0, search);
     settle(mesh, leaves, point, search);
     return search.best;
   }
   stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), nodeKey(rootLevel, 0)};
+  const double shrink = cylinderShrink(mesh, point);
   while (top > 0) {
     const Pending entry = stack[--top];
     if (entry.bound > search.prune) continue;
     double bounds[kFanout];
-    distancesSquared(mesh.childOctets[entry.level() - 1][entry.index()], point, bounds);
     const std::uint32_t first = entry.index() * static_cast<std::uint32_t>(kFanout);
     if (entry.level() == 1) {
       // The children are leaves: visited here, nearest first, each checked against the bound as
       // it tightens (the order the stack gave them, without pushing and popping each).
-      for (unsigned rest = notAboveMask(bounds, search.prune); rest != 0;) {
+      for (unsigned rest =
+               Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
+                              point, shrink, search.prune, bounds);
+           rest != 0;) {
         std::uint32_t nearest = static_cast<std::uint32_t>(std::countr_zero(rest));
         for (unsigned more = rest & (rest - 1); more != 0; more &= more - 1) {
           const auto i = static_cast<std::uint32_t>(std::countr_zero(more));
           if (bounds[i] < bounds[nearest]) nearest = i;
         }
         if (bounds[nearest] > search.prune) break;
-        visitLeaf(mesh, leaves, point, first + nearest, search);
+        visitLeaf<Bounds>(mesh, leaves, point, first + nearest, search);
         rest &= ~(1u << nearest);
       }
       continue;
@@ -212,7 +222,8 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
     // The children not beyond the bound (never the empty slots) go onto the stack in descending
     // order of distance, so the nearest is popped next. The mask is made without branches: a
     // branch per child mispredicted often enough to cost 4% of an ε-limited query.
-    const unsigned near = notAboveMask(bounds, search.prune);
+    const unsigned near = Bounds::children(mesh.childOctets[entry.level() - 1][entry.index()],
+                                           point, search.prune, bounds);
     const std::size_t base = top;
     for (unsigned rest = near; rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -220,6 +231,8 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
       for (; at > base && stack[at - 1].bound < bounds[i]; --at)
         stack[at] = stack[at - 1];
       stack[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
+      prefetchBlock(&mesh.childOctets[entry.level() - 2][first + i]);
+      if (entry.level() == 2) prefetchBlock(&mesh.leafCylinders[first + i]);
     }
   }
   settle(mesh, leaves, point, search);
@@ -228,7 +241,7 @@ void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
 
 Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
                         double limitSquared) noexcept {
-  return descend(mesh, leaves, point, limitSquared);
+  return descend<PlainBounds>(mesh, leaves, point, limitSquared);
 }
 
 #if defined(DELTA_X86_ISAS)
@@ -236,10 +249,10 @@ Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const V
 // it calls is inlined into it or stays a baseline out-of-line copy, so no AVX-512 code can reach
 // callers on other CPUs. (The answers do not depend on the ISA: the exact kernel is the library's
 // one out-of-line closestPointOnTriangle, and bounds only decide what it skips.)
-[[gnu::target("avx512f,avx512dq,avx512vl,avx2,fma")]] Nearest descendAvx512(
-    const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
-    double limitSquared) noexcept {
-  return descend(mesh, leaves, point, limitSquared);
+[[gnu::target(DELTA_AVX512_TARGET)]] Nearest descendAvx512(const QueryMeshData& mesh,
+                                                           const Leaves& leaves, const Vec3& point,
+                                                           double limitSquared) noexcept {
+  return descend<Avx512Bounds>(mesh, leaves, point, limitSquared);
 }
 #endif
 

@@ -66,6 +66,45 @@ inline void distancesSquared(const BoxOctet& boxes, const Vec3& point,
   return mask;
 }
 
+/// The leaves' oriented cylinders, eight side by side (one block per node of level 1, beside its
+/// BoxOctet): each leaf's triangles lie within heights [low, high] along `normal` (single
+/// precision, not quite unit: n) from the centre c of the leaf's box in the octet, and within
+/// `radius` of the axis through c along n. A far point's search reaches the leaves around its
+/// nearest point, whose boxes, as thick as they are wide wherever the surface is not axis-aligned,
+/// come closer to it than their triangles; the cylinder of a patch nearly flat is about as thin as
+/// the patch. For a point p, w = p − c, h = n·w, s = n·n and the lateral l = w − n·h/s:
+///   distance² ≥ max(low − h, h − high, 0)² / s + max(|l| − radius, 0)²
+/// (Pythagoras along n / √s and across it). Built from the double vertices and widened by the
+/// slack, rounded outward; empty slots' boxes make c NaN, whose bound the caller ignores.
+struct alignas(64) CylinderOctet {
+  float normalX[kFanout], normalY[kFanout], normalZ[kFanout];
+  float low[kFanout], high[kFanout], radius[kFanout];
+};
+using CylinderOctets = std::vector<CylinderOctet, AlignedAllocator<CylinderOctet, 64>>;
+
+/// out[i] = max(out[i], the cylinder bound of child i of `boxes`/`cylinders` shrunk by `shrink`):
+/// `shrink` (a distance) must exceed the rounding of the bound and of the exact kernel's distance
+/// (node_bounds.h's cylinderShrink). A NaN bound (empty slot) leaves out[i] as it was.
+inline void raiseByCylinders(const BoxOctet& boxes, const CylinderOctet& cylinders,
+                             const Vec3& point, double shrink, double (&out)[kFanout]) noexcept {
+  for (std::size_t i = 0; i < kFanout; ++i) {
+    const double nx = cylinders.normalX[i], ny = cylinders.normalY[i], nz = cylinders.normalZ[i];
+    const double wx = point.x - (double{boxes.lowerX[i]} + double{boxes.upperX[i]}) * 0.5;
+    const double wy = point.y - (double{boxes.lowerY[i]} + double{boxes.upperY[i]}) * 0.5;
+    const double wz = point.z - (double{boxes.lowerZ[i]} + double{boxes.upperZ[i]}) * 0.5;
+    const double inverse = 1.0 / (nx * nx + ny * ny + nz * nz);
+    const double h = nx * wx + ny * wy + nz * wz;
+    const double along = h * inverse;
+    const double lx = wx - nx * along, ly = wy - ny * along, lz = wz - nz * along;
+    const double across = std::max(
+        std::sqrt(lx * lx + ly * ly + lz * lz) - double{cylinders.radius[i]} - shrink, 0.0);
+    const double height = std::max(
+        std::max(double{cylinders.low[i]} - h, h - double{cylinders.high[i]}) - shrink, 0.0);
+    const double bound = height * height * inverse + across * across;
+    out[i] = std::max(out[i], bound);
+  }
+}
+
 /// A node's oriented slab: the unit mean normal of its triangles (their area vectors' sum) and
 /// the extent of its vertices along it, widened by the slack. A patch nearly flat is thin along
 /// its normal where its axis-aligned box is not: two patches facing each other across a small
@@ -153,6 +192,8 @@ struct QueryMeshData {
   /// The same tree for the point queries: childOctets[l][i] holds the boxes of node i of level
   /// l + 1's children (levels[l][8i, 8i + 8)).
   std::vector<BoxOctets> childOctets;
+  /// Per node of level 1, its leaves' cylinders (childOctets[0]'s boxes give their centres).
+  CylinderOctets leafCylinders;
   /// Per node of `levels`, its oriented slab (the same indexing).
   std::vector<std::vector<NodeSlab>> slabs;
   /// Per cell of a uniform grid over the box, a lower bound of the distance to the mesh: the

@@ -1,0 +1,158 @@
+#pragma once
+
+// The point queries' node bounds (query_mesh_data.h's boxes and leaf cylinders), in two builds of
+// the same arithmetic: plain loops for any ISA, and AVX-512 registers of eight lanes for the
+// descent's AVX-512 build (nearest.cpp). Each is a lower bound of the squared distance from the
+// point to every triangle below the node, as computed by the exact kernel; tests compare both
+// with it.
+
+#include <algorithm>
+#include <cstddef>
+
+#include "delta/core/vec3.h"
+
+#include "query_mesh_data.h"
+
+#if defined(DELTA_X86_ISAS)
+// GCC 12 warns of the undefined pass-through registers inside its own AVX-512 intrinsics.
+#if defined(__clang__)
+#include <immintrin.h>
+#else
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#include <immintrin.h>
+#pragma GCC diagnostic pop
+#endif
+/// The function-level target of the AVX-512 builds (no AVX-512 code reaches other callers).
+#define DELTA_AVX512_TARGET "avx512f,avx512dq,avx512vl,avx2,fma"
+#endif
+
+namespace delta::detail {
+
+/// What the cylinder bounds of a search from `point` shrink by (raiseByCylinders): 2⁻³⁸ of the
+/// point's and the mesh's coordinates and extent, thousands of times the rounding of the bound
+/// (a few ulps of them) and of the exact kernel's distance.
+inline double cylinderShrink(const QueryMeshData& mesh, const Vec3& point) noexcept {
+  return 0x1p-38 * maxAbs(point) + 0.25 * mesh.slack;  // slack: 2⁻³⁶ of the mesh's
+}
+
+/// The squared distances of a node's children, in plain loops that any ISA compiles:
+/// query_mesh_data.h's box distances, raised by the cylinders where the children are leaves.
+/// Each writes the eight bounds and returns the mask of those not above `prune`.
+struct PlainBounds {
+  static unsigned children(const BoxOctet& boxes, const Vec3& point, double prune,
+                           double (&out)[kFanout]) noexcept {
+    distancesSquared(boxes, point, out);
+    return notAboveMask(out, prune);
+  }
+  static unsigned leaves(const BoxOctet& boxes, const CylinderOctet& cylinders, const Vec3& point,
+                         double shrink, double prune, double (&out)[kFanout]) noexcept {
+    distancesSquared(boxes, point, out);
+    raiseByCylinders(boxes, cylinders, point, shrink, out);
+    return notAboveMask(out, prune);
+  }
+  /// A leaf's triangles after their vector bounds: `prune` lowered to the least upper bound of
+  /// those present (not the padding; never NaN), the lower bounds clamped at 0 (NaN, nothing
+  /// known: 0, in doubt); returns the mask of those present whose lower bound is not above it.
+  static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
+                             unsigned present, double& prune) noexcept {
+    for (std::size_t i = 0; i < kFanout; ++i) {
+      if (upper[i] < prune && (present >> i & 1)) prune = upper[i];
+      lower[i] = lower[i] > 0.0 ? lower[i] : 0.0;
+    }
+    return notAboveMask(lower, prune) & present;
+  }
+};
+
+#if defined(DELTA_X86_ISAS)
+
+/// The same bounds, each in one eight-lane register: GCC 12 made the plain loops two halves of
+/// four lanes, with a compare and a blend for each maximum. The same operations but for the
+/// contraction of the sums of squares (a distance one rounding closer; the slack covers it).
+struct Avx512Bounds {
+  [[gnu::target(DELTA_AVX512_TARGET)]] static __m512d widened(const float (&values)[kFanout]) {
+    return _mm512_cvtps_pd(_mm256_load_ps(values));
+  }
+  [[gnu::target(DELTA_AVX512_TARGET)]] static __m512d boxes(const BoxOctet& boxes,
+                                                            const Vec3& point) {
+    const __m512d zero = _mm512_setzero_pd();
+    const __m512d px = _mm512_set1_pd(point.x), py = _mm512_set1_pd(point.y),
+                  pz = _mm512_set1_pd(point.z);
+    // max(lower − p, p − upper, 0) per axis (∞ for the empty slots, lower > upper)
+    const __m512d dx = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(widened(boxes.lowerX), px),
+                                                   _mm512_sub_pd(px, widened(boxes.upperX))),
+                                     zero);
+    const __m512d dy = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(widened(boxes.lowerY), py),
+                                                   _mm512_sub_pd(py, widened(boxes.upperY))),
+                                     zero);
+    const __m512d dz = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(widened(boxes.lowerZ), pz),
+                                                   _mm512_sub_pd(pz, widened(boxes.upperZ))),
+                                     zero);
+    return _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
+  }
+  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned notAbove(__m512d bounds, double prune,
+                                                                double (&out)[kFanout]) {
+    _mm512_storeu_pd(out, bounds);
+    return _mm512_cmp_pd_mask(bounds, _mm512_set1_pd(prune), _CMP_LE_OQ);
+  }
+  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned children(const BoxOctet& octet,
+                                                                const Vec3& point, double prune,
+                                                                double (&out)[kFanout]) noexcept {
+    return notAbove(boxes(octet, point), prune, out);
+  }
+  /// raiseByCylinders (query_mesh_data.h), lane for lane.
+  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned leaves(const BoxOctet& octet,
+                                                              const CylinderOctet& cylinders,
+                                                              const Vec3& point, double shrink,
+                                                              double prune,
+                                                              double (&out)[kFanout]) noexcept {
+    const __m512d box = boxes(octet, point);
+    const __m512d half = _mm512_set1_pd(0.5), zero = _mm512_setzero_pd(),
+                  by = _mm512_set1_pd(shrink);
+    const __m512d wx = _mm512_sub_pd(
+        _mm512_set1_pd(point.x),
+        _mm512_mul_pd(_mm512_add_pd(widened(octet.lowerX), widened(octet.upperX)), half));
+    const __m512d wy = _mm512_sub_pd(
+        _mm512_set1_pd(point.y),
+        _mm512_mul_pd(_mm512_add_pd(widened(octet.lowerY), widened(octet.upperY)), half));
+    const __m512d wz = _mm512_sub_pd(
+        _mm512_set1_pd(point.z),
+        _mm512_mul_pd(_mm512_add_pd(widened(octet.lowerZ), widened(octet.upperZ)), half));
+    const __m512d nx = widened(cylinders.normalX), ny = widened(cylinders.normalY),
+                  nz = widened(cylinders.normalZ);
+    const __m512d inverse =
+        _mm512_div_pd(_mm512_set1_pd(1.0),
+                      _mm512_fmadd_pd(nx, nx, _mm512_fmadd_pd(ny, ny, _mm512_mul_pd(nz, nz))));
+    const __m512d h = _mm512_fmadd_pd(nx, wx, _mm512_fmadd_pd(ny, wy, _mm512_mul_pd(nz, wz)));
+    const __m512d along = _mm512_mul_pd(h, inverse);
+    const __m512d lx = _mm512_fnmadd_pd(nx, along, wx), ly = _mm512_fnmadd_pd(ny, along, wy),
+                  lz = _mm512_fnmadd_pd(nz, along, wz);
+    const __m512d lateral =
+        _mm512_sqrt_pd(_mm512_fmadd_pd(lx, lx, _mm512_fmadd_pd(ly, ly, _mm512_mul_pd(lz, lz))));
+    const __m512d across =
+        _mm512_max_pd(_mm512_sub_pd(_mm512_sub_pd(lateral, widened(cylinders.radius)), by), zero);
+    const __m512d height =
+        _mm512_max_pd(_mm512_sub_pd(_mm512_max_pd(_mm512_sub_pd(widened(cylinders.low), h),
+                                                  _mm512_sub_pd(h, widened(cylinders.high))),
+                                    by),
+                      zero);
+    const __m512d cylinder =
+        _mm512_fmadd_pd(_mm512_mul_pd(height, height), inverse, _mm512_mul_pd(across, across));
+    return notAbove(_mm512_max_pd(cylinder, box), prune, out);  // the box where it is NaN
+  }
+  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned candidates(double (&lower)[kFanout],
+                                                                  const double (&upper)[kFanout],
+                                                                  unsigned present,
+                                                                  double& prune) noexcept {
+    const __m512d above = _mm512_loadu_pd(upper);
+    const __mmask8 below = _mm512_mask_cmp_pd_mask(static_cast<__mmask8>(present), above,
+                                                   _mm512_set1_pd(prune), _CMP_LT_OQ);
+    prune = std::min(prune, _mm512_mask_reduce_min_pd(below, above));  // +∞ where none
+    return notAbove(_mm512_max_pd(_mm512_loadu_pd(lower), _mm512_setzero_pd()), prune, lower) &
+           present;
+  }
+};
+#endif
+
+}  // namespace delta::detail

@@ -1,0 +1,215 @@
+// The leaves' cylinders (query_mesh_data.h's CylinderOctet, node_bounds.h's PlainBounds and
+// Avx512Bounds): a cylinder bound never exceeds the exact kernel's squared distance to any
+// triangle of its leaf, on real meshes and on adversarial ones (a tilted flat grid far from the
+// origin, a tiny sphere, slivers, zero-area and repeated-vertex triangles), for points on the
+// triangles, just off them, straight above their interiors, far away; and it rejects most of the
+// leaves the boxes admit above a tilted patch (what it is for).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "delta/core/format.h"
+#include "delta/core/rotation.h"
+#include "delta/io/mesh_io.h"
+#include "delta/kernels/isa.h"
+#include "delta/kernels/point_triangle.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/query_mesh.h"
+
+#include "kernels/triangle_pairs.h"
+#include "query/detail/node_bounds.h"
+#include "query/detail/query_mesh_data.h"
+
+namespace delta::detail {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+/// An n × n grid of squares on the unit square, turned about (1, 2, 3) and moved to `offset`:
+/// flat, but its leaves' boxes are as thick as they are wide.
+Mesh tiltedGrid(int n, const Vec3& offset) {
+  const RigidTransform pose =
+      RigidTransform::translationBy(offset) *
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, 2, 3}, 0.7), {0, 0, 0});
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> triangles;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      vertices.push_back(pose.apply(Vec3{double(i) / n, double(j) / n, 0.0}));
+  const auto at = [n](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return Mesh(std::move(vertices), std::move(triangles));
+}
+
+/// Random triangles in the unit cube, a third of them slivers (a vertex on the opposite edge), a
+/// sixth with a repeated vertex, a sixth collinear.
+Mesh degenerateSoup(std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> triangles;
+  for (std::size_t t = 0; t < count; ++t) {
+    const Vec3 a{unit(random), unit(random), unit(random)};
+    const Vec3 b = a + Vec3{unit(random), unit(random), unit(random)} * 0.1;
+    Vec3 c = a + Vec3{unit(random), unit(random), unit(random)} * 0.1;
+    switch (t % 6) {
+      case 0:
+      case 1:
+        c = a + (b - a) * unit(random) + Vec3{1e-9, -1e-9, 0};
+        break;  // a sliver
+      case 2:
+        c = b;
+        break;  // repeated
+      case 3:
+        c = a + (b - a) * 2.5;
+        break;  // collinear
+      default:
+        break;
+    }
+    const auto first = static_cast<std::uint32_t>(vertices.size());
+    vertices.insert(vertices.end(), {a, b, c});
+    triangles.push_back({first, first + 1, first + 2});
+  }
+  return Mesh(std::move(vertices), std::move(triangles));
+}
+
+/// The exact kernel's least squared distance from `point` to the triangles of leaf `leaf`.
+double leafDistanceSquared(const QueryMeshData& data, std::size_t leaf, const Vec3& point) {
+  double nearest = kInfinity;
+  for (std::size_t k = leaf * kFanout; k < std::min((leaf + 1) * kFanout, data.size()); ++k)
+    nearest =
+        std::min(nearest, kernels::closestPointOnTriangle(point, data.triangle(k)).distanceSquared);
+  return nearest;
+}
+
+/// Probe points around leaf `leaf`: its vertices, points just off them and straight above its
+/// triangles' interiors along their normals (where the cylinder is tightest), and points at
+/// every scale from 10⁻⁹ to 10³ of the leaf's size.
+std::vector<Vec3> probesOf(const QueryMeshData& data, std::size_t leaf, std::mt19937_64& random) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Vec3> points;
+  const Aabb& box = data.levels[0][leaf];
+  const double size = std::max(box.diagonal(), 1e-300);
+  for (std::size_t k = leaf * kFanout; k < std::min((leaf + 1) * kFanout, data.size()); ++k) {
+    const Triangle t = data.triangle(k);
+    points.push_back(t.a);
+    const Vec3 centroid = (t.a + t.b + t.c) * (1.0 / 3.0);
+    const Vec3 area = t.areaVector();
+    const double norm = length(area);
+    for (double height : {0.0, 1e-12, 1e-6, 1e-2, 1.0, 30.0}) {
+      const Vec3 up = norm > 0.0 ? area * (height * size / norm) : Vec3{0, 0, height * size};
+      points.push_back(centroid + up);
+      points.push_back(centroid - up);
+    }
+  }
+  for (double scale : {1e-9, 1e-6, 1e-3, 0.1, 0.5, 1.0, 3.0, 100.0, 1e3})
+    for (int i = 0; i < 4; ++i)
+      points.push_back(box.center() +
+                       Vec3{unit(random), unit(random), unit(random)} * (scale * size));
+  return points;
+}
+
+/// Checks every leaf bound of up to `nodes` random level-1 nodes of `mesh` against the exact
+/// kernel; `raised` counts the bounds the cylinders raised above the boxes'.
+void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t nodes,
+                          std::size_t& raised) {
+  const QueryMesh query(mesh);
+  const QueryMeshData& data = query.data();
+  EXPECT_GE(data.levels.size(), 2u) << name;
+  if (data.levels.size() < 2) return;
+  const bool avx512 = kernels::supportedIsaAtMost(kernels::Isa::Avx512) == kernels::Isa::Avx512;
+  std::mt19937_64 random(7);
+  raised = 0;
+  const std::size_t count = data.leafCylinders.size();
+  for (std::size_t round = 0; round < std::min(nodes, count); ++round) {
+    const std::size_t node = nodes >= count ? round : random() % count;
+    const BoxOctet& boxes = data.childOctets[0][node];
+    const CylinderOctet& cylinders = data.leafCylinders[node];
+    for (std::size_t slot = 0; slot < kFanout; ++slot) {
+      const std::size_t leaf = node * kFanout + slot;
+      if (leaf >= data.levels[0].size()) break;
+      for (const Vec3& p : probesOf(data, leaf, random)) {
+        const double exact = leafDistanceSquared(data, leaf, p);
+        const double shrink = cylinderShrink(data, p);
+        double boxOnly[kFanout], plain[kFanout];
+        distancesSquared(boxes, p, boxOnly);
+        PlainBounds::leaves(boxes, cylinders, p, shrink, kInfinity, plain);
+        ASSERT_LE(plain[slot], exact) << name << ", leaf " << leaf << ", p = " << toString(p);
+        if (plain[slot] > boxOnly[slot]) ++raised;
+#if defined(DELTA_X86_ISAS)
+        if (avx512) {
+          double wide[kFanout];
+          Avx512Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, wide);
+          ASSERT_LE(wide[slot], exact)
+              << name << " (AVX-512), leaf " << leaf << ", p = " << toString(p);
+          // The same arithmetic but for contracted sums: apart by a few roundings of the
+          // coordinates, far within the shrink.
+          const double reach = std::sqrt(std::max(plain[slot], exact));
+          ASSERT_NEAR(wide[slot], plain[slot], 1e-12 * (plain[slot] + exact) + shrink * reach)
+              << name << ", leaf " << leaf;
+        }
+#endif
+      }
+    }
+  }
+}
+
+TEST(LeafCylinder, BoundNeverExceedsTheLeafsTriangles) {
+  const std::filesystem::path meshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
+  const std::size_t nodes = testing::kSlowBuild ? 40 : 200;
+  std::size_t raised = 0;
+  expectBelowTheLeaves(io::load(meshes / "fandisk.off"), "fandisk", nodes, raised);
+  EXPECT_GT(raised, 100u);
+  expectBelowTheLeaves(io::load(meshes / "armadillo.off"), "armadillo", nodes, raised);
+  EXPECT_GT(raised, 100u);
+  expectBelowTheLeaves(tiltedGrid(40, {1e6, -3e6, 2e5}), "tilted grid at 1e6", nodes, raised);
+  EXPECT_GT(raised, 100u);
+  expectBelowTheLeaves(tiltedGrid(24, {0, 0, 0}), "tilted grid", nodes, raised);
+  EXPECT_GT(raised, 100u);
+  expectBelowTheLeaves(primitives::icosphere(3, 1e-7, {3, 1, 2}), "tiny icosphere", nodes, raised);
+  expectBelowTheLeaves(primitives::box({1, 2, 3}), "box", nodes, raised);
+  expectBelowTheLeaves(degenerateSoup(2000, 3), "slivers and zero-area triangles", nodes, raised);
+}
+
+TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
+  // Far above a flat tilted patch, the boxes of the leaves around the nearest point come closer
+  // than the nearest triangle; the cylinders of a flat patch are flat.
+  const QueryMesh query(tiltedGrid(64, {0, 0, 0}));
+  const QueryMeshData& data = query.data();
+  const Vec3 normal = normalized(data.triangle(0).areaVector());
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(0.1, 0.9);
+  std::size_t byBoxes = 0, byCylinders = 0;
+  for (int round = 0; round < 50; ++round) {
+    const Triangle t = data.triangle(random() % data.size());
+    const Vec3 p = t.a + normal * (unit(random) * 0.5);
+    double nearest = kInfinity;
+    for (std::size_t k = 0; k < data.size(); ++k)
+      nearest =
+          std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
+    for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
+      double boxes[kFanout], bounds[kFanout];
+      const unsigned admitted = PlainBounds::children(data.childOctets[0][node], p, nearest, boxes);
+      byBoxes += static_cast<std::size_t>(std::popcount(admitted));
+      byCylinders += static_cast<std::size_t>(
+          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node], p,
+                                            cylinderShrink(data, p), nearest, bounds)));
+    }
+  }
+  EXPECT_GE(byCylinders, 50u);  // at least the leaf of the nearest triangle
+  EXPECT_LT(3 * byCylinders, byBoxes) << byCylinders << " of " << byBoxes;
+}
+
+}  // namespace
+}  // namespace delta::detail
