@@ -167,6 +167,8 @@ template <typename Bounds>
   }
 }
 
+/// Asks for every cache line of `block` (a node's octet of boxes or cylinders): a child pushed now
+/// is most often popped a few visits later (W1 −1.5% on Zen 5).
 template <typename Block>
 [[gnu::always_inline]] inline void prefetchBlock(const Block* block) noexcept {
   const char* bytes = reinterpret_cast<const char*>(block);
