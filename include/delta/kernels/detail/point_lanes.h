@@ -79,30 +79,22 @@ inline bool pointTriangleBounds8(const FloatLeavesView& block, std::size_t first
   // min and max as x86's minpd and maxpd define them (a < b ? a : b, a > b ? a : b: the second
   // operand where either is NaN), which GCC 12 leaves as a compare and a blend where it cannot
   // see the pattern; abs clears the sign bit (one and where the select took three instructions).
-  const auto min = [&select](const P& a, const P& b) {
+  const auto pick = [&select](const P& a, const P& b, bool larger) {
 #if defined(__AVX512F__) && !defined(__clang__)
     if constexpr (H == 8) {
       P r;
       for (int k = 0; k < U; ++k)
-        r.v[k] = __builtin_ia32_minpd512_mask(a.v[k], b.v[k], a.v[k],
-                                              static_cast<unsigned char>(0xff), 4);
+        r.v[k] = larger ? __builtin_ia32_maxpd512_mask(a.v[k], b.v[k], a.v[k],
+                                                       static_cast<unsigned char>(0xff), 4)
+                        : __builtin_ia32_minpd512_mask(a.v[k], b.v[k], a.v[k],
+                                                       static_cast<unsigned char>(0xff), 4);
       return r;
     }
 #endif
-    return select(a < b, a, b);
+    return larger ? select(a > b, a, b) : select(a < b, a, b);
   };
-  const auto max = [&select](const P& a, const P& b) {
-#if defined(__AVX512F__) && !defined(__clang__)
-    if constexpr (H == 8) {
-      P r;
-      for (int k = 0; k < U; ++k)
-        r.v[k] = __builtin_ia32_maxpd512_mask(a.v[k], b.v[k], a.v[k],
-                                              static_cast<unsigned char>(0xff), 4);
-      return r;
-    }
-#endif
-    return select(a > b, a, b);
-  };
+  const auto min = [&pick](const P& a, const P& b) { return pick(a, b, false); };
+  const auto max = [&pick](const P& a, const P& b) { return pick(a, b, true); };
   const auto abs = [](const P& a) {
     using Bits = typename Register<H>::Mask;
     using Real = typename Register<H>::Real;
