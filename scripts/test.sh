@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite: set up (scripts/setup.sh); every test built with AddressSanitizer +
-# UndefinedBehaviorSanitizer; the threaded tests built with ThreadSanitizer (clang, LLVM
+# UndefinedBehaviorSanitizer; the readers Δ owns fuzzed (scripts/fuzz.sh, clang's libFuzzer under
+# ASan + UBSan, 15 s a reader); the threaded tests built with ThreadSanitizer (clang, LLVM
 # OpenMP); the library installed and the examples (find_package consumer, immersed boundary)
 # built against the installed copy and run; then every test in the Release build (its ctest
 # summary is the closing line CI reads). Fails on the first failure.
@@ -12,6 +13,9 @@ echo "== sanitizer build (ASan + UBSan)"
 scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=Debug -DDELTA_SANITIZE=address,undefined \
   -DDELTA_BUILD_BENCH=OFF
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j"$jobs" --output-on-failure)
+
+echo "== fuzzing (libFuzzer under ASan + UBSan): every reader Δ owns, its regressions replayed"
+scripts/fuzz.sh 15
 
 echo "== ThreadSanitizer build (clang + LLVM OpenMP): the threaded tests (names contain Thread)"
 # Built with clang and LLVM's OpenMP runtime, which TSan understands (GCC's libgomp is not

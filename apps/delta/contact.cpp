@@ -4,14 +4,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/io/atomic_file.h"
 #include "delta/io/vtk.h"
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
@@ -59,23 +60,23 @@ void validate(const ContactOptions& options) {
 }
 
 void writeCsv(const std::vector<ContactPoint>& contacts, const std::string& path) {
-  std::ofstream file(path);
-  if (!file) throw Error("cannot write '" + path + "'");
-  file << "triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap\n";
+  io::AtomicFile file(path);
+  file.write("triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap,converged\n");
   char line[512];
   for (const ContactPoint& c : contacts) {
-    std::snprintf(line, sizeof line, "%u,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n",
-                  c.first, c.second, c.x.x, c.x.y, c.x.z, c.normal.x, c.normal.y, c.normal.z,
-                  c.distance, c.overlap ? 1 : 0);
-    file << line;
+    const int length =
+        std::snprintf(line, sizeof line, "%u,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d\n",
+                      c.first, c.second, c.x.x, c.x.y, c.x.z, c.normal.x, c.normal.y, c.normal.z,
+                      c.distance, c.overlap ? 1 : 0, c.converged ? 1 : 0);
+    file.write(std::string_view(line, static_cast<std::size_t>(length)));
   }
-  if (!file.flush()) throw Error("writing '" + path + "' failed");
+  file.commit();
 }
 
 void writeVtp(const std::vector<ContactPoint>& contacts, const std::string& path) {
   std::vector<Vec3> points;
   io::VtkArray normal{"normal", 3, {}}, direction{"direction", 3, {}};
-  io::VtkArray gap{"distance", 1, {}}, overlap{"overlap", 1, {}};
+  io::VtkArray gap{"distance", 1, {}}, overlap{"overlap", 1, {}}, converged{"converged", 1, {}};
   io::VtkArray triangleA{"triangle_a", 1, {}}, triangleB{"triangle_b", 1, {}};
   for (const ContactPoint& c : contacts) {
     points.push_back(c.x);
@@ -83,11 +84,12 @@ void writeVtp(const std::vector<ContactPoint>& contacts, const std::string& path
     direction.values.insert(direction.values.end(), {c.direction.x, c.direction.y, c.direction.z});
     gap.values.push_back(c.distance);
     overlap.values.push_back(c.overlap ? 1.0 : 0.0);
+    converged.values.push_back(c.converged ? 1.0 : 0.0);
     triangleA.values.push_back(c.first);
     triangleB.values.push_back(c.second);
   }
   io::VtkPolyData data = io::VtkPolyData::fromPoints(std::move(points));
-  data.pointData = {normal, direction, gap, overlap, triangleA, triangleB};
+  data.pointData = {normal, direction, gap, overlap, converged, triangleA, triangleB};
   io::writeVtp(data, path);
 }
 

@@ -1,8 +1,6 @@
 // `delta dem [SCENARIO]`: runs a DEM scenario (two-particles, settle, hopper, or one described by a
 // config file), with a progress line, a summary (text or --json) and, with --out, a ParaView
 // series and a CSV log (dem_output.h).
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +16,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/parallel.h"
 #include "delta/dem/scenarios.h"
 #ifdef DELTA_WITH_MPI
 #include "delta/dem/mpi/distributed_world.h"
@@ -391,7 +390,7 @@ void printJson(const dem::Scenario& scenario, std::size_t triangles, double buil
       .value("run_s", run.runSeconds)
       .value("write_s", run.writeSeconds)
       .value("frames", output ? output->frames() : std::size_t{0})
-      .value("threads", omp_get_max_threads());
+      .value("threads", threadCount());
   if (scenario.name == "two-particles")
     json.value("restitution", run.restitution).value("energy_change", run.energyChange);
   if (run.ranks > 0) {
@@ -422,7 +421,7 @@ void printText(const dem::Scenario& scenario, std::size_t triangles, double buil
               counted(triangles, "triangle").c_str(),
               counted(world.obstacles().size(), "obstacle").c_str(), world.parameters().timeStep,
               buildSeconds);
-  const std::string threads = counted(static_cast<std::size_t>(omp_get_max_threads()), "thread");
+  const std::string threads = counted(static_cast<std::size_t>(threadCount()), "thread");
   const std::string where =
       run.ranks > 0 ? counted(static_cast<std::size_t>(run.ranks), "rank") + " of " + threads
                     : threads;

@@ -1,7 +1,9 @@
 #include "dem_output.h"
 
+#include <cerrno>
 #include <cstdint>
 #include <string>
+#include <system_error>
 #include <utility>
 
 #include "delta/core/error.h"
@@ -45,6 +47,7 @@ io::VtkPolyData contactsOf(const dem::World& world) {
   std::vector<Vec3> points;
   io::VtkArray force{"force", 3, {}}, direction{"direction", 3, {}};
   io::VtkArray depth{"depth", 1, {}}, distance{"distance", 1, {}}, overlap{"overlap", 1, {}};
+  io::VtkArray converged{"converged", 1, {}};
   io::VtkArray first{"particle", 1, {}}, second{"other", 1, {}}, obstacle{"with_obstacle", 1, {}};
   for (const dem::Contact& contact : world.contacts()) {
     points.push_back(contact.point.x);
@@ -53,12 +56,13 @@ io::VtkPolyData contactsOf(const dem::World& world) {
     depth.values.push_back(contact.depth);
     distance.values.push_back(contact.point.distance);
     overlap.values.push_back(contact.point.overlap ? 1.0 : 0.0);
+    converged.values.push_back(contact.point.converged ? 1.0 : 0.0);
     first.values.push_back(contact.first);
     second.values.push_back(contact.second);
     obstacle.values.push_back(contact.withObstacle ? 1.0 : 0.0);
   }
   io::VtkPolyData data = io::VtkPolyData::fromPoints(std::move(points));
-  data.pointData = {force, direction, depth, distance, overlap, first, second, obstacle};
+  data.pointData = {force, direction, depth, distance, overlap, converged, first, second, obstacle};
   return data;
 }
 
@@ -107,10 +111,22 @@ void DemOutput::begin(const dem::World& world) {
   io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
   const std::filesystem::path path = directory_ / "log.csv";
   log_ = std::fopen(path.c_str(), "w");
-  if (!log_) throw Error("cannot write '" + path.string() + "'");
+  if (!log_)
+    throw Error("cannot write '" + path.string() + "': " + std::generic_category().message(errno));
   std::fprintf(log_,
                "step,time,kinetic_energy,potential_energy,elastic_energy,total_energy,contacts,"
                "contact_pairs,step_seconds,contact_detection_seconds\n");
+  flushLog();
+}
+
+void DemOutput::flushLog() {
+  errno = 0;
+  if (std::fflush(log_) == 0 && !std::ferror(log_)) return;
+  const int error = errno;
+  std::fclose(log_);
+  log_ = nullptr;
+  throw Error("writing '" + (directory_ / "log.csv").string() + "' failed: " +
+              (error != 0 ? std::generic_category().message(error) : "a write failed"));
 }
 
 void DemOutput::log(const dem::World& world) {
@@ -127,6 +143,7 @@ void DemOutput::log(const LogRow& row) {
   std::fprintf(log_, "%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,%zu,%.6g,%.6g\n", row.step, row.time,
                energies.kinetic(), energies.gravitational, energies.elastic, energies.total(),
                row.contacts, row.contactPairs, row.stepSeconds, row.contactDetectionSeconds);
+  flushLog();  // a row a step: what a run cut short has logged is on disk, and a full disk stops it
 }
 
 void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids, double time) {

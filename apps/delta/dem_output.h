@@ -19,7 +19,8 @@ namespace delta::cli {
 ///   contacts.pvd + contacts_NNNNNN.vtp     one vertex per contact point; point data `force` (on
 ///                                          `particle`), `direction` (unit, from the other body
 ///                                          toward `particle`), `depth` (into the ε-shell),
-///                                          `distance`, `overlap` (0/1), `particle`, `other`
+///                                          `distance`, `overlap` (0/1), `converged` (0/1:
+///                                          ContactPoint::converged), `particle`, `other`
 ///                                          (particle or obstacle index), `with_obstacle` (0/1)
 ///   obstacles.vtp                          the obstacles where they start; cell data `obstacle`,
 ///                                          point data `velocity`; when an obstacle moves also
@@ -31,7 +32,8 @@ namespace delta::cli {
 ///                                          contact_detection_seconds
 ///
 /// NNNNNN is the frame number; the .pvd files give each frame its simulated time and are
-/// rewritten after every frame, so a run cut short leaves a series that opens.
+/// rewritten after every frame (each file whole or not at all: io/atomic_file.h), so a run cut
+/// short leaves a series that opens; log.csv is flushed after every row.
 ///
 /// A run on P processes (`delta dem` under mpirun) writes a piece of each frame per rank,
 /// particles_NNNNNN_K.vtp and contacts_NNNNNN_K.vtp (K the rank, each with the particles it owns
@@ -66,7 +68,8 @@ class DemOutput {
   void begin(const dem::World& world);
   /// Appends the world's current step to log.csv.
   void log(const dem::World& world);
-  /// Appends a row to log.csv (rank 0; the others ignore it).
+  /// Appends a row to log.csv (rank 0; the others ignore it) and flushes it; throws delta::Error
+  /// naming the file and the reason when it cannot be written (a full disk).
   void log(const LogRow& row);
   /// Writes a frame of particles and contacts (and of moving obstacles) and updates the series.
   void frame(const dem::World& world) { frame(world, {}, world.time()); }
@@ -80,6 +83,9 @@ class DemOutput {
   const std::filesystem::path& directory() const noexcept { return directory_; }
 
  private:
+  /// Flushes log.csv; closes it and throws delta::Error when a write has failed.
+  void flushLog();
+
   std::filesystem::path directory_;
   int piece_ = 0, pieces_ = 0;
   std::FILE* log_ = nullptr;

@@ -4,10 +4,13 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/io/detail/file_read.h"
+
+#include "motion_options.h"
 
 namespace delta::cli {
 namespace {
@@ -84,7 +87,7 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
       throw Error(origin + " '" + text + "' must lie in [0, 1) (a fraction of the sum of radii)");
     settings.offset = offset;
   } else if (key == "steps") {
-    settings.steps = wholeNumber(text, origin, 1, UINT64_MAX);
+    settings.steps = parseStepCount(text, origin, 1);
   } else if (key == "output_every") {
     settings.outputEvery = wholeNumber(text, origin, 1, UINT64_MAX);
   } else if (key == "particle_mesh") {
@@ -106,8 +109,16 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
 DemSettings readDemConfig(const std::string& path) {
   if (std::filesystem::is_directory(path))
     throw Error("config '" + path + "' is a folder, not a file");
-  std::ifstream file(path);
-  if (!file) throw Error("cannot read config '" + path + "'");
+  // A config sets a dozen keys: 1 MiB is far more than one needs, and bounds what a wrong path
+  // (a FIFO or /dev/zero are refused as not regular files) can make Δ read.
+  constexpr std::uintmax_t kMaxConfigBytes = std::uintmax_t{1} << 20;
+  std::string contents;
+  try {
+    contents = io::detail::readSmallRegularFile(path, kMaxConfigBytes, "a DEM config");
+  } catch (const Error& error) {
+    throw Error("cannot read config '" + path + "': " + error.what());
+  }
+  std::istringstream file(contents);
   DemSettings settings;
   std::string line;
   for (std::size_t number = 1; std::getline(file, line); ++number) {

@@ -3,14 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/io/atomic_file.h"
 #include "delta/io/vtk.h"
 #include "delta/query/point_distance.h"
 
@@ -50,22 +51,20 @@ void validate(const DistanceOptions& options) {
 void writeCsv(const std::vector<Vec3>& points,
               const std::vector<contactdetection::PointDistance>& answers, bool withInside,
               const std::string& path) {
-  std::ofstream file(path);
-  if (!file) throw Error("cannot write '" + path + "'");
-  file << "index,distance,closest_x,closest_y,closest_z,triangle" << (withInside ? ",inside" : "")
-       << '\n';
+  io::AtomicFile file(path);
+  file.write(withInside ? "index,distance,closest_x,closest_y,closest_z,triangle,inside\n"
+                        : "index,distance,closest_x,closest_y,closest_z,triangle\n");
   char line[256];
   for (std::size_t i = 0; i < points.size(); ++i) {
     const contactdetection::PointDistance& a = answers[i];
-    if (!a.found())
-      std::snprintf(line, sizeof line, "%zu,,,,,%s\n", i, withInside ? "," : "");
-    else
-      std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i, a.distance,
-                    a.closest.x, a.closest.y, a.closest.z, a.triangle,
-                    withInside ? (a.inside ? ",1" : ",0") : "");
-    file << line;
+    const int length =
+        !a.found() ? std::snprintf(line, sizeof line, "%zu,,,,,%s\n", i, withInside ? "," : "")
+                   : std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i,
+                                   a.distance, a.closest.x, a.closest.y, a.closest.z, a.triangle,
+                                   withInside ? (a.inside ? ",1" : ",0") : "");
+    file.write(std::string_view(line, static_cast<std::size_t>(length)));
   }
-  if (!file.flush()) throw Error("writing '" + path + "' failed");
+  file.commit();
 }
 
 /// The points with their distance (NaN beyond ε; negative inside with --signed), closest point

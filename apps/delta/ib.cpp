@@ -2,8 +2,6 @@
 // distance at every grid vertex (ib/adaptive_grid.h); with --steps the boundary moves rigidly every
 // step and the grid follows. Prints cells, queries and timings (text or --json); --out writes
 // ParaView files.
-#include <omp.h>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +13,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/parallel.h"
 #include "delta/ib/adaptive_grid.h"
 #include "delta/ib/grid_vtk.h"
 #include "delta/io/vtk.h"
@@ -37,7 +36,7 @@ struct IbOptions {
   std::optional<double> padding;
   bool unsignedDistance = false;
   std::optional<double> exactBand;
-  long long steps = 0;
+  std::string steps = "0";
   std::string rotate, translate;
   std::string out;
   bool json = false;
@@ -69,11 +68,10 @@ void validate(const IbOptions& options) {
   if (options.exactBand && !(*options.exactBand >= 0.0))
     throw Error("--exact-band " + toString(*options.exactBand) +
                 " must be a distance >= 0 (inf: every distance exact)");
-  if (options.steps < 0)
-    throw Error("--steps " + std::to_string(options.steps) + " must not be negative");
+  const std::size_t steps = parseStepCount(options.steps, "--steps", 0);
   if (!options.rotate.empty()) parseRotation(options.rotate, "--rotate");
   if (!options.translate.empty()) parseVector(options.translate, "--translate");
-  if (options.steps == 0 && !(options.rotate.empty() && options.translate.empty()))
+  if (steps == 0 && !(options.rotate.empty() && options.translate.empty()))
     throw Error("--rotate and --translate move the boundary every step: give --steps N");
 }
 
@@ -173,7 +171,7 @@ void printJson(const ib::AdaptiveGrid& grid, const IbSummary& run) {
       .value("share_in_delta", run.shareInDelta())
       .value("query_s", run.querySeconds())
       .value("write_s", run.writeSeconds)
-      .value("threads", omp_get_max_threads());
+      .value("threads", threadCount());
   std::printf("%s\n", json.endObject().str().c_str());
 }
 
@@ -206,7 +204,7 @@ void printText(const std::string& source, const ib::AdaptiveGrid& grid, const Ib
 
 void run(const IbOptions& options) {
   validate(options);
-  const std::size_t steps = static_cast<std::size_t>(options.steps);
+  const std::size_t steps = parseStepCount(options.steps, "--steps", 0);
   std::unique_ptr<IbOutput> output;
   if (!options.out.empty()) output = std::make_unique<IbOutput>(options.out, steps > 0);
   IbSummary summary;

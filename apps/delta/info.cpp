@@ -94,6 +94,7 @@ void printJson(const std::string& source, const MeshReport& r) {
       .endObject()
       .value("points_skipped", r.statistics.pointsSkipped)
       .value("lines_skipped", r.statistics.linesSkipped)
+      .value("precision", io::toString(r.statistics.precision))
       .value("load_s", r.loadSeconds)
       .value("analyse_s", r.analyseSeconds)
       .value("mesh_bytes", r.meshBytes)

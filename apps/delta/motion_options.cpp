@@ -31,6 +31,16 @@ std::vector<double> parseNumbers(const std::string& text, std::size_t count, con
   return values;
 }
 
+std::size_t parseStepCount(const std::string& text, const std::string& origin, std::size_t least) {
+  std::size_t value = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, status] = std::from_chars(text.data(), end, value);
+  if (text.empty() || status != std::errc() || stop != end || value < least || value > kMaxSteps)
+    throw Error(origin + " '" + text + "' must be a whole number from " + std::to_string(least) +
+                " to " + std::to_string(kMaxSteps));
+  return value;
+}
+
 Vec3 parseVector(const std::string& text, const char* option) {
   const std::vector<double> v = parseNumbers(text, 3, option);
   return {v[0], v[1], v[2]};

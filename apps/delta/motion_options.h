@@ -18,6 +18,16 @@ std::vector<double> parseNumbers(const std::string& text, std::size_t count, con
 /// "X,Y,Z".
 Vec3 parseVector(const std::string& text, const char* option);
 
+/// The most time steps `delta ib --steps` and `delta dem --steps` (and a DEM config's `steps`)
+/// accept: far beyond any run that ends, small enough that every count stays exact.
+inline constexpr std::size_t kMaxSteps = 1'000'000'000'000;
+
+/// A number of time steps: a whole number in decimal digits from `least` (ib: 0, a static grid;
+/// dem: 1) to kMaxSteps. The one range check of `delta ib --steps`, `delta dem --steps` and a DEM
+/// config's `steps`: throws delta::Error "ORIGIN 'TEXT' must be a whole number from LEAST to
+/// 1000000000000" (ORIGIN: the option, or the config file and line).
+std::size_t parseStepCount(const std::string& text, const std::string& origin, std::size_t least);
+
 /// "AX,AY,AZ,DEGREES": the turn by DEGREES about the axis (AX, AY, AZ), right-handed; the axis
 /// must not be zero.
 Quaternion parseRotation(const std::string& text, const char* option);

@@ -36,7 +36,7 @@ if wrong.any():
 # Within the band they get exact signed distances; beyond it, the triangle is NO_TRIANGLE.
 band = 0.1
 new_vertices = np.array([(-1.0 + 0.05 * i, 0.01, 0.02) for i in range(41)])
-answers = np.empty(len(new_vertices), delta.distance_dtype)  # reused: no allocation per batch
+answers = np.empty(len(new_vertices), delta.distance_dtype)  # reused; filled once the batch is done
 delta.distance(grid.boundary, new_vertices, eps=band, signed=True, out=answers)
 found = answers["triangle"] != delta.NO_TRIANGLE
 for x, d in zip(new_vertices[found, 0], delta.signed_distance(answers[found])):

@@ -24,6 +24,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "handles.h"
+#include "interrupt.h"
 
 namespace delta::python {
 namespace {
@@ -89,14 +90,16 @@ py::dtype cellDtype() {
                      sizeof(Cell));
 }
 
-Aabb domainFrom(const std::optional<ArrayLike>& given) {
-  if (!given) return {};
+std::optional<Aabb> domainFrom(const std::optional<ArrayLike>& given) {
+  if (!given) return std::nullopt;
   const DoubleArray corners = pointArray(*given, "domain", true);
-  if (corners.shape(0) != 2) throw Error("domain must have shape (2, 3): lower, upper corner");
+  if (corners.shape(0) != 2)
+    throw Error("domain must have shape (2, 3): lower, upper corner; not " + shapeOf(corners));
   const std::span<const Vec3> box = asVec3(corners);
-  return {box[0], box[1]};
+  return Aabb{box[0], box[1]};
 }
 
+/// Builds without the GIL; Ctrl-C stops the build (KeyboardInterrupt, no grid made).
 PyGrid makeGrid(const Geometry& mesh, int levels, double refineFactor, bool signedDistance,
                 std::optional<double> exactBand, double padding,
                 const std::optional<ArrayLike>& domain) {
@@ -104,9 +107,10 @@ PyGrid makeGrid(const Geometry& mesh, int levels, double refineFactor, bool sign
   options.levels = levels;
   options.refineFactor = refineFactor;
   options.signedDistance = signedDistance;
-  options.exactBand = exactBand.value_or(std::numeric_limits<double>::quiet_NaN());
+  options.exactBand = exactBand;
   options.padding = padding;
   options.domain = domainFrom(domain);
+  const SignalScope interruptible;
   py::gil_scoped_release release;
   return PyGrid(ib::AdaptiveGrid(mesh.prepare(), options));
 }
@@ -126,7 +130,11 @@ exact distance (negative inside when signed), computed level by level by Delta's
 without the GIL. `move_boundary(motion)` / `move_boundary_to(pose)` move the boundary rigidly and
 update the grid, querying again only what could have changed: within `exact_band` (default: a
 finest cell's diagonal; inf: everywhere) distances stay exact, farther ones within
-`error_bounds`. As `delta ib MESH`.
+`error_bounds`. As `delta ib MESH`. Invalid values raise delta.Error, never a silent default:
+levels outside 1-20, refine_factor not finite and positive, padding negative or not finite,
+exact_band NaN or negative, a domain that is not finite with lower < upper on every axis. Ctrl-C
+stops a build within some tens of milliseconds (KeyboardInterrupt; no grid is made); moves run
+to the end.
 
 `distances` is a read-only view of the grid's storage (no copy); a move writes new storage when a
 view is alive, so a view keeps showing the distances it was taken of.
@@ -215,8 +223,14 @@ RuntimeError.)")
           "query_seconds, seconds.")
       .def(
           "cell_diagonal",
-          [](const PyGrid& grid, int level) { return grid.read().cellDiagonal(level); }, "level"_a,
-          "The diagonal of a cell of this level.")
+          [](const PyGrid& grid, int level) {
+            const ib::AdaptiveGrid& g = grid.read();
+            if (level < 0 || level > g.levels())
+              throw Error("cell_diagonal: level " + std::to_string(level) + " is not 0 to " +
+                          std::to_string(g.levels()));
+            return g.cellDiagonal(level);
+          },
+          "level"_a, "The diagonal of a cell of this level (0 to levels; delta.Error otherwise).")
       .def(
           "cells",
           [](const PyGrid& grid, int level) {

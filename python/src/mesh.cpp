@@ -5,10 +5,12 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -32,14 +34,23 @@ namespace {
 using namespace pybind11::literals;
 
 /// Applies `map` to every point of a (…, 3) array, into a new float64 array of the same shape.
+/// delta::Error names the first point that is not finite, or that `map` sends out of the range
+/// of doubles (a result is never ±∞ or NaN).
 template <typename Map>
 py::array mapPoints(const ArrayLike& points, const Map& map) {
   const DoubleArray input = pointArray(points, "points", false);
   DoubleArray output(std::vector<py::ssize_t>(input.shape(), input.shape() + input.ndim()));
   const std::span<const Vec3> from = asVec3(input);
   auto* to = reinterpret_cast<Vec3*>(output.mutable_data());
-  for (std::size_t i = 0; i < from.size(); ++i)
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    if (!isFinite(from[i]))
+      throw Error("points: point " + std::to_string(i) + " " + toString(from[i]) +
+                  " has a non-finite coordinate");
     to[i] = map(from[i]);
+    if (!isFinite(to[i]))
+      throw Error("points: point " + std::to_string(i) + " " + toString(from[i]) +
+                  " moves out of the range of doubles, to " + toString(to[i]));
+  }
   return output;
 }
 
@@ -71,44 +82,71 @@ py::array homogeneous(const RigidTransform& motion) {
 }
 
 RigidTransform fromHomogeneous(const ArrayLike& object) {
-  const py::array given = py::array::ensure(object.object);
-  const auto matrix = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
-  if (!matrix || matrix.ndim() != 2 || matrix.shape(0) != 4 || matrix.shape(1) != 4)
-    throw Error("RigidTransform.from_matrix: a 4x4 array of numbers is needed");
-  const auto m = matrix.unchecked<2>();
-  if (m(3, 0) != 0.0 || m(3, 1) != 0.0 || m(3, 2) != 0.0 || m(3, 3) != 1.0)
+  const RealArray given = realArray(object.object);
+  if (!given.problem.empty())
+    throw py::type_error("RigidTransform.from_matrix: the matrix " + given.problem);
+  if (given.array.ndim() != 2 || given.array.shape(0) != 4 || given.array.shape(1) != 4)
+    throw Error("RigidTransform.from_matrix: the matrix must have shape (4, 4), not " +
+                shapeOf(given.array));
+  requireExactIntegers(given.array, "RigidTransform.from_matrix: the matrix");
+  const DoubleArray matrix = DoubleArray::ensure(given.array);
+  requireFinite({matrix.data(), 16}, "RigidTransform.from_matrix: the matrix");
+  const double* m = matrix.data();
+  if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0)
     throw Error("RigidTransform.from_matrix: the last row must be (0, 0, 0, 1)");
   Mat3 rotation;
   for (int row = 0; row < 3; ++row)
     for (int column = 0; column < 3; ++column)
-      rotation(row, column) = m(row, column);
-  return {Quaternion::fromMatrix(rotation), {m(0, 3), m(1, 3), m(2, 3)}};
+      rotation(row, column) = m[4 * row + column];
+  return {Quaternion::fromMatrix(rotation), {m[3], m[7], m[11]}};
+}
+
+/// The vertex indices of an (m, 3) integer array, each checked to fit a uint32 (Mesh checks
+/// that it names a vertex). TypeError for what is not integers (booleans, reals, strings),
+/// delta::Error for another shape.
+std::vector<TriangleIndices> triangleIndices(const ArrayLike& triangles) {
+  const RealArray given = realArray(triangles.object);
+  if (!given.problem.empty()) {
+    std::string why = given.problem;
+    const std::string reals = "must be real numbers";
+    if (why.starts_with(reals)) why.replace(0, reals.size(), "must be integers");
+    throw py::type_error("Mesh: triangles " + why);
+  }
+  const char kind = given.array.dtype().kind();
+  if (kind != 'i' && kind != 'u')
+    throw py::type_error("Mesh: triangles must be integers, not of dtype " +
+                         py::str(given.array.dtype()).cast<std::string>());
+  if (given.array.ndim() != 2 || given.array.shape(1) != 3)
+    throw Error("Mesh: triangles must have shape (m, 3), not " + shapeOf(given.array));
+  const auto count = static_cast<std::size_t>(given.array.shape(0));
+  std::vector<TriangleIndices> corners(count);
+  const auto copy = [&]<typename Index>(Index) {
+    using Indices = py::array_t<Index, py::array::c_style | py::array::forcecast>;
+    const Indices indices = Indices::ensure(given.array);
+    if (!indices) throw Error("Mesh: triangles: conversion to integers failed");
+    const Index* index = indices.data();
+    for (std::size_t t = 0; t < count; ++t)
+      for (std::size_t k = 0; k < 3; ++k) {
+        const Index value = index[3 * t + k];
+        bool negative = false;
+        if constexpr (std::is_signed_v<Index>) negative = value < 0;
+        if (negative ||
+            static_cast<std::uint64_t>(value) > std::numeric_limits<std::uint32_t>::max())
+          throw Error("mesh: triangle " + std::to_string(t) + " refers to vertex " +
+                      std::to_string(value) + ", which is not a vertex index");
+        corners[t][k] = static_cast<std::uint32_t>(value);
+      }
+  };
+  if (kind == 'u')
+    copy(std::uint64_t{});
+  else
+    copy(std::int64_t{});
+  return corners;
 }
 
 PyMesh makeMesh(const ArrayLike& vertices, const ArrayLike& triangles) {
   const DoubleArray coordinates = pointArray(vertices, "Mesh: vertices", true);
-  const py::array given = py::array::ensure(triangles.object);
-  if (!given || (given.dtype().kind() != 'i' && given.dtype().kind() != 'u'))
-    throw Error(std::string("Mesh: triangles must be an array of integers") +
-                (given ? ", not of dtype " + py::str(given.dtype()).cast<std::string>() : ""));
-  if (given.ndim() != 2 || given.shape(1) != 3)
-    throw Error("Mesh: triangles must have shape (m, 3), not of " + std::to_string(given.ndim()) +
-                " axes" +
-                (given.ndim() == 2 ? " with " + std::to_string(given.shape(1)) + " columns" : ""));
-  const auto indices =
-      py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(given);
-  if (!indices) throw Error("Mesh: triangles: conversion to int64 failed");
-  const std::size_t count = static_cast<std::size_t>(indices.shape(0));
-  std::vector<TriangleIndices> corners(count);
-  const std::int64_t* index = indices.data();
-  for (std::size_t t = 0; t < count; ++t)
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::int64_t value = index[3 * t + k];
-      if (value < 0 || value > std::numeric_limits<std::uint32_t>::max())
-        throw Error("mesh: triangle " + std::to_string(t) + " refers to vertex " +
-                    std::to_string(value) + ", which is not a vertex index");
-      corners[t][k] = static_cast<std::uint32_t>(value);
-    }
+  std::vector<TriangleIndices> corners = triangleIndices(triangles);
   const std::span<const Vec3> points = asVec3(coordinates);
   std::vector<Vec3> copied(points.begin(), points.end());
   py::gil_scoped_release release;
@@ -172,9 +210,18 @@ renormalised after every product.)")
       .def("__repr__", [](const Quaternion& q) { return repr(q); })
       .def(py::pickle([](const Quaternion& q) { return py::make_tuple(q.w, q.x, q.y, q.z); },
                       [](const py::tuple& wxyz) {
-                        return Quaternion::fromComponents(
-                            wxyz[0].cast<double>(), wxyz[1].cast<double>(), wxyz[2].cast<double>(),
-                            wxyz[3].cast<double>());
+                        if (wxyz.size() != 4)
+                          throw Error("Quaternion: a pickled state is (w, x, y, z), not " +
+                                      std::to_string(wxyz.size()) + " values");
+                        const Quaternion q{wxyz[0].cast<double>(), wxyz[1].cast<double>(),
+                                           wxyz[2].cast<double>(), wxyz[3].cast<double>()};
+                        // A pickled unit quaternion comes back bit for bit (normalising it
+                        // again would change its last bits); anything else is normalised and
+                        // checked as Quaternion(w, x, y, z) is.
+                        const double norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+                        if (std::abs(norm2 - 1.0) <= 8 * std::numeric_limits<double>::epsilon())
+                          return q;
+                        return Quaternion::fromComponents(q.w, q.x, q.y, q.z);
                       }));
 
   py::class_<RigidTransform>(module, "RigidTransform", R"(A rigid motion p -> R p + t.
@@ -384,7 +431,12 @@ Threading: the GIL serialises methods; queries work on a snapshot without the GI
             const py::object self = py::cast(mesh);
             return py::make_tuple(self.attr("vertices"), self.attr("triangles"));
           },
-          [](const py::tuple& state) { return makeMesh({state[0]}, {state[1]}); }));
+          [](const py::tuple& state) {
+            if (state.size() != 2)
+              throw Error("Mesh: a pickled state is (vertices, triangles), not " +
+                          std::to_string(state.size()) + " values");
+            return makeMesh({state[0]}, {state[1]});
+          }));
 }
 
 void bindPrimitivesAndFiles(py::module_& module) {
@@ -449,12 +501,15 @@ malformed file.)");
         const io::LoadStatistics& s = loaded.statistics;
         py::dict statistics("meshes"_a = s.meshes, "source_vertices"_a = s.sourceVertices,
                             "points_skipped"_a = s.pointsSkipped,
-                            "lines_skipped"_a = s.linesSkipped);
+                            "lines_skipped"_a = s.linesSkipped,
+                            "precision"_a = io::toString(s.precision));
         return py::make_tuple(PyMesh(std::move(loaded.mesh)), statistics);
       },
       "path"_a,
       "load(path) and what the import found beside the triangles: (mesh, dict with meshes, "
-      "source_vertices, points_skipped, lines_skipped).");
+      "source_vertices, points_skipped, lines_skipped, precision: 'exact' where the vertices are "
+      "the file's numbers (OFF, PLY, OBJ, STL), 'single' where assimp rounded them to single "
+      "precision (glTF, 3DS, ...)).");
   module.def(
       "save",
       [](const PyMesh& mesh, const std::filesystem::path& path) {

@@ -4,16 +4,20 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "delta/core/contact_point.h"
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/kernels/triangle_batch.h"
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
@@ -24,6 +28,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "handles.h"
+#include "interrupt.h"
 #include "records.h"
 
 namespace delta::python {
@@ -44,69 +49,147 @@ py::array contactArray(std::vector<ContactPoint>&& contacts) {
 }
 
 /// A structured array with (at least) the fields of contact_dtype, in any layout, as Δ's contact
-/// points (field by field: a sliced, reordered or user-built array works).
+/// points (field by field: a sliced, reordered or user-built array works). Every field must hold
+/// what contact_dtype holds: real numbers (finite) for x, normal, direction and distance (not
+/// negative), integers in the uint32 range for the triangle ids, booleans for overlap; TypeError
+/// for another kind, delta::Error naming the record and field for a value out of range.
 std::vector<ContactPoint> contactsFrom(const ArrayLike& given) {
   const py::array records = py::array::ensure(given.object);
   if (!records || !records.dtype().has_fields() || records.ndim() != 1)
-    throw Error("contacts must be a one-dimensional structured array of delta.contact_dtype");
+    throw py::type_error(
+        "contacts must be a one-dimensional structured array of delta.contact_dtype");
   const std::size_t count = static_cast<std::size_t>(records.shape(0));
   const py::object fields = records.dtype().attr("fields");
-  // The field as a C-contiguous array of T with `width` values a record.
-  const auto column = [&]<typename T>(const char* name, std::size_t width, T) {
+  // The field, checked to be of `kinds`, as a C-contiguous array of T with `width` values a
+  // record.
+  const auto column = [&]<typename T>(const char* name, std::size_t width, const char* kinds, T) {
     if (!fields.contains(name))
       throw Error(std::string("contacts have no field '") + name + "' (delta.contact_dtype)");
+    const py::array field = records[name];
+    const py::dtype dtype = field.dtype();
+    if (std::string(kinds).find(dtype.kind()) == std::string::npos ||
+        (dtype.kind() == 'f' && dtype.itemsize() > 8))
+      throw py::type_error(std::string("contacts: the field '") + name + "' must hold " +
+                           (kinds[0] == 'b'   ? "booleans"
+                            : kinds[0] == 'i' ? "integers"
+                                              : "real numbers") +
+                           ", not " +
+                           py::str(static_cast<const py::handle&>(dtype)).cast<std::string>() +
+                           " (delta.contact_dtype)");
     using Column = py::array_t<T, py::array::c_style | py::array::forcecast>;
-    const Column values = Column::ensure(records[name]);
+    if constexpr (std::is_same_v<T, double>) requireExactIntegers(field, name);
+    if constexpr (std::is_same_v<T, std::int64_t>) {
+      if (dtype.kind() == 'u' && dtype.itemsize() == 8) {
+        // Beyond int64: out of the uint32 range anyway.
+        using Unsigned = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
+        const Unsigned values = Unsigned::ensure(field);
+        for (py::ssize_t i = 0; i < values.size(); ++i)
+          if (values.data()[i] > std::numeric_limits<std::uint32_t>::max())
+            throw Error("contacts: record " + std::to_string(i) + " has '" + name + "' " +
+                        std::to_string(values.data()[i]) + ", not a triangle id (uint32)");
+      }
+    }
+    const Column values = Column::ensure(field);
     if (!values || static_cast<std::size_t>(values.size()) != width * count)
       throw Error(std::string("contacts: the field '") + name + "' must hold " +
                   std::to_string(width) + " number(s) a record (delta.contact_dtype)");
     return values;
   };
-  const auto x = column("x", 3, 0.0), normal = column("normal", 3, 0.0),
-             direction = column("direction", 3, 0.0), distance = column("distance", 1, 0.0);
-  const auto first = column("triangle_a", 1, std::uint32_t{}),
-             second = column("triangle_b", 1, std::uint32_t{});
-  const auto overlap = column("overlap", 1, false);
+  const auto x = column("x", 3, "iuf", 0.0), normal = column("normal", 3, "iuf", 0.0),
+             direction = column("direction", 3, "iuf", 0.0),
+             distance = column("distance", 1, "iuf", 0.0);
+  const auto first = column("triangle_a", 1, "iu", std::int64_t{}),
+             second = column("triangle_b", 1, "iu", std::int64_t{});
+  const auto overlap = column("overlap", 1, "b", false);
+  // Records made before the penalty solver reported convergence have no such field.
+  std::optional<py::array_t<bool, py::array::c_style | py::array::forcecast>> converged;
+  if (fields.contains("converged")) converged = column("converged", 1, "b", false);
   std::vector<ContactPoint> contacts(count);
   const std::span<const Vec3> xs = asVec3(x), normals = asVec3(normal),
                               directions = asVec3(direction);
-  for (std::size_t i = 0; i < count; ++i)
-    contacts[i] = {
-        xs[i],           normals[i],      directions[i], distance.data()[i], overlap.data()[i],
-        first.data()[i], second.data()[i]};
+  const auto refuse = [](std::size_t i, const char* field, const std::string& value,
+                         const char* wanted) {
+    throw Error("contacts: record " + std::to_string(i) + " has '" + field + "' " + value +
+                ", not " + wanted);
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!isFinite(xs[i])) refuse(i, "x", toString(xs[i]), "finite numbers");
+    if (!isFinite(normals[i])) refuse(i, "normal", toString(normals[i]), "finite numbers");
+    if (!isFinite(directions[i])) refuse(i, "direction", toString(directions[i]), "finite numbers");
+    const double d = distance.data()[i];
+    if (!(std::isfinite(d) && d >= 0.0))
+      refuse(i, "distance", toString(d), "a finite distance >= 0");
+    const std::int64_t a = first.data()[i], b = second.data()[i];
+    constexpr std::int64_t kMaxId = std::numeric_limits<std::uint32_t>::max();
+    if (a < 0 || a > kMaxId) refuse(i, "triangle_a", std::to_string(a), "a triangle id (uint32)");
+    if (b < 0 || b > kMaxId) refuse(i, "triangle_b", std::to_string(b), "a triangle id (uint32)");
+    ContactPoint& contact = contacts[i];
+    contact.x = xs[i];
+    contact.normal = normals[i];
+    contact.direction = directions[i];
+    contact.distance = d;
+    contact.overlap = overlap.data()[i];
+    if (converged) contact.converged = converged->data()[i];
+    contact.first = static_cast<std::uint32_t>(a);
+    contact.second = static_cast<std::uint32_t>(b);
+  }
   return contacts;
 }
 
-/// `out`, checked: it can take the answers of a points query whose result has this shape.
-py::array checkedOutput(const py::array& out, const std::vector<py::ssize_t>& shape) {
+/// `out`, checked: it can take the answers of a points query whose result has this shape, and
+/// shares no memory with the points.
+py::array checkedOutput(const py::array& out, const std::vector<py::ssize_t>& shape,
+                        const DoubleArray& points) {
   if (!out.dtype().equal(distanceDtype()))
-    throw Error("out must have dtype delta.distance_dtype, not " +
-                py::str(out.dtype()).cast<std::string>());
+    throw py::type_error("out must have dtype delta.distance_dtype, not " +
+                         py::str(static_cast<const py::handle&>(out.dtype())).cast<std::string>());
   bool same = out.ndim() == static_cast<py::ssize_t>(shape.size());
   for (std::size_t axis = 0; same && axis < shape.size(); ++axis)
     same = out.shape(static_cast<py::ssize_t>(axis)) == shape[axis];
-  if (!same) throw Error("out must have the shape of points without their last axis");
+  if (!same)
+    throw Error("out must have the shape of points without their last axis, not " + shapeOf(out));
   if (!(out.flags() & py::array::c_style)) throw Error("out must be C-contiguous");
   if (!out.writeable()) throw Error("out must be writeable");
+  if (overlaps(out, points))
+    throw Error(
+        "out shares memory with points: the answers would overwrite the points being "
+        "asked about; pass a separate array");
   return out;
 }
 
 py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<double> epsilon,
-                   bool signedDistance, std::optional<py::array> out) {
+                   bool signedDistance, std::optional<py::object> out) {
   const DoubleArray coordinates = pointArray(points, "points", false);
   const std::vector<py::ssize_t> shape(coordinates.shape(),
                                        coordinates.shape() + coordinates.ndim() - 1);
-  py::array answers = out ? checkedOutput(*out, shape) : py::array(distanceDtype(), shape);
+  std::optional<py::array> given;
+  if (out) {
+    if (!py::isinstance<py::array>(*out))
+      throw py::type_error("out must be a NumPy array of delta.distance_dtype, not " +
+                           py::str(py::type::handle_of(*out).attr("__name__")).cast<std::string>());
+    given = checkedOutput(py::reinterpret_borrow<py::array>(*out), shape, coordinates);
+  }
   const std::span<const Vec3> query = asVec3(coordinates);
-  const std::span<cd::PointDistance> written(
-      static_cast<cd::PointDistance*>(answers.mutable_data()), query.size());
   cd::PointQuery request;
   if (epsilon) request.epsilon = *epsilon;
   request.signedDistance = signedDistance;
+  // Into a new array, or for `out` into a scratch one copied at the end: a query stopped by an
+  // error or Ctrl-C leaves `out` as it was, never half-written.
+  std::vector<cd::PointDistance> scratch;
+  py::array answers = given ? *given : py::array(distanceDtype(), shape);
   {
+    const SignalScope interruptible;
     py::gil_scoped_release release;
-    cd::distances(mesh.prepare(), query, request, written);
+    if (given) {
+      scratch.resize(query.size());
+      cd::distances(mesh.prepare(), query, request, scratch);
+    } else {
+      cd::distances(mesh.prepare(), query, request,
+                    {static_cast<cd::PointDistance*>(answers.mutable_data()), query.size()});
+    }
   }
+  if (given && !scratch.empty())
+    std::memcpy(answers.mutable_data(), scratch.data(), scratch.size() * sizeof(cd::PointDistance));
   return answers;
 }
 
@@ -187,8 +270,10 @@ Returns a structured array of delta.contact_dtype, one record a pair, sorted by 
 triangle_b): `x` (3,) midway between the closest points P on a and Q on b, `normal` (3,) = P - x
 (length distance / 2), `direction` (3,) the unit vector from b toward a (defined also for
 touching and intersecting triangles), `distance` |P - Q|, `overlap` (the triangles intersect, or
-x lies inside both closed meshes), `triangle_a`, `triangle_b` (uint32, the meshes' triangle
-order). `method`: "hybrid" (exact, fastest), "bruteforce" (exact) or "penalty" (approximate).
+x lies inside both closed meshes), `converged` (always True for the exact methods; for "penalty"
+whether its Newton iteration certified the pair: read it before trusting the distance),
+`triangle_a`, `triangle_b` (uint32, the meshes' triangle order). `method`: "hybrid" (exact,
+fastest), "bruteforce" (exact) or "penalty" (approximate).
 The same records as `delta contact A B --eps E --out FILE.csv`. delta.Error when eps is not
 finite and positive.)");
   module.def(
@@ -197,6 +282,7 @@ finite and positive.)");
         const DoubleArray coordinates = pointArray(points, "points", true);
         std::vector<ContactPoint> found;
         {
+          const SignalScope interruptible;
           py::gil_scoped_release release;
           found = cd::contacts(mesh.prepare(), asVec3(coordinates), epsilon);
         }
@@ -206,7 +292,7 @@ finite and positive.)");
       "Every point of `points` (n, 3) closer than eps to the mesh, in point order, as records of "
       "delta.contact_dtype: the point is the first geometry (triangle_a = its index, P = the "
       "point), the mesh the second (Q = the closest point, triangle_b its triangle); `overlap` = "
-      "inside a closed mesh.");
+      "inside a closed mesh. Ctrl-C stops it (KeyboardInterrupt).");
   module.def("distance", &distance, "mesh"_a, "points"_a, "eps"_a = py::none(), "signed"_a = false,
              py::kw_only(), "out"_a = py::none(),
              R"(The distance from every point to the mesh (a Mesh or a QueryMesh).
@@ -218,8 +304,12 @@ less the last axis, written in place by the query: `distance` (unsigned; +inf be
 delta.NO_TRIANGLE beyond eps), `inside` (with signed=True; the mesh must be closed, delta.Error
 otherwise). The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
 delta.signed_distance(r) computes it. `eps`: answer only points closer than eps (faster: the
-search stops near the root for the others). `out`: an array of delta.distance_dtype and that
-shape to write into instead of allocating (returned). Exactly `delta distance MESH --points FILE`.)");
+search stops near the root for the others). `out`: a C-contiguous, writeable array of
+delta.distance_dtype and that shape, sharing no memory with the points (delta.Error otherwise),
+to put the answers in instead of a new array (returned); they are computed into a scratch buffer
+and copied into `out` at the end, so that an error or Ctrl-C leaves `out` as it was. On the main
+thread, Ctrl-C stops the query within some tens of milliseconds (KeyboardInterrupt). Exactly
+`delta distance MESH --points FILE`.)");
   module.def(
       "filter",
       [](const ArrayLike& contacts, double h) {

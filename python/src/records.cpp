@@ -18,14 +18,15 @@ static_assert(std::is_standard_layout_v<contactdetection::PointDistance> &&
               std::is_trivially_copyable_v<contactdetection::PointDistance>);
 static_assert(sizeof(bool) == 1, "NumPy's bool is one byte");
 
-constexpr const char* kContactNames[] = {"x",       "normal",     "direction", "distance",
-                                         "overlap", "triangle_a", "triangle_b"};
-constexpr const char* kContactFormats[] = {"(3,)f8", "(3,)f8", "(3,)f8", "f8", "?", "u4", "u4"};
+constexpr const char* kContactNames[] = {"x",       "normal",    "direction",  "distance",
+                                         "overlap", "converged", "triangle_a", "triangle_b"};
+constexpr const char* kContactFormats[] = {"(3,)f8", "(3,)f8", "(3,)f8", "f8",
+                                           "?",      "?",      "u4",     "u4"};
 constexpr std::size_t kContactOffsets[] = {
     offsetof(ContactPoint, x),         offsetof(ContactPoint, normal),
     offsetof(ContactPoint, direction), offsetof(ContactPoint, distance),
-    offsetof(ContactPoint, overlap),   offsetof(ContactPoint, first),
-    offsetof(ContactPoint, second)};
+    offsetof(ContactPoint, overlap),   offsetof(ContactPoint, converged),
+    offsetof(ContactPoint, first),     offsetof(ContactPoint, second)};
 
 }  // namespace
 

@@ -103,13 +103,25 @@ def test_inputs_are_converted_when_needed():
         ([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]], r"shape \(n, 3\)"),
         ([0, 0, 0, 1, 0, 0, 0, 1, 0], [[0, 1, 2]], r"shape \(n, 3\)"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2, 0]], r"shape \(m, 3\)"),
-        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2.0]], "integers"),
-        ([["a", "b", "c"]] * 3, [[0, 1, 2]], "real numbers"),
-        (np.zeros((3, 3), dtype=complex), [[0, 1, 2]], "real numbers"),
     ],
 )
 def test_bad_meshes_raise_delta_error(vertices, triangles, message):
     with pytest.raises(delta.Error, match=message):
+        delta.Mesh(vertices, triangles)
+
+
+@pytest.mark.parametrize(
+    "vertices, triangles, message",
+    [
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2.0]], "integers"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, True]], "integers, not booleans"),
+        ([["a", "b", "c"]] * 3, [[0, 1, 2]], "real numbers"),
+        (np.zeros((3, 3), dtype=complex), [[0, 1, 2]], "real numbers"),
+        ([[0, 0, 0], [1, 0, 0], [0, True, 0]], [[0, 1, 2]], "not booleans"),
+    ],
+)
+def test_meshes_of_what_is_not_numbers_raise_type_error(vertices, triangles, message):
+    with pytest.raises(TypeError, match=message):
         delta.Mesh(vertices, triangles)
 
 
@@ -169,10 +181,32 @@ def test_save_and_load_round_trip(tmp_path, extension):
     assert loaded.triangle_count == mesh.triangle_count
     # The same triangles in the same order, coordinates rounded to single precision.
     original = mesh.vertices[mesh.triangles].astype(np.float32).astype(np.float64)
-    np.testing.assert_array_equal(loaded.vertices[loaded.triangles], original)
+    corners = loaded.vertices[loaded.triangles]
+    if extension == "obj":  # text with 9 significant digits, read exactly: they name the float
+        corners = corners.astype(np.float32).astype(np.float64)
+    np.testing.assert_array_equal(corners, original)
     again, statistics = delta.load_with_statistics(path)
     np.testing.assert_array_equal(again.vertices, loaded.vertices)
     assert statistics["points_skipped"] == 0 and statistics["meshes"] >= 1
+    assert statistics["precision"] == "exact"
+
+
+def test_load_reads_decimals_exactly_and_reports_precision(tmp_path, meshes):
+    path = tmp_path / "tricky.dat"  # OFF by its content, whatever the extension
+    path.write_text("OFF\n4 4 0\n0.1 0.2 0.30000000000000004\n1e6 1e6 1e6\n"
+                    "1000000.001 1e6 1e6\n1e6 1000000.001 1e6\n"
+                    "3 0 1 2\n3 1 2 3\n3 0 2 3\n3 0 3 1\n")
+    mesh, statistics = delta.load_with_statistics(path)
+    np.testing.assert_array_equal(
+        mesh.vertices, [[0.1, 0.2, 0.30000000000000004], [1e6, 1e6, 1e6],
+                        [1000000.001, 1e6, 1e6], [1e6, 1000000.001, 1e6]])
+    assert statistics["precision"] == "exact"
+    _, gltf = delta.load_with_statistics(
+        meshes.parent / "assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf")
+    assert gltf["precision"] == "single"
+    (tmp_path / "huge.off").write_text("OFF\n3 1 0\n0 0 0\n1e999 0 0\n0 1 0\n3 0 1 2\n")
+    with pytest.raises(delta.Error, match="line 4.*1e999"):
+        delta.load(tmp_path / "huge.off")
 
 
 def test_load_and_save_errors_name_the_file(tmp_path):

@@ -14,6 +14,7 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta {
 namespace detail {
@@ -319,6 +320,7 @@ void requireContained(const SpatialCacheState& state, const Vec3& p, const char*
 
 void validate(const TriangleSoA& triangles, const CacheOptions& options) {
   if (triangles.size() == 0) throw Error("SpatialCache: the mesh has no triangles");
+  checkMeshScale(triangles, "SpatialCache: the mesh");
   if (triangles.size() > std::numeric_limits<std::uint32_t>::max())
     throw Error("SpatialCache: " + std::to_string(triangles.size()) +
                 " triangles, more than 32-bit ids can name");

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <string>
 
+#include "delta/core/cancel.h"
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/memory.h"
 
 namespace delta::ib {
 namespace {
@@ -52,7 +54,54 @@ double largestDisplacement(const Aabb& box, const RigidTransform& from, const Ri
   return largest;
 }
 
-GridOptions checked(GridOptions options, const QueryMesh& boundary) {
+/// Cells or vertices a serial loop of a build goes through between two polls for cancellation
+/// (core/cancel.h): some milliseconds of hashing and bookkeeping.
+constexpr std::size_t kCellsBetweenPolls = std::size_t{1} << 14;
+
+/// What a grid needs a cell, as measured (peak resident memory over cells, all levels counted:
+/// 345 MB for 1.74 million cells, levels 8 around granulate:1): the cell, its share of the
+/// vertices (their keys, distances, hash table) and of the query batches.
+constexpr double kBytesPerCell = 200.0;
+
+/// The boundary's area (a rigid motion keeps it).
+double surfaceArea(const QueryMesh& boundary) {
+  const TriangleSoA& triangles = boundary.triangles();
+  double area = 0.0;
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    area += 0.5 * length(triangles.triangle(t).areaVector());
+  return area;
+}
+
+/// Refuses a build's next level before its cells are made when the grid it leads to would not
+/// fit. `refined` cells of `level` (of `levels`) are to be split, `cells` are made so far. The
+/// finest level's cells are estimated two ways and the smaller is taken (each errs on its own
+/// side): extrapolated, 8·refined·4^(levels − 1 − level), since a surface's band of refined cells
+/// quadruples each finer level once the cells are smaller than its features (fewer before); and
+/// from the band itself, `finestBand` cells (the boundary's area over the finest cell's face,
+/// times the band's width in cells; more where parts of the boundary lie closer than the band).
+/// Throws delta::Error with the estimate and the limit: more cells in a level than 32-bit indices
+/// hold, or more memory than core/memory.h allows.
+void requireRoomToRefine(std::size_t refined, int level, int levels, std::size_t cells,
+                         double finestBand) {
+  if (refined == 0) return;
+  const double next = 8.0 * static_cast<double>(refined);  // made now
+  const double extrapolated = next * std::pow(4.0, levels - 1 - level);
+  const double finest = std::max(next, std::min(extrapolated, finestBand));
+  const double total = static_cast<double>(cells) + finest * 4.0 / 3.0;  // 1 + 1/4 + 1/16 ...
+  const std::string estimate = "levels " + std::to_string(levels) + ": about " +
+                               toString(std::round(finest)) + " cells at level " +
+                               std::to_string(levels) + " (estimated from the " +
+                               std::to_string(refined) + " cells refined at level " +
+                               std::to_string(level) + " and the boundary's area)";
+  if (finest >= static_cast<double>(Cell::kLeaf))
+    throw Error("AdaptiveGrid: " + estimate + ", more than the " + std::to_string(Cell::kLeaf) +
+                " a level's 32-bit indices hold; it would need about " +
+                describeBytes(total * kBytesPerCell) + " of memory: use fewer levels");
+  requireMemory(total * kBytesPerCell, "AdaptiveGrid: " + estimate);
+}
+
+/// Throws delta::Error naming the first option out of its range.
+void check(const GridOptions& options, const QueryMesh& boundary) {
   if (options.levels < 1 || options.levels > kMaxLevels)
     throw Error("GridOptions: levels " + std::to_string(options.levels) + " must be 1 to " +
                 std::to_string(kMaxLevels));
@@ -62,33 +111,50 @@ GridOptions checked(GridOptions options, const QueryMesh& boundary) {
   if (!(std::isfinite(options.padding) && options.padding >= 0.0))
     throw Error("GridOptions: padding " + toString(options.padding) +
                 " must be finite and not negative");
-  if (!std::isnan(options.exactBand) && !(options.exactBand >= 0.0))
-    throw Error("GridOptions: exactBand " + toString(options.exactBand) + " must not be negative");
-  if (options.domain.empty()) {
-    const Aabb box = currentBounds(boundary);
+  if (options.exactBand && !(*options.exactBand >= 0.0))
+    throw Error("GridOptions: exactBand " + toString(*options.exactBand) +
+                " must not be negative or NaN (leave it unset for the default)");
+  if (options.domain) {
+    const Aabb& box = *options.domain;
     const Vec3 extent = box.extent();
-    const double side = std::max({extent.x, extent.y, extent.z}) * (1.0 + 2.0 * options.padding);
-    const Vec3 half = Vec3{side, side, side} * 0.5;
-    options.domain = {box.center() - half, box.center() + half};
+    if (!isFinite(box.lower) || !isFinite(box.upper) || !(extent.x > 0.0) || !(extent.y > 0.0) ||
+        !(extent.z > 0.0))
+      throw Error("GridOptions: domain " + toString(box.lower) + " to " + toString(box.upper) +
+                  " must be finite with lower < upper on every axis");
   }
-  const Vec3 extent = options.domain.extent();
-  if (!isFinite(options.domain.lower) || !isFinite(options.domain.upper) || !(extent.x > 0.0) ||
-      !(extent.y > 0.0) || !(extent.z > 0.0))
-    throw Error("GridOptions: domain " + toString(options.domain.lower) + " to " +
-                toString(options.domain.upper) + " must be finite with a positive extent");
   if (options.signedDistance && !boundary.closed())
     throw Error("signed distances need a closed boundary, and this one is not (" +
                 describeDefects(boundary.topology()) +
                 "); unsigned distances work (GridOptions::signedDistance = false)");
-  return options;
+}
+
+/// The domain of checked options: the one given, or the boundary's box made a cube and padded.
+Aabb domainOf(const GridOptions& options, const QueryMesh& boundary) {
+  if (options.domain) return *options.domain;
+  const Aabb box = currentBounds(boundary);
+  const Vec3 extent = box.extent();
+  const double side = std::max({extent.x, extent.y, extent.z}) * (1.0 + 2.0 * options.padding);
+  const Vec3 half = Vec3{side, side, side} * 0.5;
+  const Aabb domain{box.center() - half, box.center() + half};
+  const Vec3 size = domain.extent();
+  if (!isFinite(domain.lower) || !isFinite(domain.upper) || !(size.x > 0.0) || !(size.y > 0.0) ||
+      !(size.z > 0.0))
+    throw Error("GridOptions: the default domain " + toString(domain.lower) + " to " +
+                toString(domain.upper) +
+                " around the boundary must be finite with a positive extent (do its vertices "
+                "all coincide?)");
+  return domain;
 }
 
 }  // namespace
 
 AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options)
-    : boundary_(boundary), options_(checked(options, boundary)) {
+    : boundary_(boundary), options_(options) {
+  check(options_, boundary_);
+  domain_ = domainOf(options_, boundary_);
+  options_.domain = domain_;
   resolution_ = std::uint32_t{1} << options_.levels;
-  exactBand_ = std::isnan(options_.exactBand) ? cellDiagonal(options_.levels) : options_.exactBand;
+  exactBand_ = options_.exactBand ? *options_.exactBand : cellDiagonal(options_.levels);
   rebuildTable(1024);
   poses_.push_back(boundary_.pose());
   refine();
@@ -101,6 +167,7 @@ const GridStatistics& AdaptiveGrid::moveBoundary(const RigidTransform& motion) {
 }
 
 const GridStatistics& AdaptiveGrid::moveBoundaryTo(const RigidTransform& pose) {
+  const CancelScope uninterruptible({});  // a move stopped half-way would leave no valid grid
   boundary_.setPose(pose);
   poses_.push_back(boundary_.pose());
   refine();
@@ -135,8 +202,8 @@ Vec3 AdaptiveGrid::position(std::uint32_t v) const noexcept {
 
 Vec3 AdaptiveGrid::positionOfKey(std::uint64_t key) const noexcept {
   const double scale = 1.0 / resolution_;
-  const Vec3& lower = options_.domain.lower;
-  const Vec3 extent = options_.domain.extent();
+  const Vec3& lower = domain_.lower;
+  const Vec3 extent = domain_.extent();
   constexpr std::uint64_t mask = (std::uint64_t{1} << 21) - 1;
   return {lower.x + extent.x * (double(key & mask) * scale),
           lower.y + extent.y * (double((key >> 21) & mask) * scale),
@@ -158,7 +225,7 @@ std::vector<double> AdaptiveGrid::errorBounds() const {
 }
 
 double AdaptiveGrid::cellDiagonal(int level) const noexcept {
-  return length(options_.domain.extent()) / double(std::uint64_t{1} << level);
+  return std::ldexp(length(domain_.extent()), -level);
 }
 
 void AdaptiveGrid::refine() {
@@ -166,7 +233,7 @@ void AdaptiveGrid::refine() {
   statistics_ = {};
   const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
   // How far each remembered distance may be off now (0 for this pose).
-  const double roundingScale = kRoundingAllowance * length(options_.domain.extent());
+  const double roundingScale = kRoundingAllowance * length(domain_.extent());
   slackOfEpoch_.resize(poses_.size());
   for (std::uint32_t epoch = 0; epoch < now; ++epoch)
     slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
@@ -194,6 +261,7 @@ void AdaptiveGrid::refine() {
   }
 
   std::vector<std::uint8_t> decision;  // per cell: 0 keep a leaf, 1 refine, 2 in doubt
+  double finestBand = -1.0;            // a build's estimate of its finest cells, once needed
   std::size_t carried = 0;
   for (int level = 0;; ++level) {
     std::vector<Cell>& cells = levels_[level];
@@ -210,6 +278,7 @@ void AdaptiveGrid::refine() {
     decision.assign(cells.size(), 0);
     ++pass_;
     for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (i % kCellsBetweenPolls == 0) pollCancellation();
       double lowest = std::numeric_limits<double>::infinity();
       double highest = std::numeric_limits<double>::infinity();
       for (std::uint32_t v : cells[i].corners) {
@@ -234,11 +303,30 @@ void AdaptiveGrid::refine() {
       decision[i] = lowest < threshold ? 1 : 0;
     }
 
+    if (old.empty()) {  // a build; a move, never stopped half-way, keeps about its cell count
+      if (finestBand < 0.0) {
+        // (4√3·F + 3)·A/h² finest cells, h the side of a finest cell: the band refined at level
+        // L − 1 is about 2·(F·√3·2h + 1.5h) wide, each of its cells split in 8 (measured on
+        // granulate:1 with F = 1: 9.86·A/h², where this gives 9.93).
+        const Vec3 cell = domain_.extent() / double(std::uint64_t{1} << options_.levels);
+        const double side = std::cbrt(cell.x * cell.y * cell.z);
+        finestBand = std::min((4.0 * std::sqrt(3.0) * options_.refineFactor + 3.0) *
+                                  surfaceArea(boundary_) / (side * side),
+                              std::pow(8.0, options_.levels));
+      }
+      std::size_t cellsSoFar = 0;
+      for (int coarser = 0; coarser <= level; ++coarser)
+        cellsSoFar += levels_[coarser].size();
+      requireRoomToRefine(static_cast<std::size_t>(std::count(decision.begin(), decision.end(), 1)),
+                          level, options_.levels, cellsSoFar, finestBand);
+    }
+
     // The next level: the children of refined cells, carried over where they were refined before.
     std::vector<Cell>& next = levels_[level + 1];
     nextFromOld.clear();
     const std::uint32_t half = (resolution_ >> level) / 2;
     for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (i % kCellsBetweenPolls == 0) pollCancellation();
       Cell& cell = cells[i];
       if (decision[i] == 0) {
         cell.firstChild = Cell::kLeaf;
@@ -291,6 +379,7 @@ void AdaptiveGrid::refine() {
   compact();
   // The band: every vertex that may be within exactBand gets its exact distance.
   ++pass_;
+  pollCancellation();
   for (std::uint32_t v = 0; v < keys_.size(); ++v)
     if (epoch_[v] != now && std::abs(distance_[v]) - slackOfEpoch_[epoch_[v]] <= exactBand_)
       queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);

@@ -10,10 +10,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
 #include <limits>
 #include <new>
-#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -24,7 +22,11 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/mat3.h"
-#include "delta/io/detail/format_checks.h"
+#include "delta/io/atomic_file.h"
+#include "delta/io/detail/file_read.h"
+#include "delta/io/detail/isolated_import.h"
+#include "delta/io/detail/mesh_readers.h"
+#include "delta/io/detail/text_scan.h"
 #include "delta/io/detail/vertex_join.h"
 
 namespace delta::io {
@@ -56,60 +58,39 @@ std::string describe(double x, double y, double z) {
   return toString(Vec3{x, y, z});
 }
 
-// ----- The file, before assimp reads it -----
+// ----- Δ's own readers -----
 
-/// The size of the regular, non-empty file at `path`.
-std::uintmax_t requireNonEmptyFile(const fs::path& path) {
-  std::error_code error;
-  const fs::file_status status = fs::status(path, error);
-  if (status.type() == fs::file_type::not_found) throw Error("no such file");
-  if (error) throw Error(error.message());
-  if (fs::is_directory(status)) throw Error("it is a directory, not a file");
-  if (!fs::is_regular_file(status)) throw Error("it is not a regular file");
-  const std::uintmax_t size = fs::file_size(path, error);
-  if (error) throw Error(error.message());
-  if (size == 0) throw Error("file is empty");
-  return size;
-}
+/// What assimp's child process may use (detail::IsolationLimits): 4 GiB of address space
+/// beyond the caller's, plus 64 bytes a byte of the file (assimp's scene of a compact binary
+/// format takes tens of times its size); a minute of processor time; two minutes in all.
+constexpr std::uint64_t kAssimpAddressSpaceBytes = std::uint64_t{4} << 30;
+constexpr std::uint64_t kAssimpAddressSpacePerFileByte = 64;
+constexpr unsigned kAssimpCpuSeconds = 60;
+constexpr unsigned kAssimpWallSeconds = 120;
 
-std::ifstream openForReading(const fs::path& path) {
-  errno = 0;
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
-    const std::string reason = errno != 0 ? std::generic_category().message(errno) : "unknown";
-    throw Error("cannot open it for reading: " + reason);
+/// Bytes read first to recognise the format: more than any signature needs (`solid` ... `facet`
+/// after a long name, an OFF keyword after a block of comments, the binary STL header).
+constexpr std::uintmax_t kHeadBytes = 4096;
+
+detail::TriangleSoup readOwnFormat(detail::MeshFormat format, const detail::RegularFile& file,
+                                   std::string_view head) {
+  // From the head alone, so that a sparse file of gigabytes named .ply is not read whole to say
+  // that it does not start with "ply".
+  detail::requireFormatStart(format, head, file.size());
+  const std::string bytes = file.readAll();
+  switch (format) {
+    case detail::MeshFormat::off:
+      return detail::readOff(bytes);
+    case detail::MeshFormat::ply:
+      return detail::readPly(bytes);
+    case detail::MeshFormat::obj:
+      return detail::readObj(bytes);
+    case detail::MeshFormat::stl:
+      return detail::readStl(bytes);
+    case detail::MeshFormat::other:
+      break;
   }
-  return file;
-}
-
-/// The first `count` bytes of the file (all of it: `count` is its size, or fewer).
-std::string readStart(const fs::path& path, std::uintmax_t count) {
-  std::ifstream file = openForReading(path);
-  std::string bytes(static_cast<std::size_t>(count), '\0');
-  file.read(bytes.data(), static_cast<std::streamsize>(count));
-  if (file.gcount() != static_cast<std::streamsize>(count))
-    throw Error("read " + std::to_string(file.gcount()) + " of " + std::to_string(count) +
-                " bytes");
-  return bytes;
-}
-
-/// Formats whose assimp reader returns wrong geometry for some damaged files without an error
-/// are checked first (format_checks.h); any other file need only open. Returns the text assimp
-/// should read instead of the file: OFF rewritten by detail::offForAssimp.
-std::optional<std::string> checkContent(const fs::path& path, std::uintmax_t size) {
-  const std::string extension = lowerCaseExtension(path);
-  if (extension == ".off") {
-    std::string text = detail::offForAssimp(readStart(path, size));
-    detail::checkOff(text);
-    return text;
-  }
-  if (extension == ".obj") detail::checkObj(readStart(path, size));
-  if (extension == ".ply") detail::checkPly(readStart(path, size));
-  if (extension == ".stl" && !detail::isBinaryStlOfAnnouncedSize(
-                                 readStart(path, std::min<std::uintmax_t>(size, 84)), size))
-    detail::checkStl(readStart(path, size));
-  openForReading(path);
-  return std::nullopt;
+  throw Error("no reader of Δ's own for this format");
 }
 
 // ----- assimp's scene -----
@@ -156,19 +137,16 @@ RawPrimitives checkRawScene(const aiScene& scene) {
   return primitives;
 }
 
-/// Reads the file (or `offText`, the file's text prepared for assimp's OFF reader), checks what
-/// the importer made and triangulates it. The scene belongs to `importer`.
-const aiScene& importScene(Assimp::Importer& importer, const fs::path& path,
-                           const std::optional<std::string>& offText) {
+/// Reads the file, checks what the importer made and triangulates it. The scene belongs to
+/// `importer`.
+const aiScene& importScene(Assimp::Importer& importer, const fs::path& path) {
   // Animation formats (MD5, BVH) would otherwise invent a mesh for a skeleton.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
   const auto failed = [&importer] {
     const std::string reason = importer.GetErrorString();
     return Error(reason.empty() ? "assimp could not read it" : reason);
   };
-  const aiScene* raw = offText
-                           ? importer.ReadFileFromMemory(offText->data(), offText->size(), 0, "off")
-                           : importer.ReadFile(path.string(), 0);
+  const aiScene* raw = importer.ReadFile(path.string(), 0);
   if (raw == nullptr) throw failed();
   const RawPrimitives primitives = checkRawScene(*raw);
   if (primitives.polygons == 0)
@@ -201,12 +179,7 @@ struct Placement {
 constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint32_t kUsed = 0;
 
-/// All triangles of the scene with their vertices placed, before vertices are joined.
-struct TriangleSoup {
-  std::vector<Vec3> positions;
-  std::vector<TriangleIndices> triangles;  ///< indices into `positions`
-  LoadStatistics statistics;
-};
+using detail::TriangleSoup;
 
 /// Appends the vertices of `mesh` that `soupIndex` marks as used, in the mesh's order, placed,
 /// and records where each went.
@@ -281,6 +254,7 @@ void addNodeMeshes(const aiScene& scene, const aiNode& node, const Placement& pl
 TriangleSoup mergeScene(const aiScene& scene) {
   if (scene.mRootNode == nullptr) throw Error("the scene has no root node");
   TriangleSoup soup;
+  soup.statistics.precision = CoordinatePrecision::single;
   std::vector<std::pair<const aiNode*, Placement>> pending{{scene.mRootNode, Placement{}}};
   std::unordered_set<const aiNode*> visited;
   while (!pending.empty()) {
@@ -301,6 +275,9 @@ TriangleSoup mergeScene(const aiScene& scene) {
 }
 
 LoadedMesh joinVertices(TriangleSoup soup) {
+  if (soup.triangles.empty())
+    throw Error("the file has no triangles, only " + std::to_string(soup.statistics.pointsSkipped) +
+                " points and " + std::to_string(soup.statistics.linesSkipped) + " lines");
   detail::JoinedVertices joined = detail::joinIdenticalVertices(soup.positions);
   for (TriangleIndices& triangle : soup.triangles)
     for (std::uint32_t& index : triangle)
@@ -360,11 +337,41 @@ void fillScene(aiScene& scene, const Mesh& mesh) {
 
 }  // namespace
 
+const char* toString(CoordinatePrecision precision) noexcept {
+  return precision == CoordinatePrecision::exact ? "exact" : "single";
+}
+
 LoadedMesh loadWithStatistics(const fs::path& path) {
   try {
-    const std::optional<std::string> offText = checkContent(path, requireNonEmptyFile(path));
-    Assimp::Importer importer;  // one per call: importers are not shareable between threads
-    return joinVertices(mergeScene(importScene(importer, path, offText)));
+    const detail::RegularFile file(path);
+    if (file.size() == 0) throw Error("file is empty");
+    const std::string head = file.read(0, kHeadBytes);
+    const std::string extension = lowerCaseExtension(path);
+    const bool ownExtension =
+        extension == ".off" || extension == ".ply" || extension == ".obj" || extension == ".stl";
+    // An importer only where it is asked (one per call: importers are not shareable between
+    // threads): making one makes all of assimp's readers.
+    const bool assimpReadsExtension =
+        ownExtension || Assimp::Importer().IsExtensionSupported(extension);
+    const detail::MeshFormat format =
+        detail::detectMeshFormat(head, file.size(), extension, assimpReadsExtension);
+    if (format != detail::MeshFormat::other) return joinVertices(readOwnFormat(format, file, head));
+    // No mesh format starts with 4 KiB of zeros; assimp would read such a file whole (a sparse
+    // file of gigabytes) before saying that it knows no format for it.
+    if (head.find_first_not_of('\0') == std::string::npos)
+      throw Error("its first " + std::to_string(head.size()) +
+                  " bytes are all zero: this is no mesh file");
+    // assimp's readers crash, abort or loop on some damaged files (mutated .x, .md5mesh, .mdl,
+    // .ase, .3mf, .cob files): they run in a child process, so that this process survives.
+    const detail::IsolationLimits limits{
+        kAssimpAddressSpaceBytes + kAssimpAddressSpacePerFileByte * file.size(), kAssimpCpuSeconds,
+        kAssimpWallSeconds};
+    return joinVertices(detail::runIsolated(
+        [&path] {
+          Assimp::Importer isolated;
+          return mergeScene(importScene(isolated, path));
+        },
+        limits));
   } catch (...) {
     throw Error("cannot load '" + path.string() + "': " + currentExceptionReason());
   }
@@ -376,16 +383,21 @@ Mesh load(const fs::path& path) {
 }
 
 void save(const Mesh& mesh, const fs::path& path) {
+  // Exported to memory and written by Δ, whole or not at all (AtomicFile, whose errors name the
+  // path): assimp's own file writing does not report a failed write such as a full disk.
+  Assimp::Exporter exporter;
+  const aiExportDataBlob* blob = nullptr;
   try {
     const char* format = exportFormat(path);
     aiScene scene;
     fillScene(scene, mesh);
-    Assimp::Exporter exporter;
-    if (exporter.Export(&scene, format, path.string()) != aiReturn_SUCCESS)
-      throw Error(exporter.GetErrorString());
+    blob = exporter.ExportToBlob(&scene, format);
+    if (!blob) throw Error(exporter.GetErrorString());
+    if (blob->next) throw Error("the exporter made more than one file");
   } catch (...) {
     throw Error("cannot save '" + path.string() + "': " + currentExceptionReason());
   }
+  writeFileAtomically(path, std::string_view(static_cast<const char*>(blob->data), blob->size));
 }
 
 }  // namespace delta::io

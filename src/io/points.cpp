@@ -3,14 +3,19 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <string>
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/io/detail/file_read.h"
 
 namespace delta::io {
 namespace {
+
+/// A line of three numbers needs no more than 3 × 24 characters; comments may be longer, but a
+/// line past this size is no points file's.
+constexpr std::size_t kMaxLineBytes = 4096;
+constexpr std::uintmax_t kChunkBytes = std::uintmax_t{1} << 20;
 
 bool isSeparator(char c) {
   return c == ' ' || c == '\t' || c == ',' || c == '\r';
@@ -60,14 +65,37 @@ Vec3 parseLine(std::string_view line, std::size_t number) {
 
 std::vector<Vec3> loadPoints(const std::filesystem::path& path) {
   try {
-    if (std::filesystem::is_directory(path)) throw Error("it is a directory, not a file");
-    std::ifstream file(path);
-    if (!file) throw Error("cannot open it for reading");
+    const detail::RegularFile file(path);
     std::vector<Vec3> points;
-    std::string line;
-    for (std::size_t number = 1; std::getline(file, line); ++number)
-      if (!isBlankOrComment(line)) points.push_back(parseLine(line, number));
-    if (file.bad()) throw Error("reading failed");
+    std::string line;  // a line cut across two chunks
+    std::size_t number = 1;
+    const auto takeLine = [&](std::string_view text) {
+      if (text.size() > kMaxLineBytes)
+        throw Error("line " + std::to_string(number) + " is longer than " +
+                    std::to_string(kMaxLineBytes) + " bytes: not a line of three numbers");
+      if (!isBlankOrComment(text)) points.push_back(parseLine(text, number));
+      ++number;
+    };
+    // Read in chunks, so that memory is bounded by the points, not by the file (a line without
+    // an end is refused once it passes kMaxLineBytes, not read whole).
+    for (std::uintmax_t offset = 0; offset < file.size(); offset += kChunkBytes) {
+      const std::string chunk = file.read(offset, kChunkBytes);
+      if (chunk.empty()) break;  // the file shrank
+      std::string_view rest = chunk;
+      for (std::size_t end = rest.find('\n'); end != rest.npos; end = rest.find('\n')) {
+        if (line.empty()) {
+          takeLine(rest.substr(0, end));
+        } else {
+          line.append(rest.substr(0, end));
+          takeLine(line);
+          line.clear();
+        }
+        rest.remove_prefix(end + 1);
+      }
+      line.append(rest);
+      if (line.size() > kMaxLineBytes) takeLine(line);  // throws
+    }
+    if (!line.empty()) takeLine(line);
     if (points.empty()) throw Error("it holds no points");
     return points;
   } catch (const Error& error) {

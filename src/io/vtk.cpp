@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/io/atomic_file.h"
 
 namespace delta::io {
 namespace {
@@ -176,35 +176,14 @@ std::string unstructuredGridDocument(const VtkVoxelGrid& grid, AppendedData& app
   return document("UnstructuredGrid", attributes, content + "</Cells>\n");
 }
 
-/// Writes the XML head, the appended block and the closing tags; a file that could not be
-/// written whole is removed.
+/// Writes the XML head, the appended block and the closing tags, all or nothing (AtomicFile).
 void writeDocument(const std::string& head, const AppendedData& appended,
                    const std::filesystem::path& path) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw Error("cannot open it for writing");
-  file << head;
-  file.write(appended.bytes().data(), static_cast<std::streamsize>(appended.bytes().size()));
-  file << "\n</AppendedData>\n</VTKFile>\n";
-  if (!file.flush()) {
-    file.close();
-    std::error_code ignored;
-    std::filesystem::remove(path, ignored);  // no partial file
-    throw Error("writing failed");
-  }
-}
-
-/// Writes a whole XML document that has no appended data (.pvd, .pvtp); a file that could not
-/// be written whole is removed.
-void writeText(const std::string& xml, const std::filesystem::path& path) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw Error("cannot open it for writing");
-  file << xml;
-  if (!file.flush()) {
-    file.close();
-    std::error_code ignored;
-    std::filesystem::remove(path, ignored);  // no partial file
-    throw Error("writing failed");
-  }
+  AtomicFile file(path);
+  file.write(head);
+  file.write(appended.bytes());
+  file.write("\n</AppendedData>\n</VTKFile>\n");
+  file.commit();
 }
 
 /// The PDataArray elements of a .pvtp's PPointData or PCellData: each array's name and
@@ -219,6 +198,17 @@ std::string parallelDataSection(const char* tag, const std::vector<VtkArray>& ar
            "\" NumberOfComponents=\"" + std::to_string(array.components) + "\"/>\n";
   }
   return xml + "</" + tag + ">\n";
+}
+
+/// What `make` returns (the checked data as a document), with its errors naming `path`; the
+/// writing that follows names the path itself (AtomicFile).
+template <typename Make>
+std::string documentFor(const std::filesystem::path& path, const Make& make) {
+  try {
+    return make();
+  } catch (const Error& error) {
+    throw Error("cannot write '" + path.string() + "': " + error.what());
+  }
 }
 
 }  // namespace
@@ -238,32 +228,28 @@ VtkPolyData VtkPolyData::fromPoints(std::vector<Vec3> points) {
 }
 
 void writeVtp(const VtkPolyData& data, const std::filesystem::path& path) {
-  try {
+  AppendedData appended;
+  const std::string head = documentFor(path, [&] {
     checkArrays(data.pointData, data.points.size(), "point");
     checkArrays(data.cellData, data.cellCount(), "cell");
-    AppendedData appended;
-    const std::string head = polyDataDocument(data, appended);
-    writeDocument(head, appended, path);
-  } catch (const Error& error) {
-    throw Error("cannot write '" + path.string() + "': " + error.what());
-  }
+    return polyDataDocument(data, appended);
+  });
+  writeDocument(head, appended, path);
 }
 
 void writeVtu(const VtkVoxelGrid& grid, const std::filesystem::path& path) {
-  try {
+  AppendedData appended;
+  const std::string head = documentFor(path, [&] {
     checkArrays(grid.pointData, grid.points.size(), "point");
     checkArrays(grid.cellData, grid.voxels.size(), "cell");
-    AppendedData appended;
-    const std::string head = unstructuredGridDocument(grid, appended);
-    writeDocument(head, appended, path);
-  } catch (const Error& error) {
-    throw Error("cannot write '" + path.string() + "': " + error.what());
-  }
+    return unstructuredGridDocument(grid, appended);
+  });
+  writeDocument(head, appended, path);
 }
 
 void writePvd(std::span<const VtkSeriesEntry> entries, const std::filesystem::path& path) {
-  try {
-    std::string xml =
+  const std::string xml = documentFor(path, [&] {
+    std::string text =
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" "
         "byte_order=\"LittleEndian\">\n<Collection>\n";
     for (const VtkSeriesEntry& entry : entries) {
@@ -272,35 +258,31 @@ void writePvd(std::span<const VtkSeriesEntry> entries, const std::filesystem::pa
                     "' is not finite");
       char time[32];
       std::snprintf(time, sizeof time, "%.17g", entry.time);
-      xml += std::string("<DataSet timestep=\"") + time + "\" group=\"\" part=\"0\" file=\"" +
-             escaped(entry.file.generic_string()) + "\"/>\n";
+      text += std::string("<DataSet timestep=\"") + time + "\" group=\"\" part=\"0\" file=\"" +
+              escaped(entry.file.generic_string()) + "\"/>\n";
     }
-    xml += "</Collection>\n</VTKFile>\n";
-    writeText(xml, path);
-  } catch (const Error& error) {
-    throw Error("cannot write '" + path.string() + "': " + error.what());
-  }
+    return text + "</Collection>\n</VTKFile>\n";
+  });
+  writeFileAtomically(path, xml);
 }
 
 void writePvtp(const VtkPolyData& layout, std::span<const std::filesystem::path> pieces,
                const std::filesystem::path& path) {
-  try {
+  const std::string xml = documentFor(path, [&] {
     if (pieces.empty()) throw Error("no pieces to show");
-    std::string xml =
+    std::string text =
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"PPolyData\" version=\"1.0\" "
         "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PPolyData GhostLevel=\"0\">\n";
-    xml += parallelDataSection("PPointData", layout.pointData);
-    xml += parallelDataSection("PCellData", layout.cellData);
-    xml +=
+    text += parallelDataSection("PPointData", layout.pointData);
+    text += parallelDataSection("PCellData", layout.cellData);
+    text +=
         "<PPoints>\n<PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
         "</PPoints>\n";
     for (const std::filesystem::path& piece : pieces)
-      xml += "<Piece Source=\"" + escaped(piece.generic_string()) + "\"/>\n";
-    xml += "</PPolyData>\n</VTKFile>\n";
-    writeText(xml, path);
-  } catch (const Error& error) {
-    throw Error("cannot write '" + path.string() + "': " + error.what());
-  }
+      text += "<Piece Source=\"" + escaped(piece.generic_string()) + "\"/>\n";
+    return text + "</PPolyData>\n</VTKFile>\n";
+  });
+  writeFileAtomically(path, xml);
 }
 
 }  // namespace delta::io

@@ -8,6 +8,8 @@
 #include "delta/core/format.h"
 #include "delta/mesh/topology.h"
 
+#include "detail/scaled_frame.h"
+
 namespace delta {
 namespace {
 
@@ -30,16 +32,17 @@ constexpr AxisTerms axisTerms(double w0, double w1, double w2) noexcept {
   return terms;
 }
 
-/// The integrals over the enclosed solid of 1, x, y, z, x², y², z², xy, yz, zx, in the frame
-/// whose origin is `origin` (D. Eberly, "Polyhedral Mass Properties (Revisited)", 2002: the
-/// divergence theorem turns each volume integral into a sum of closed-form triangle integrals).
-std::array<double, 10> volumeIntegrals(const Mesh& mesh, const Vec3& origin) noexcept {
+/// The integrals over the enclosed solid of 1, x, y, z, x², y², z², xy, yz, zx, in `frame`
+/// (D. Eberly, "Polyhedral Mass Properties (Revisited)", 2002: the divergence theorem turns each
+/// volume integral into a sum of closed-form triangle integrals).
+std::array<double, 10> volumeIntegrals(const Mesh& mesh,
+                                       const detail::ScaledFrame& frame) noexcept {
   std::array<double, 10> integral{};
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     const Triangle triangle = mesh.triangle(t);
-    const Vec3 p0 = triangle.a - origin;
-    const Vec3 p1 = triangle.b - origin;
-    const Vec3 p2 = triangle.c - origin;
+    const Vec3 p0 = frame(triangle.a);
+    const Vec3 p1 = frame(triangle.b);
+    const Vec3 p2 = frame(triangle.c);
     const Vec3 n = cross(p1 - p0, p2 - p0);
     const AxisTerms x = axisTerms(p0.x, p1.x, p2.x);
     const AxisTerms y = axisTerms(p0.y, p1.y, p2.y);
@@ -80,18 +83,21 @@ MassProperties massProperties(const Mesh& mesh, double density) {
          " edges traversed the same way by both their triangles)");
 
   const Aabb box = mesh.bounds();
-  const Vec3 origin = box.center();
-  const std::array<double, 10> integral = volumeIntegrals(mesh, origin);
+  const detail::ScaledFrame frame = detail::scaledFrame(box);
+  const std::array<double, 10> integral = volumeIntegrals(mesh, frame);
   const double volume = integral[0];
   // Zero relative to the mesh's size: rounding alone makes a flat closed mesh's volume of order
-  // 1e-16 · diagonal³.
-  const double diagonal = box.diagonal();
+  // 1e-16 · diagonal³ (in the scaled frame, where the half extent is about 1).
+  const double diagonal = length((box.upper * 0.5 - box.lower * 0.5) * (2.0 * frame.scale));
   const double zeroVolume = 1e-12 * diagonal * diagonal * diagonal;
   if (volume < -zeroVolume)
-    fail("the mesh is inside-out (signed volume " + toString(volume) + "); reverse its triangles");
-  if (!(volume > zeroVolume)) fail("the mesh encloses zero volume (" + toString(volume) + ")");
+    fail("the mesh is inside-out (signed volume " +
+         toString(std::ldexp(volume, 3 * frame.exponent)) + "); reverse its triangles");
+  if (!(volume > zeroVolume))
+    fail("the mesh encloses zero volume (" + toString(std::ldexp(volume, 3 * frame.exponent)) +
+         ")");
 
-  // Centroid in the local frame, then the second moments moved from the local origin to it.
+  // Centroid in the scaled frame, then the second moments moved from its origin to it.
   const Vec3 c = Vec3{integral[1], integral[2], integral[3]} / volume;
   const double xx = integral[4] - volume * c.x * c.x;
   const double yy = integral[5] - volume * c.y * c.y;
@@ -100,25 +106,39 @@ MassProperties massProperties(const Mesh& mesh, double density) {
   const double yz = integral[8] - volume * c.y * c.z;
   const double zx = integral[9] - volume * c.z * c.x;
 
+  // Back to the mesh's scale: a volume scales by 2^3e, the second moments by 2^5e. The density
+  // multiplies the scaled values first (it may itself be large or small) and is checked with
+  // them.
+  const int e = frame.exponent;
+  const auto back = [](double value, int exponent, const char* what) {
+    return detail::scaledBack(value, exponent, "massProperties", what);
+  };
   MassProperties properties;
-  properties.volume = volume;
-  properties.mass = density * volume;
-  properties.centroid = origin + c;
+  properties.volume = back(volume, 3 * e, "volume");
+  properties.mass = back(density * volume, 3 * e, "mass");
+  properties.centroid =
+      frame.origin + Vec3{std::ldexp(c.x, e), std::ldexp(c.y, e), std::ldexp(c.z, e)};
+  const double moments[6] = {yy + zz, zz + xx, xx + yy, -xy, -yz, -zx};
+  double inertia[6];
+  for (std::size_t i = 0; i < 6; ++i)
+    inertia[i] = moments[i] == 0.0 ? 0.0 : back(moments[i] * density, 5 * e, "inertia tensor");
   properties.inertia =
-      Mat3::fromRows({yy + zz, -xy, -zx}, {-xy, zz + xx, -yz}, {-zx, -yz, xx + yy}) * density;
+      Mat3::fromRows({inertia[0], inertia[3], inertia[5]}, {inertia[3], inertia[1], inertia[4]},
+                     {inertia[5], inertia[4], inertia[2]});
   return properties;
 }
 
-double signedVolume(const Mesh& mesh) noexcept {
+double signedVolume(const Mesh& mesh) {
   // Relative to the box centre: the tetrahedra to the origin then stay as small as the mesh,
-  // and so does the rounding of their sum.
-  const Vec3 origin = mesh.bounds().center();
+  // and so does the rounding of their sum; scaled to about 1 (detail::ScaledFrame), so that no
+  // product of degree 3 under- or overflows whatever the mesh's size.
+  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
   double sixTimesVolume = 0.0;
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     const Triangle triangle = mesh.triangle(t);
-    sixTimesVolume += dot(triangle.a - origin, cross(triangle.b - origin, triangle.c - origin));
+    sixTimesVolume += dot(frame(triangle.a), cross(frame(triangle.b), frame(triangle.c)));
   }
-  return sixTimesVolume / 6.0;
+  return detail::scaledBack(sixTimesVolume / 6.0, 3 * frame.exponent, "signedVolume", "volume");
 }
 
 }  // namespace delta

@@ -2,8 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
 
 #include "detail/edges.h"
+#include "detail/scaled_frame.h"
 
 namespace delta {
 
@@ -32,29 +37,46 @@ std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept {
   return count;
 }
 
-double surfaceArea(const Mesh& mesh) noexcept {
-  double area = 0.0;
-  for (std::size_t t = 0; t < mesh.triangleCount(); ++t)
-    area += mesh.triangle(t).area();
-  return area;
+double surfaceArea(const Mesh& mesh) {
+  // Scaled as signedVolume: the cross products (degree 2) overflow from 1e154 on.
+  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
+  double twiceArea = 0.0;
+  for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+    // b·s − a·s is (b − a)·s exactly (when nothing overflows): the edges keep their accuracy.
+    const Triangle triangle = mesh.triangle(t);
+    const Vec3 a = triangle.a * frame.scale;
+    twiceArea += length(cross(triangle.b * frame.scale - a, triangle.c * frame.scale - a));
+  }
+  return detail::scaledBack(twiceArea * 0.5, 2 * frame.exponent, "surfaceArea", "area");
 }
 
 EdgeLengths edgeLengths(const Mesh& mesh) {
   const std::vector<detail::DirectedEdge> edges = detail::sortedDirectedEdges(mesh);
   const std::span<const Vec3> vertices = mesh.vertices();
+  // Measured scaled as surfaceArea (a length's square overflows from 1e154 on), then scaled back.
+  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
   EdgeLengths lengths;
   std::size_t distinct = 0;
   double sum = 0.0;
   for (std::size_t i = 0; i < edges.size(); ++i) {
     if (i > 0 && edges[i].key == edges[i - 1].key) continue;
-    const double edgeLength = distance(vertices[detail::edgeFirstVertex(edges[i].key)],
-                                       vertices[detail::edgeSecondVertex(edges[i].key)]);
+    const double edgeLength =
+        distance(vertices[detail::edgeFirstVertex(edges[i].key)] * frame.scale,
+                 vertices[detail::edgeSecondVertex(edges[i].key)] * frame.scale);
     lengths.min = distinct == 0 ? edgeLength : std::min(lengths.min, edgeLength);
     lengths.max = std::max(lengths.max, edgeLength);
     sum += edgeLength;
     ++distinct;
   }
   if (distinct > 0) lengths.mean = sum / static_cast<double>(distinct);
+  // The shortest may be below the normal doubles (an edge of 1e-310 is one): only an overflow,
+  // an edge longer than the largest double, is refused.
+  if (!std::isfinite(std::ldexp(lengths.max, frame.exponent)))
+    throw Error("edgeLengths: the longest edge (" + toString(lengths.max) + " × 2^" +
+                std::to_string(frame.exponent) + ") overflows a double");
+  lengths.min = std::ldexp(lengths.min, frame.exponent);
+  lengths.mean = std::ldexp(lengths.mean, frame.exponent);
+  lengths.max = std::ldexp(lengths.max, frame.exponent);
   return lengths;
 }
 

@@ -12,10 +12,15 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/memory.h"
 #include "delta/mesh/detail/convex_hull.h"
 
 namespace delta::primitives {
 namespace {
+
+/// What a granulate needs a point, as an estimate: the sample, its hull vertex and two
+/// triangles, and qhull's facets, ridges and vertex records (a few hundred bytes a point).
+constexpr double kGranulateBytesPerPoint = 512.0;
 
 [[noreturn]] void fail(const char* primitive, const std::string& what) {
   throw Error(std::string("primitives::") + primitive + ": " + what);
@@ -99,8 +104,9 @@ Vec3 randomDirection(std::mt19937_64& random) {
 }  // namespace
 
 Mesh icosphere(int subdivisions, double radius, const Vec3& center) {
-  if (subdivisions < 0 || subdivisions > 8)
-    fail("icosphere", "subdivisions " + std::to_string(subdivisions) + " is outside 0–8");
+  if (subdivisions < 0 || subdivisions > kMaxIcosphereSubdivisions)
+    fail("icosphere", "subdivisions " + std::to_string(subdivisions) + " is outside 0–" +
+                          std::to_string(kMaxIcosphereSubdivisions));
   requirePositive("icosphere", "radius", radius);
   requireFinite("icosphere", "center", center);
   std::vector<Vec3> vertices;
@@ -132,6 +138,15 @@ Mesh cylinder(double radius, double height, int segments, const Vec3& center) {
   requirePositive("cylinder", "height", height);
   if (segments < 3)
     fail("cylinder", "segments " + std::to_string(segments) + " must be at least 3");
+  // The vertices and triangles, checked before they are allocated (2n + 2 would wrap in 32 bits
+  // from n = 2³¹ − 1).
+  const double bytes = static_cast<double>(segments) * kCylinderBytesPerSegment;
+  if (segments > kMaxCylinderSegments)
+    fail("cylinder", "segments " + std::to_string(segments) + " is above the limit " +
+                         std::to_string(kMaxCylinderSegments) +
+                         " (4·segments triangles with 32-bit ids); it would need about " +
+                         describeBytes(bytes) + " of memory");
+  requireMemory(bytes, "primitives::cylinder: segments " + std::to_string(segments));
   requireFinite("cylinder", "center", center);
   const auto n = static_cast<std::uint32_t>(segments);
   // Vertices: bottom ring 0…n−1, top ring n…2n−1, bottom centre 2n, top centre 2n+1.
@@ -171,6 +186,8 @@ Mesh quad(double sizeX, double sizeY, const Vec3& center) {
 Mesh granulate(std::uint64_t seed, const Vec3& semiAxes, int points) {
   requirePositive("granulate", "semiAxes", semiAxes);
   if (points < 4) fail("granulate", "points " + std::to_string(points) + " must be at least 4");
+  requireMemory(static_cast<double>(points) * kGranulateBytesPerPoint,
+                "primitives::granulate: points " + std::to_string(points));
   std::mt19937_64 random(seed);
   std::vector<Vec3> samples(static_cast<std::size_t>(points));
   for (Vec3& p : samples) {

@@ -11,8 +11,10 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
+#include "delta/mesh/coordinate_range.h"
 
 #include "detail/dual_traversal.h"
+#include "detail/placement.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
@@ -57,7 +59,8 @@ Vec3 faceDirection(const Triangle& first, const Triangle& second) noexcept {
 }
 
 ContactPoint contactPoint(const Triangle& first, const Triangle& second, const Vec3& p,
-                          const Vec3& q, bool intersect, std::size_t i, std::size_t j) {
+                          const Vec3& q, bool intersect, bool converged, std::size_t i,
+                          std::size_t j) {
   ContactPoint contact;
   contact.x = (p + q) * 0.5;
   contact.normal = p - contact.x;
@@ -65,6 +68,7 @@ ContactPoint contactPoint(const Triangle& first, const Triangle& second, const V
   contact.direction = normalized(p - q);
   if (!(lengthSquared(contact.direction) > 0.5)) contact.direction = faceDirection(first, second);
   contact.overlap = intersect;
+  contact.converged = converged;
   contact.first = static_cast<std::uint32_t>(i);
   contact.second = static_cast<std::uint32_t>(j);
   return contact;
@@ -188,7 +192,8 @@ void contactsOf(const Task& task, const TriangleSoA& first, const TriangleSoA& s
   for (std::size_t k = 0; k < results.size(); ++k)
     if (results.distanceSquared(k) < reach * reach)
       out.push_back(contactPoint(one, second.triangle(begin + k), results.p(k), results.q(k),
-                                 results.intersect(k), task.triangle, begin + k));
+                                 results.intersect(k), results.converged(k), task.triangle,
+                                 begin + k));
 }
 
 }  // namespace
@@ -200,6 +205,8 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
   if (first.size() == 0 || second.size() == 0) throw Error("contacts: a mesh has no triangles");
   if (first.size() >= kMaxTriangles || second.size() >= kMaxTriangles)
     throw Error("contacts: a mesh has more triangles than 32-bit ids can name");
+  checkMeshScale(first, "contacts: the first mesh");
+  checkMeshScale(second, "contacts: the second mesh");
   const std::vector<Aabb> firstBlocks = blockBoxes(first), secondBlocks = blockBoxes(second);
   const Aabb firstBox = meshBox(firstBlocks), secondBox = meshBox(secondBlocks);
   // Boxes are compared with a slack far above the rounding of a kernel's distance (a few ulps of
@@ -235,6 +242,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   // slack, so no pair the kernel would find is dropped); then each triangle of the first leaf
   // against the second leaf's eight. Moved meshes meet in the first one's prepared frame: the
   // second's boxes and, leaf by leaf, its triangles are carried there; nothing is rebuilt.
+  detail::checkPlacedPair(first, second, "contacts");
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
@@ -352,7 +360,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       for (std::size_t k = 0; k < results.size(); ++k)
         if (results.distanceSquared(k) < reach * reach)
           out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
-                                     results.intersect(k), firstIds[k], secondIds[k]));
+                                     results.intersect(k), results.converged(k), firstIds[k],
+                                     secondIds[k]));
       perRun[run] = std::move(out);
     }
   });

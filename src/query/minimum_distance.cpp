@@ -14,10 +14,12 @@
 #include "delta/core/error.h"
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
+#include "delta/mesh/coordinate_range.h"
 #include "delta/mesh/mesh.h"
 
 #include "detail/dual_traversal.h"
 #include "detail/morton.h"
+#include "detail/placement.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
@@ -221,6 +223,8 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
                                 kernels::Solver solver) {
   if (first.size() == 0 || second.size() == 0)
     throw Error("minimumDistance: a mesh has no triangles");
+  checkMeshScale(first, "minimumDistance: the first mesh");
+  checkMeshScale(second, "minimumDistance: the second mesh");
   const Blocks blocks = blocksOf(second);
   const std::vector<std::uint32_t> firstOrder = mortonOrder(first);
   const std::size_t groups = (first.size() + kGroup - 1) / kGroup;
@@ -357,6 +361,7 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   // pair found (strictly: equal boxes may still hold a tie with smaller ids). Moved meshes meet in
   // the first one's prepared frame; the second's boxes and, leaf by leaf, its triangles are
   // carried there. Serial: the search is short and its answer must not depend on threads.
+  detail::checkPlacedPair(first, second, "minimumDistance");
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
   const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
@@ -443,7 +448,12 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
       std::size_t kept = 0;
       double gaps[detail::kFanout];  // the second's eight boxes at once
       detail::distancesSquared(*other.octet, one.boxes[i], gaps);
-      for (unsigned near = detail::notAboveMask(gaps, bestSquared); near != 0; near &= near - 1) {
+      // Only the leaf's triangles: a short leaf's empty slots lie at +∞, which is not above the
+      // best before the first pair (+∞), and their padding (zero triangles) would then be
+      // measured as if they were triangles.
+      const unsigned present = (1u << other.count) - 1;
+      for (unsigned near = detail::notAboveMask(gaps, bestSquared) & present; near != 0;
+           near &= near - 1) {
         const auto k = static_cast<std::size_t>(std::countr_zero(near));
         if (!detail::separated(one.planes[i], other.triangles[k], other.planes[k].magnitude,
                                reach) &&

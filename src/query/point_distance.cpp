@@ -7,9 +7,11 @@
 #include <limits>
 #include <string>
 
+#include "delta/core/cancel.h"
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
+#include "delta/mesh/coordinate_range.h"
 
 #include "detail/morton.h"
 #include "detail/query_mesh_data.h"
@@ -33,16 +35,35 @@ void validate(const QueryMesh& mesh, const PointQuery& query) {
   if (query.signedDistance) mesh.data().pseudonormals();  // made here, where it may throw
 }
 
-[[noreturn]] void throwNonFinite(std::size_t index, const Vec3& point) {
-  throw Error("point distances: point " + std::to_string(index) + " (" + toString(point) +
-              ") has a non-finite coordinate");
+/// Whether a point (world frame) and, carried into the mesh's prepared frame, `local` lie in
+/// the coordinate range (coordinate_range.h): false for a non-finite one too.
+bool inRange(const Vec3& point, const Vec3& local) noexcept {
+  return inCoordinateRange(point) && inCoordinateRange(local);
 }
 
-/// Throws for the first point (in index order) with a non-finite coordinate.
+/// Throws for point `index`, which is not inRange: a non-finite coordinate, or one beyond the
+/// range where it is or where the mesh's pose carries it.
+[[noreturn]] void throwBadPoint(const QueryMesh& mesh, std::size_t index, const Vec3& point) {
+  const std::string what = "point distances: point " + std::to_string(index);
+  if (!isFinite(point))
+    throw Error(what + " (" + toString(point) + ") has a non-finite coordinate");
+  checkPointRange(point, what);
+  checkPointRange(mesh.inversePose().apply(point),
+                  what + " " + toString(point) + ", carried into the moved mesh's frame at");
+  throw Error(what + " is out of range");  // not reached: one of the checks throws
+}
+
+/// The point carried into the mesh's prepared frame.
+Vec3 localPoint(const QueryMesh& mesh, const Vec3& point) noexcept {
+  return mesh.moved() ? mesh.inversePose().apply(point) : point;
+}
+
+/// Throws for the first point (in index order) with a non-finite coordinate or one out of the
+/// coordinate range (where it is, or in the mesh's frame).
 template <typename PointAt>
-void validatePoints(std::size_t count, const PointAt& pointAt) {
+void validatePoints(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt) {
   for (std::size_t i = 0; i < count; ++i)
-    if (!isFinite(pointAt(i))) throwNonFinite(i, pointAt(i));
+    if (!inRange(pointAt(i), localPoint(mesh, pointAt(i)))) throwBadPoint(mesh, i, pointAt(i));
 }
 
 /// The triangle (tree order) that answered the previous point of a run, whose exact distance to
@@ -92,7 +113,9 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
                   " to the mesh overflows a double");
     return result;
   }
-  result.distance = std::sqrt(nearest.distanceSquared);
+  if (nearest.distanceSquared < detail::kUnderflowingSquare)
+    nearest = detail::resolveUnderflow(data, point, nearest);
+  result.distance = detail::distanceOf(data, point, nearest);
   if (hint) *hint = {nearest.sorted, point, result.distance};
   result.closest =
       mesh.moved() ? mesh.pose().apply(nearest.closest.closest) : nearest.closest.closest;
@@ -132,8 +155,9 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
       const std::size_t end = std::min(count, (block + 1) * kSieveBlock);
       std::size_t survivors = 0;
       for (std::size_t i = block * kSieveBlock; i < end; ++i) {
-        if (firstBad[block] == count && !isFinite(pointAt(i))) firstBad[block] = i;
-        inDoubt[i] = !(grid.lowerBoundSquared(local(i)) > limit);
+        const Vec3 inMeshFrame = local(i);
+        if (firstBad[block] == count && !inRange(pointAt(i), inMeshFrame)) firstBad[block] = i;
+        inDoubt[i] = !(grid.lowerBoundSquared(inMeshFrame) > limit);
         if (inDoubt[i])
           ++survivors;
         else
@@ -143,7 +167,7 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
     }
   });
   for (std::size_t block = 0; block < blocks; ++block)
-    if (firstBad[block] != count) throwNonFinite(firstBad[block], pointAt(firstBad[block]));
+    if (firstBad[block] != count) throwBadPoint(mesh, firstBad[block], pointAt(firstBad[block]));
   for (std::size_t block = 0; block < blocks; ++block)
     kept[block + 1] += kept[block];
   // Second pass: each block gathers its survivors at its offset, with their Morton keys (in the
@@ -182,7 +206,7 @@ void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& orde
   const std::size_t count = order.size();
   // Each run of kGrain points is gathered before and its answers scattered after the searches:
   // the scattered reads and writes then overlap in tight loops instead of each stalling a search.
-  parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
+  cancellableParallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
     std::array<Vec3, kGrain> points;
     std::array<PointDistance, kGrain> answers;
     Hint hint;
@@ -210,8 +234,8 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   };
   const double limit = query.epsilon * query.epsilon;
   if (count < kCoherentFrom || count > std::numeric_limits<std::uint32_t>::max()) {
-    validatePoints(count, pointAt);
-    parallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
+    validatePoints(mesh, count, pointAt);
+    cancellableParallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i)
         out[i] = answer(mesh, pointAt(i), query, boundOf(i));
     });
@@ -224,7 +248,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
         [&survivors](std::size_t k) { return std::size_t{survivors.indices[k]}; }, boundOf, query,
         true, out);
   } else {
-    validatePoints(count, pointAt);
+    validatePoints(mesh, count, pointAt);
     searchInOrder(
         mesh, detail::mortonOrder(count, pointAt), pointAt, [](std::size_t k) { return k; },
         boundOf, query, false, out);
@@ -283,7 +307,7 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
 
 PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query) {
   validate(mesh, query);
-  validatePoints(1, [&point](std::size_t) { return point; });
+  validatePoints(mesh, 1, [&point](std::size_t) { return point; });
   return answer(mesh, point, query);
 }
 

@@ -10,6 +10,7 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
+#include "delta/mesh/coordinate_range.h"
 #include "delta/mesh/mass_properties.h"
 
 #include "detail/morton.h"
@@ -442,6 +443,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   if (mesh.triangleCount() == 0) throw Error("QueryMesh: the mesh has no triangles");
   if (mesh.triangleCount() >= std::numeric_limits<std::uint32_t>::max())
     throw Error("QueryMesh: more triangles than 32-bit ids can name");
+  checkMeshScale(mesh.bounds(), "QueryMesh: the mesh");
   auto data = std::make_shared<detail::QueryMeshData>();
   data->bounds = mesh.bounds();
   data->order = treeOrder(mesh);

@@ -11,6 +11,7 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/kernels/sphere.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -49,6 +50,7 @@ void checkEpsilonAndMesh(double epsilon, const TriangleSoA& mesh) {
   if (mesh.size() > std::numeric_limits<std::uint32_t>::max())
     throw Error("sphereContacts: the mesh has " + std::to_string(mesh.size()) +
                 " triangles, more than 32-bit ids reach");
+  checkMeshScale(mesh, "sphereContacts: the mesh");
 }
 
 void checkSphere(const Sphere& sphere, std::size_t index) {
@@ -58,6 +60,12 @@ void checkSphere(const Sphere& sphere, std::size_t index) {
   if (!std::isfinite(sphere.radius) || !(sphere.radius > 0.0))
     throw Error("sphereContacts: sphere " + std::to_string(index) +
                 " radius = " + toString(sphere.radius) + " must be finite and positive");
+  const Vec3 reach{sphere.radius, sphere.radius, sphere.radius};
+  const Aabb box{sphere.center - reach, sphere.center + reach};
+  if (boxInCoordinateRange(box)) return;  // the message only for a sphere out of range
+  checkCoordinateRange(box, "sphereContacts: sphere " + std::to_string(index) + " (center " +
+                                toString(sphere.center) + ", radius " + toString(sphere.radius) +
+                                ")");
 }
 
 /// The contacts of one (validated) sphere with every triangle of `mesh`, in id order.

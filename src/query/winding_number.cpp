@@ -1,12 +1,29 @@
 #include "delta/query/winding_number.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 namespace delta {
 
 double solidAngle(const Triangle& t, const Vec3& point) noexcept {
-  const Vec3 a = t.a - point, b = t.b - point, c = t.c - point;
+  Vec3 a = t.a - point, b = t.b - point, c = t.c - point;
+  // The angle depends on the directions of a, b, c only. Its products are of degree 3, which
+  // overflow from differences of 1e102 on and underflow below 1e-102: out of [2⁻³⁰⁰, 2³⁰⁰] the
+  // differences are scaled by a power of two (exact) to about 1, and where they overflowed
+  // (coordinates near the largest double) they are taken from the halved coordinates first.
+  double largest = std::max({maxAbs(a), maxAbs(b), maxAbs(c)});
+  if (!(largest <= 0x1p300 && largest >= 0x1p-300)) {
+    if (std::isinf(largest)) {
+      const Vec3 half = point * 0.5;
+      a = t.a * 0.5 - half, b = t.b * 0.5 - half, c = t.c * 0.5 - half;
+      largest = std::max({maxAbs(a), maxAbs(b), maxAbs(c)});
+    }
+    if (largest > 0.0 && std::isfinite(largest)) {
+      const double scale = std::ldexp(1.0, -std::ilogb(largest));
+      a = a * scale, b = b * scale, c = c * scale;
+    }
+  }
   const double la = length(a), lb = length(b), lc = length(c);
   // tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|)
   const double numerator = dot(a, cross(b, c));

@@ -158,7 +158,8 @@ TEST(DeltaCli, ContactWritesSortedCsvRows) {
   std::ifstream file(csv);
   std::string header, line;
   std::getline(file, header);
-  EXPECT_EQ(header, "triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap");
+  EXPECT_EQ(header,
+            "triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap,converged");
   std::vector<std::pair<long, long>> ids;
   while (std::getline(file, line)) {
     long a = -1, b = -1;

@@ -47,6 +47,27 @@ TEST(ParallelFor, UsesSeveralThreadsWhenAllowed) {
   EXPECT_NE(std::count(owner.begin(), owner.end(), 0), 64) << "everything ran on thread 0";
 }
 
+TEST(ParallelFor, CapsTheThreadsAskedFor) {
+  // OMP_NUM_THREADS=100000 asked libgomp for a team it set up on the caller's stack: a segfault.
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(100000);
+  EXPECT_EQ(threadCount(), kMaxThreads);
+  std::atomic<int> largestTeam{0};
+  std::vector<int> hits(4096, 0);
+  parallelFor(0, hits.size(), 1, [&](std::size_t begin, std::size_t end) {
+    int team = largestTeam.load();
+    while (team < omp_get_num_threads() &&
+           !largestTeam.compare_exchange_weak(team, omp_get_num_threads())) {
+    }
+    for (std::size_t i = begin; i < end; ++i)
+      ++hits[i];
+  });
+  omp_set_num_threads(before);
+  EXPECT_LE(largestTeam.load(), kMaxThreads);
+  EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), 4096);
+  EXPECT_EQ(threadCount(), std::min(before, kMaxThreads));
+}
+
 TEST(ParallelFor, RethrowsTheFirstException) {
   std::atomic<int> calls = 0;
   EXPECT_THROW(parallelFor(0, 1000, 10,

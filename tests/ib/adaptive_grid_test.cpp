@@ -2,16 +2,20 @@
 
 #include <gtest/gtest.h>
 #include <omp.h>
+#include <pthread.h>
 
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "delta/core/cancel.h"
 #include "delta/core/error.h"
 #include "delta/core/parallel.h"
 #include "delta/io/mesh_io.h"
@@ -166,9 +170,79 @@ TEST(AdaptiveGrid, RejectsBadOptions) {
   EXPECT_THROW(AdaptiveGrid(sphere, {.exactBand = -1.0}), Error);
   EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, 0, 1}}}), Error);
   EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, NAN, 1}}}), Error);
+  EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, INFINITY, 1}}}), Error);
   AdaptiveGrid grid(sphere, {.levels = 2});
   EXPECT_THROW(grid.cells(3), Error);
   EXPECT_THROW(grid.moveBoundary(RigidTransform::translationBy({NAN, 0, 0})), Error);
+}
+
+TEST(AdaptiveGrid, InvalidValuesAreRefusedNotReplacedByDefaults) {
+  // An inverted domain (lower > upper) is an empty box, and a NaN band was the "default"
+  // sentinel: both used to be silently replaced by the defaults.
+  const QueryMesh sphere(primitives::icosphere(1));
+  try {
+    AdaptiveGrid(sphere, {.levels = 2, .domain = Aabb{{1, 1, 1}, {-1, -1, -1}}});
+    ADD_FAILURE() << "an inverted domain was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("lower < upper"), std::string::npos) << error.what();
+  }
+  try {
+    AdaptiveGrid(sphere, {.levels = 2, .exactBand = std::nan("")});
+    ADD_FAILURE() << "a NaN exact band was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("exactBand nan"), std::string::npos) << error.what();
+  }
+  // Unset: the defaults, resolved in options().
+  const AdaptiveGrid grid(sphere, {.levels = 2});
+  EXPECT_EQ(grid.exactBand(), grid.cellDiagonal(2));
+  ASSERT_TRUE(grid.options().domain.has_value());
+  EXPECT_EQ(grid.options().domain->lower, grid.domain().lower);
+  EXPECT_FALSE(grid.options().exactBand.has_value());
+}
+
+TEST(AdaptiveGrid, BuildStopsWhenItsCancelScopeAsks) {
+  const QueryMesh sphere(primitives::icosphere(4));
+  const GridOptions options{.levels = 7};
+  const AdaptiveGrid reference(sphere, options);
+  // A scope that never stops: the same grid, polled several times, on this thread only.
+  const pthread_t owner = pthread_self();
+  std::size_t polls = 0;
+  bool wrongPlace = false;
+  {
+    const CancelScope scope([&] {
+      wrongPlace = wrongPlace || !pthread_equal(pthread_self(), owner);
+      ++polls;
+      return false;
+    });
+    const AdaptiveGrid polled(sphere, options);
+    EXPECT_EQ(polled.leavesPerLevel(), reference.leavesPerLevel());
+    EXPECT_TRUE(std::equal(polled.distances().begin(), polled.distances().end(),
+                           reference.distances().begin(), reference.distances().end()));
+  }
+  EXPECT_GT(polls, 7u);
+  EXPECT_FALSE(wrongPlace);
+  // Stopped at the first poll, or at one a good way in (how many polls a build makes varies a
+  // little with the chunks the calling thread takes): Cancelled, no grid.
+  for (std::size_t stopAt : {std::size_t{1}, polls / 4}) {
+    std::size_t calls = 0;
+    const CancelScope scope([&] { return ++calls >= stopAt; });
+    EXPECT_THROW(AdaptiveGrid(sphere, options), Cancelled) << "stop at poll " << stopAt;
+    EXPECT_EQ(calls, stopAt);
+  }
+  // A poll's own exception propagates unchanged.
+  {
+    const CancelScope scope([]() -> bool { throw std::logic_error("interrupted"); });
+    EXPECT_THROW(AdaptiveGrid(sphere, options), std::logic_error);
+  }
+  // Moves never poll: a scope that would stop at once lets them finish.
+  AdaptiveGrid moving(sphere, options);
+  {
+    std::size_t calls = 0;
+    const CancelScope scope([&] { return ++calls > 0; });
+    moving.moveBoundary(RigidTransform::translationBy({0.05, 0, 0}));
+    EXPECT_EQ(calls, 0u);
+  }
+  expectRefinementRule(moving);
 }
 
 TEST(AdaptiveGrid, TouchingAndTinyBoundaries) {
@@ -241,7 +315,7 @@ void expectSameAsNewGrid(const AdaptiveGrid& moved) {
 
 TEST(AdaptiveGrid, MovingBoundaryGivesTheGridOfItsNewPosition) {
   const QueryMesh fandisk(io::load(kMeshes / "fandisk.off"));
-  for (double band : {std::nan(""), 0.0}) {
+  for (std::optional<double> band : {std::optional<double>{}, std::optional<double>{0.0}}) {
     AdaptiveGrid grid(fandisk, {.levels = 5, .exactBand = band});
     // A time step's motion: about a fifth of the finest cell.
     const double h = grid.cellDiagonal(5);
@@ -256,8 +330,7 @@ TEST(AdaptiveGrid, MovingBoundaryGivesTheGridOfItsNewPosition) {
       total += statistics;
       queries += statistics.queries;
       // Only what could have changed is asked again.
-      EXPECT_LT(double(statistics.queries),
-                double(grid.vertexCount()) * (band == 0.0 ? 0.35 : 0.6));
+      EXPECT_LT(double(statistics.queries), double(grid.vertexCount()) * (band ? 0.35 : 0.6));
       EXPECT_GT(statistics.cellsCreated + statistics.cellsRemoved, 0u);
       // A new grid to compare with after every step; under the sanitizers (where each costs
       // seconds) after the first and the last, which still sees the five updates in between.

@@ -1,11 +1,16 @@
 #include "delta/io/points.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "delta/core/error.h"
 
@@ -71,8 +76,54 @@ TEST(Points, MalformedLinesAreNamedByNumber) {
 }
 
 TEST(Points, MissingFileAndDirectoryFail) {
-  EXPECT_NE(loadError("/nonexistent/points.xyz").find("cannot open"), std::string::npos);
+  EXPECT_NE(loadError("/nonexistent/points.xyz").find("no such file"), std::string::npos);
   EXPECT_NE(loadError(fs::temp_directory_path()).find("directory"), std::string::npos);
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+TEST(Points, RefusesFifosDevicesAndEndlessLinesAtOnce) {
+  const fs::path fifo =
+      fs::temp_directory_path() / ("delta_points_fifo_" + std::to_string(std::random_device{}()));
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const auto start = std::chrono::steady_clock::now();
+  const std::string fifoMessage = loadError(fifo);  // blocked forever before
+  fs::remove(fifo);
+  EXPECT_NE(fifoMessage.find("FIFO"), std::string::npos) << fifoMessage;
+  EXPECT_NE(loadError("/dev/zero").find("not a regular file"), std::string::npos);
+  // A 3 GiB sparse file: one line of zeros without an end, refused after its first 4 KiB.
+  const fs::path sparse =
+      fs::temp_directory_path() / ("delta_points_sparse_" + std::to_string(std::random_device{}()));
+  {
+    const int fd = ::open(sparse.c_str(), O_CREAT | O_WRONLY, 0600);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::ftruncate(fd, off_t{3} << 30), 0);
+    ::close(fd);
+  }
+  const std::string sparseMessage = loadError(sparse);
+  fs::remove(sparse);
+  EXPECT_NE(sparseMessage.find("line 1 is longer than 4096 bytes"), std::string::npos)
+      << sparseMessage;
+  EXPECT_LT(secondsSince(start), 1.0);
+}
+
+TEST(Points, LinesAcrossReadChunksAreWhole) {
+  // More than one 1 MiB chunk: lines cut by the chunk boundary are joined.
+  std::string text;
+  std::size_t count = 0;
+  while (text.size() < (std::size_t{3} << 20)) {
+    text += std::to_string(count) + ".25 -0.1 1e-3\n";
+    ++count;
+  }
+  const fs::path path = writeFile("chunks.xyz", text + "7 8 9");  // no final line end
+  const std::vector<Vec3> points = loadPoints(path);
+  fs::remove(path);
+  ASSERT_EQ(points.size(), count + 1);
+  for (std::size_t i = 0; i < count; ++i)
+    ASSERT_EQ(points[i], (Vec3{static_cast<double>(i) + 0.25, -0.1, 1e-3})) << i;
+  EXPECT_EQ(points.back(), (Vec3{7, 8, 9}));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "delta/core/error.h"
+#include "delta/core/memory.h"
 #include "delta/mesh/detail/convex_hull.h"
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/topology.h"
@@ -307,6 +308,26 @@ TEST(Primitives, InvalidParametersNameTheParameterAndValue) {
   expectErrorNaming([] { primitives::quad(1, -3); }, "sizeY", "-3");
   expectErrorNaming([] { primitives::granulate(1, {1, 1, 1}, 3); }, "points", "3");
   expectErrorNaming([] { primitives::granulate(1, {1, 0, 1}); }, "semiAxes", "0");
+}
+
+TEST(Primitives, SizesBeyondTheirLimitsAreRefusedBeforeAllocating) {
+  // 2·n + 2 vertices wrapped in 32 bits and overflowed the heap.
+  expectErrorNaming([] { primitives::cylinder(1, 1, 2147483647); }, "segments 2147483647",
+                    "above the limit 1073741823");
+  expectErrorNaming([] { primitives::cylinder(1, 1, 2147483647); }, "would need about", "206 GB");
+  // Within the index limit, refused by memory (where the machine has less than it needs).
+  const double cylinderBytes =
+      primitives::kMaxCylinderSegments * primitives::kCylinderBytesPerSegment;
+  if (cylinderBytes > static_cast<double>(memoryLimitBytes()))
+    expectErrorNaming([] { primitives::cylinder(1, 1, primitives::kMaxCylinderSegments); },
+                      "segments 1073741823 would need about 103 GB", "memory limit");
+  if (2147483647.0 * 512.0 > static_cast<double>(memoryLimitBytes()))
+    expectErrorNaming(
+        [] {
+          primitives::granulate(1, {1, 1, 1}, 2147483647);
+        },
+        "points 2147483647 would need about", "memory limit");
+  EXPECT_EQ(primitives::cylinder(1, 1, 100000).triangleCount(), 400000u);
 }
 
 }  // namespace

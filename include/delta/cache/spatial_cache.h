@@ -80,8 +80,10 @@ struct CacheOptions {
 class SpatialCache {
  public:
   /// The root only; cells are refined on demand by leafAt() while refinement is allowed.
-  /// Throws delta::Error for an empty TriangleSoA, more than 2³² − 1 triangles, or invalid
-  /// options (maxCandidates 0, maxDepth outside 0–20, margin negative or not finite).
+  /// Throws delta::Error for an empty TriangleSoA, more than 2³² − 1 triangles, a mesh outside
+  /// the coordinate range (mesh/coordinate_range.h: a coordinate beyond ±2²⁰⁰, or all below
+  /// 2⁻²⁰⁰), or invalid options (maxCandidates 0, maxDepth outside 0–20, margin negative or not
+  /// finite).
   explicit SpatialCache(const TriangleSoA& triangles, const CacheOptions& options = {});
   ~SpatialCache();
   SpatialCache(const SpatialCache&) = delete;

@@ -23,10 +23,15 @@ namespace delta {
 /// Threading: a value type; no shared state.
 struct ContactPoint {
   Vec3 x;
-  Vec3 normal;               ///< P − x: from x toward the first geometry, length distance / 2
-  Vec3 direction;            ///< unit vector from the second geometry toward the first
-  double distance = 0.0;     ///< |P − Q|
-  bool overlap = false;      ///< the geometries interpenetrate here
+  Vec3 normal;            ///< P − x: from x toward the first geometry, length distance / 2
+  Vec3 direction;         ///< unit vector from the second geometry toward the first
+  double distance = 0.0;  ///< |P − Q|
+  bool overlap = false;   ///< the geometries interpenetrate here
+  /// The solver certified this pair's answer: always true for the exact solvers (hybrid, brute
+  /// force) and the sphere and point queries; for Solver::Penalty its Newton's flag (error bound
+  /// within kernels::kPenaltyTolerance of the pair's size; see kernels/penalty.h): a pair not
+  /// converged still has a feasible point pair, but its distance may be too large.
+  bool converged = true;
   std::uint32_t first = 0;   ///< triangle, point or sphere id in the first geometry
   std::uint32_t second = 0;  ///< triangle id in the second geometry
 };

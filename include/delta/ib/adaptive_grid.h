@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -31,19 +32,21 @@ struct GridOptions {
   /// Signed distances (negative inside; the boundary must be closed, delta::Error otherwise) or
   /// unsigned.
   bool signedDistance = true;
-  /// The domain the root cell covers. Empty (the default): the boundary's box where it is when
-  /// the grid is made, made a cube about its centre and grown by `padding` × its longest side on
-  /// every side. The domain stays where it is when the boundary moves.
-  Aabb domain{};
+  /// The domain the root cell covers: finite, with lower < upper on every axis (delta::Error
+  /// otherwise; an inverted box is refused, not replaced). None (the default): the boundary's
+  /// box where it is when the grid is made, made a cube about its centre and grown by `padding` ×
+  /// its longest side on every side. The domain stays where it is when the boundary moves.
+  std::optional<Aabb> domain{};
   /// See `domain`. ≥ 0, finite.
   double padding = 0.1;
   /// After a move, vertices whose |distance| is at most this hold the exact distance to the
   /// boundary where it is now; further vertices keep their sign (exact) and a distance within
   /// errorBound() of the exact one, and are queried again only once that bound could bring them
-  /// into the band or change a refinement decision. NaN (the default): the diagonal of a
+  /// into the band or change a refinement decision. None (the default): the diagonal of a
   /// level-L cell, so that every corner of every cell the boundary passes through is exact.
-  /// 0: only what refinement needs. +∞: every vertex exact after every move. ≥ 0.
-  double exactBand = std::numeric_limits<double>::quiet_NaN();
+  /// 0: only what refinement needs. +∞: every vertex exact after every move. ≥ 0 (NaN and
+  /// negative values: delta::Error).
+  std::optional<double> exactBand{};
 };
 
 /// One cell of the grid: a box of the octree, at `level`, whose lower corner is `origin` in
@@ -103,16 +106,27 @@ struct GridStatistics {
 /// Throws delta::Error for bad options (naming the field), for a default domain around a
 /// boundary whose vertices all coincide (the domain would have no extent), and for
 /// `signedDistance` with a boundary that is not closed (the message says how it is open and that
-/// unsigned distances work). Degenerate triangles are part of the boundary like any other. Only
+/// unsigned distances work), and for a grid that would not fit: before each level of a build is
+/// made, the cells it leads to are estimated from the cells refined so far (each finer level
+/// about 4 times more) and refused, with the estimate and the limit, beyond 32-bit cell indices
+/// or the memory limit (core/memory.h; about 200 bytes a cell). Degenerate triangles are part
+/// of the boundary like any other. Only
 /// the domain is gridded: a boundary that moves (partly) out of it is simply not resolved
 /// there.
+///
+/// Cancellation (core/cancel.h): a build made in a CancelScope polls it between batches of cells
+/// and of queries (some tens of milliseconds of work each), on the calling thread; when the poll
+/// asks to stop, the constructor throws Cancelled (or what the poll throws) and no grid is made.
+/// Moves never poll (they run to the end: a move stopped half-way would leave a grid that is
+/// neither before nor after it).
 ///
 /// Threading: building and moving query in parallel (core/parallel.h); one thread may move a
 /// grid while no other uses it; const members may be called from any number of threads.
 class AdaptiveGrid {
  public:
   /// Builds the grid around `boundary` where it is now (the QueryMesh is copied: it shares the
-  /// prepared data, and the caller's copy does not move with the grid's).
+  /// prepared data, and the caller's copy does not move with the grid's). Throws delta::Error
+  /// for bad options (see the class), Cancelled when a CancelScope stops it.
   AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options = {});
 
   /// Moves the boundary by `motion` (its pose becomes motion ∘ pose) and updates the grid.
@@ -124,9 +138,10 @@ class AdaptiveGrid {
   const GridStatistics& moveBoundaryTo(const RigidTransform& pose);
 
   const QueryMesh& boundary() const noexcept { return boundary_; }
+  /// The options as given, with the domain resolved (a grid made with them has these cells).
   const GridOptions& options() const noexcept { return options_; }
-  /// The box the root cell covers.
-  const Aabb& domain() const noexcept { return options_.domain; }
+  /// The box the root cell covers (GridOptions::domain resolved).
+  const Aabb& domain() const noexcept { return domain_; }
   /// The finest level L.
   int levels() const noexcept { return options_.levels; }
 
@@ -154,7 +169,7 @@ class AdaptiveGrid {
   /// How many of the boundary's past poses the vertices' distances date from (1 after a build;
   /// poses no vertex dates from are forgotten, so a long run does not pile them up).
   std::size_t rememberedPoses() const noexcept { return poses_.size(); }
-  /// The diagonal of a level-l cell.
+  /// The diagonal of a level-l cell (2^−l of the domain's; any l, meaningful for 0 ≤ l ≤ L).
   double cellDiagonal(int level) const noexcept;
   /// What the last build or move did.
   const GridStatistics& statistics() const noexcept { return statistics_; }
@@ -181,7 +196,8 @@ class AdaptiveGrid {
   void rebuildTable(std::size_t capacity);
 
   QueryMesh boundary_;
-  GridOptions options_;
+  GridOptions options_;  ///< as given, checked, with the domain resolved
+  Aabb domain_;
   double exactBand_ = 0.0;
   std::uint32_t resolution_ = 0;  ///< 2^L: finest cells per axis
 

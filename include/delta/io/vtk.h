@@ -13,7 +13,9 @@
 /// @file
 /// Output that ParaView opens: VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), binary, double
 /// precision, parallel PolyData (.pvtp) that joins .vtp pieces into one data set, and ParaView
-/// collections (.pvd) that play files as a time series. Each writer replaces an existing file,
+/// collections (.pvd) that play files as a time series. Each writer replaces an existing file
+/// whole or not at all (io/atomic_file.h: a failed write, a full disk, leaves the previous file
+/// as it was and no temporary file; a symlink at the path is kept and its target replaced),
 /// writes empty data as a valid empty file (a .pvtp needs one piece at least), and writes
 /// coordinates and values as they are (NaN included).
 ///
@@ -68,7 +70,7 @@ void writeVtp(const VtkPolyData& data, const std::filesystem::path& path);
 /// and cell arrays are read, and every piece must have been written with the same arrays (names
 /// and components). A piece may hold no points; the pieces need not exist yet. Throws delta::Error
 /// naming the path when there are no pieces, an array has fewer than one component, or writing
-/// fails (removing what was written); replaces an existing file.
+/// fails (leaving the previous file); replaces an existing file.
 void writePvtp(const VtkPolyData& layout, std::span<const std::filesystem::path> pieces,
                const std::filesystem::path& path);
 
@@ -88,7 +90,7 @@ struct VtkVoxelGrid {
 /// version 1.0, raw appended little-endian data, Float64 values, Int64 connectivity and offsets,
 /// UInt8 cell types). Throws delta::Error naming the path when an array's size does not match
 /// its points or voxels, a voxel refers past the points (writing nothing), or writing fails
-/// (removing what was written).
+/// (leaving the previous file).
 void writeVtu(const VtkVoxelGrid& grid, const std::filesystem::path& path);
 
 /// One file of a time series: the time it shows and where it is, relative to the .pvd file

@@ -30,6 +30,11 @@ struct PointTriangleResult {
   TriangleFeature feature = TriangleFeature::Face;
 };
 
+/// Squared distances at most this times the longest edge's square are checked exactly for a
+/// point on the triangle's boundary (closestPointOnTriangle): 2⁻⁸⁰·L², some 2²⁴ times the square
+/// of the kernel's rounding error (a few ε·L) for such a point, so that none escapes the check.
+inline constexpr double kExactBoundaryCheck = 0x1p-80;
+
 /// Closest point on a solid triangle to `p`, by Voronoi regions of the vertices, edges and face
 /// (Ericson, Real-Time Collision Detection, 5.1.5). A zero-area triangle degrades to its longest
 /// edge (a segment) or to a point; the result is never NaN for finite input.
@@ -48,10 +53,30 @@ struct PointTriangleResult {
 /// a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the needle).
 ///
 /// A point on the triangle (within rounding) gets distance 0, or a rounding error's, and itself
-/// as the closest point. Coordinates must be finite; distanceSquared overflows to +∞ for
-/// distances beyond about 1e154.
+/// as the closest point. A point exactly on a vertex or an edge (in exact arithmetic on the
+/// doubles given) gets distance exactly 0 and itself as the closest point, so that the triangles
+/// sharing that vertex or edge tie and a search names the smallest id: where the computed
+/// squared distance is at most kExactBoundaryCheck·L² (L the longest edge, far above the
+/// rounding), an exact test (Shewchuk's expansions) decides whether the point lies on one of the
+/// three edges. (A point exactly inside the face keeps the projection's rounding error.)
+/// Coordinates must be finite and, for the accuracy above, within ±kLargestCoordinate
+/// (mesh/coordinate_range.h: 2²⁰⁰; the queries check it): distanceSquared overflows to +∞ for
+/// distances beyond about 1e154, and the edge tests, of degree 4, beyond 1e77. A square below about
+/// 1e-308 loses precision to underflow (distanceAtScale does not).
 ///
 /// Threading: a pure function; safe from any thread.
 PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triangle) noexcept;
+
+/// The distance closestPointOnTriangle gives, √distanceSquared, computed where its square does
+/// not underflow: 0 for a point exactly on the triangle's boundary (as the kernel decides it),
+/// otherwise the kernel run on `p` and the triangle less its first vertex (the differences it
+/// takes itself) scaled by a power of two to about the triangle's size (exact), and scaled back.
+/// Bit for bit √distanceSquared wherever nothing underflows; below (a triangle and a gap both
+/// smaller than about 1e-150) it keeps the kernel's accuracy, a few ε·(size + distance), where
+/// the square loses it or is 0: a point 1e-300 off a triangle of size 1e-300 is at 1e-300, not
+/// 0. (Off a triangle of size 1, 1e-300 is far below that accuracy, and 0 is its answer.)
+///
+/// Threading: a pure function; safe from any thread.
+double distanceAtScale(const Vec3& p, const Triangle& triangle) noexcept;
 
 }  // namespace delta::kernels

@@ -22,6 +22,11 @@ struct MassProperties {
 /// ∫ρ(|r|²I − r rᵀ) about the centroid: moments on the diagonal, products of inertia negated off
 /// it; it turns as R I Rᵀ when the mesh is rotated by R.
 ///
+/// Any finite mesh, scaled as signedVolume while it is summed; throws delta::Error when the
+/// volume, the mass or a nonzero entry of the inertia tensor is beyond a double or below its
+/// smallest normal number (the inertia, of degree 5, leaves the range from meshes of size 1e61
+/// or 1e-61 on).
+///
 /// Throws delta::Error when the mesh is not closed or not consistently oriented
 /// (analyzeTopology), when it is inside-out (negative volume) or has zero volume (|V| ≤ 1e-12·d³,
 /// d the bounding-box diagonal), or when `density` is not finite and positive. Degenerate
@@ -34,7 +39,12 @@ MassProperties massProperties(const Mesh& mesh, double density = 1.0);
 /// inside-out one, about 0 for a flat one). Meaningful only for closed meshes; does not check
 /// (an open mesh gives a value that depends on where the origin is).
 ///
+/// Any finite mesh: summed with the coordinates relative to the box's centre scaled by a power of
+/// two to about 1 (exact), so that no product under- or overflows, then scaled back. Throws
+/// delta::Error when the volume itself is beyond a double (a mesh of size 1e103 or more) or below
+/// its smallest normal number (a nonzero volume of a mesh of size 1e-103 or less).
+///
 /// Threading (both functions): read the mesh only; safe to call concurrently.
-double signedVolume(const Mesh& mesh) noexcept;
+double signedVolume(const Mesh& mesh);
 
 }  // namespace delta

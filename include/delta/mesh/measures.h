@@ -31,13 +31,19 @@ bool isDegenerate(const Triangle& triangle) noexcept;
 std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
 
 /// The sum of the triangles' areas (degenerate ones add 0; overlapping triangles each count).
+/// Any finite mesh: the edges are scaled by a power of two to about the mesh's size 1 (exact)
+/// while the cross products are summed, then the sum is scaled back. Throws delta::Error when
+/// the area itself is beyond a double (a mesh of size 1e154 or more) or a nonzero area is below
+/// its smallest normal number.
 ///
 /// Threading: reads the mesh only; safe to call concurrently.
-double surfaceArea(const Mesh& mesh) noexcept;
+double surfaceArea(const Mesh& mesh);
 
 /// Lengths of the distinct edges (an edge shared by two triangles counts once; triangles with a
 /// repeated index add none, as in analyzeTopology). Zero-length edges count; with no edge at
-/// all every statistic is 0 (never NaN).
+/// all every statistic is 0 (never NaN). Measured with the coordinates scaled by a power of two
+/// (exact) so that no square overflows; throws delta::Error when the longest edge itself is
+/// beyond a double (vertices near ±1.8e308 on opposite sides).
 ///
 /// Threading: reads the mesh only; safe to call concurrently.
 EdgeLengths edgeLengths(const Mesh& mesh);

@@ -23,8 +23,12 @@ using TriangleIndices = std::array<std::uint32_t, 3>;
 /// Invariants, checked on construction (else `delta::Error` naming the element and its value):
 /// at least one triangle, every coordinate finite, every index below the vertex count, fewer
 /// than 2³² vertices. Zero-area (degenerate) triangles and unreferenced vertices are kept: every
-/// query accepts them. Transforms keep the invariants: one whose result would not be finite
-/// throws and leaves the mesh as it was.
+/// query accepts them. Any finite coordinates make a valid Mesh, and its measures (surfaceArea,
+/// signedVolume, massProperties: rescaled by powers of two) answer for any of them or throw where
+/// the answer is beyond a double; the proximity queries answer exactly within the coordinate
+/// range of mesh/coordinate_range.h (±2²⁰⁰, and a mesh not all below 2⁻²⁰⁰ in magnitude) and
+/// throw delta::Error naming the mesh, the value and the range outside it. Transforms keep the
+/// invariants: one whose result would not be finite throws and leaves the mesh as it was.
 ///
 /// Example:
 ///

@@ -36,7 +36,9 @@ namespace delta::contactdetection {
 /// with itself and with each neighbour it shares a vertex or an edge with (and an ordinary one
 /// for every other pair closer than 2ε). Meshes further than 2ε apart give none.
 ///
-/// Throws delta::Error when ε is not finite and positive or a mesh has no triangles.
+/// Throws delta::Error when ε is not finite and positive, a mesh has no triangles, or a mesh is
+/// outside the coordinate range (mesh/coordinate_range.h: a coordinate beyond ±2²⁰⁰, or every
+/// coordinate below 2⁻²⁰⁰; the message names the first or second mesh, its box and the range).
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once, and it runs in
 /// parallel over the first mesh's triangles itself (core/parallel.h), serially inside an
@@ -57,7 +59,8 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 /// (QueryMesh::transform) are compared where they are: the second's boxes and, leaf by leaf, its
 /// triangles are carried into the first's prepared frame; nothing is rebuilt.
 ///
-/// Throws and threading as the flattened form.
+/// Throws and threading as the flattened form; moved meshes are checked where they are and with
+/// the second carried into the first's frame (where the kernels meet them).
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver = kernels::Solver::Hybrid);
 

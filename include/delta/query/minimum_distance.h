@@ -48,7 +48,10 @@ struct MinimumDistance {
 /// the smallest ids and p = q a point of both. Degenerate triangles take part as the segments
 /// or points they are.
 ///
-/// Throws delta::Error when either mesh has no triangles.
+/// Throws delta::Error when either mesh has no triangles, or is outside the coordinate range
+/// (mesh/coordinate_range.h: a coordinate beyond ±2²⁰⁰, or every coordinate below 2⁻²⁰⁰; the
+/// message names the first or second mesh, its box and the range): never +∞ or a false
+/// "intersect" from overflowed products.
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once (parallel
 /// inside, serial inside an enclosing OpenMP parallel region).
@@ -62,8 +65,9 @@ MinimumDistance minimumDistance(const TriangleSoA& first, const TriangleSoA& sec
 /// its triangles are carried into the first's prepared frame, and `p`, `q` come back where the
 /// meshes are. The same exact distance (to the kernels' rounding) and the same tie rule
 /// (smallest (first, second) ids among pairs at exactly the minimum), the same answers for
-/// touching, interpenetrating and degenerate input. Cannot fail: a QueryMesh always has
-/// triangles.
+/// touching, interpenetrating and degenerate input. Throws delta::Error only where the moved
+/// meshes leave the coordinate range (each where it is, and the second carried into the first's
+/// frame: ±2²⁰⁰); a QueryMesh always has triangles.
 ///
 /// Threading: runs on the calling thread; reads both meshes only, so any number of threads may
 /// call it at once on the same QueryMeshes.

@@ -20,9 +20,11 @@ inline constexpr std::uint32_t kNoTriangle = std::numeric_limits<std::uint32_t>:
 struct PointDistance {
   /// The (unsigned) distance to the closest point of the mesh; +∞ for a point further than ε.
   double distance = std::numeric_limits<double>::infinity();
-  Vec3 closest;                          ///< the closest point of the mesh
-  std::uint32_t triangle = kNoTriangle;  ///< the triangle it lies on (the smallest id of a tie)
-  bool inside = false;                   ///< inside the closed mesh (signed queries only)
+  Vec3 closest;  ///< the closest point of the mesh
+  /// The triangle it lies on: the smallest id of a tie, such as a point exactly on a vertex or
+  /// an edge, which every triangle sharing it is at distance 0 from.
+  std::uint32_t triangle = kNoTriangle;
+  bool inside = false;  ///< inside the closed mesh (signed queries only)
 
   bool found() const noexcept { return triangle != kNoTriangle; }
   /// The distance, negative inside (signed queries).
@@ -51,12 +53,23 @@ struct PointQuery {
 ///
 /// Degenerate input: zero-area triangles are the segments or points they are; coincident points
 /// get the same answer; a point on the surface gets distance 0 (within rounding) and is not
-/// inside. A closed mesh that intersects itself has no well-defined inside: its signs are those
-/// of the closest feature's pseudonormal.
+/// inside; a point exactly on a vertex or an edge gets distance exactly 0, itself as the closest
+/// point and the smallest id of the triangles sharing it (kernels::closestPointOnTriangle decides
+/// it exactly). A closed mesh that intersects itself has no well-defined inside: its signs are
+/// those of the closest feature's pseudonormal; a point outside the mesh's box is outside.
 ///
-/// Throws delta::Error when ε is NaN or not positive, a point has a non-finite coordinate (the
-/// error names its index), or `signedDistance` is asked of a mesh that is not closed (the error
-/// says how: boundary, non-manifold or misoriented edges). No points: an empty result.
+/// Coordinates (mesh/coordinate_range.h): every point, where it is and carried into the mesh's
+/// prepared frame by its pose, must lie within ±2²⁰⁰ (kLargestCoordinate, 1.6e60), where squared
+/// distances cannot overflow; answers are then finite and exact as above. At the small end, where
+/// the squared distance underflows (below 2⁻⁹⁶⁰, distances under 1.5e-154), the triangles that
+/// tie at 0 are compared by their distances at a power-of-two scale (kernels::distanceAtScale),
+/// so a point 1e-301 off a triangle of size 1e-300 is at 1e-301 and signed, not on the surface;
+/// off a triangle of size 1 such a gap is below the kernel's rounding, and 0 is the answer.
+///
+/// Throws delta::Error when ε is NaN or not positive, a point has a non-finite coordinate or one
+/// beyond ±2²⁰⁰ where it is or in the mesh's frame (the error names its index, the coordinates
+/// and the range), or `signedDistance` is asked of a mesh that is not closed (the error says how:
+/// boundary, non-manifold or misoriented edges). No points: an empty result.
 ///
 /// Threading: reads its inputs only; any number of threads may query one QueryMesh at once (in
 /// an enclosing OpenMP parallel region each call runs serially on its own thread).

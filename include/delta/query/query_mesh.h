@@ -48,7 +48,10 @@ struct QueryMeshData;
 /// Any valid Mesh may be prepared: degenerate triangles, unreferenced vertices, open or
 /// non-manifold surfaces and self-intersections are kept as they are (closed() is then false
 /// where the topology says so, and only unsigned queries are defined). Throws delta::Error for a
-/// mesh with no triangles (which a Mesh cannot be) or with 2³² − 1 triangles or more.
+/// mesh with no triangles (which a Mesh cannot be) or with 2³² − 1 triangles or more, and for one
+/// outside the coordinate range the queries answer exactly (mesh/coordinate_range.h): a
+/// coordinate beyond ±2²⁰⁰ (1.6e60), or every coordinate below 2⁻²⁰⁰ (6.2e-61) in magnitude; the
+/// message gives the mesh's box and the range. Queries check a moved mesh where it is.
 ///
 /// Threading: the prepared data is immutable and shared; any number of threads may query one
 /// QueryMesh (or copies of it) at once. `transform` changes only this object's pose: not while

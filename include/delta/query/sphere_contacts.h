@@ -43,8 +43,9 @@ namespace delta::contactdetection {
 ///
 /// Throws delta::Error when ε is not finite and positive, when the mesh has no triangles, or
 /// when a sphere's centre is not finite or its radius is not finite and positive (the message
-/// names the sphere's index); these are checked before any work, even for an empty span of
-/// spheres, which otherwise gives no contacts. Ids are 32-bit: more than 2³² spheres or
+/// names the sphere's index), when a sphere reaches beyond ±2²⁰⁰ or the mesh is outside the
+/// coordinate range (mesh/coordinate_range.h); these are checked before any work, even for an empty
+/// span of spheres, which otherwise gives no contacts. Ids are 32-bit: more than 2³² spheres or
 /// triangles throw too.
 ///
 /// Threading: reads its inputs only; any number of threads may call it at once on the same

@@ -20,7 +20,9 @@ namespace delta {
 /// surface itself it is about ½ and the question "inside?" has no robust answer: there the
 /// distance (zero) is what matters. Degenerate (zero-area) triangles contribute 0.
 ///
-/// An empty TriangleSoA gives 0.
+/// An empty TriangleSoA gives 0. Any finite coordinates: a solid angle depends on directions
+/// only, and its products of degree 3 are taken on the differences scaled by a power of two to
+/// about 1 where they would under- or overflow (solidAngle).
 ///
 /// O(triangles). Threading: reads the mesh only; safe to call from any number of threads.
 double windingNumber(const TriangleSoA& mesh, const Vec3& point) noexcept;

@@ -83,6 +83,18 @@ std::optional<std::uint64_t> parseUnsigned(std::string_view token) noexcept {
   return value;
 }
 
+ParsedReal parseReal(std::string_view token) noexcept {
+  if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
+  const char* end = token.data() + token.size();
+  ParsedReal parsed;
+  const auto [stop, status] =
+      std::from_chars(token.data(), end, parsed.value, std::chars_format::general);
+  if (token.empty() || status == std::errc::invalid_argument || stop != end) return {};
+  parsed.status =
+      status == std::errc::result_out_of_range ? RealStatus::outOfRange : RealStatus::ok;
+  return parsed;
+}
+
 void requireText(std::string_view text) {
   const std::size_t at = text.find('\0');
   if (at != std::string_view::npos)

@@ -8,8 +8,9 @@
 // multiply–adds round alike in a lane and in a scalar register, the data-dependent branches
 // become selects whose both arms are computed, and this file is compiled without contracting
 // a·b + c into fused operations (CMakeLists.txt), which the scalar kernel, built for baseline
-// x86-64, never has. Only zeros' signs may differ (the scalar kernel adds a few signed zeros
-// that change nothing else), and no squared distance depends on them.
+// x86-64, never has; where the scalar kernel runs its exact boundary test, the lane takes its
+// value. Only zeros' signs may differ (the scalar kernel adds a few signed zeros that change
+// nothing else), and no squared distance depends on them.
 #include "exact_lanes.h"
 
 #if defined(DELTA_X86_ISAS)
@@ -154,10 +155,19 @@ DELTA_EXACT_TARGET inline Lanes lengthSquared(const Vec& v) {
        {segmentDistance(r, origin, u, edge0), segmentDistance(r, u, v, edge1),
         segmentDistance(r, v, origin, edge2)})
     edges = select(less(distance, edges), distance, edges);
+  const Lanes squared = select(inside, face, edges);
+  // The scalar kernel's exact boundary test (a point exactly on a vertex or an edge gets 0): it
+  // runs where the square is positive and within kExactBoundaryCheck·L², the lanes that pass
+  // take the scalar kernel's value (rare: a point within rounding of a triangle's boundary).
+  const __mmask8 nearBoundary =
+      greater(squared, zero) &
+      _mm512_cmp_pd_mask(squared, splat(kernels::kExactBoundaryCheck) * longest, _CMP_LE_OQ);
   alignas(64) double result[8];
-  _mm512_store_pd(result, select(inside, face, edges));
+  _mm512_store_pd(result, squared);
   for (std::size_t i = 0; i < count; ++i)
-    out[i] = result[i];
+    out[i] = nearBoundary >> i & 1
+                 ? kernels::closestPointOnTriangle(point, mesh.triangle(sorted[i])).distanceSquared
+                 : result[i];
 }
 
 }  // namespace delta::detail

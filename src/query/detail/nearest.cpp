@@ -277,12 +277,17 @@ Descent descentFor(kernels::Isa isa) noexcept {
   return descent;
 }
 
+/// The descent, its limit capped at the largest finite double: an empty slot of a node (the
+/// tree is not full) lies at +∞, and only a finite limit keeps it out. (An unlimited search
+/// from a point whose every distance overflowed once walked into them, past the end of the
+/// tree: the queries now refuse such points, coordinate_range.h, and this keeps the descent
+/// inside the tree whatever it is given. A NaN limit finds nothing.)
 Nearest nearestWith(const Descent& descent, const QueryMeshData& mesh, const Vec3& point,
                     double limitSquared) noexcept {
   const Vec3 local = point - mesh.lanes.origin;
   return descent.descend(
       mesh, {mesh.lanes.view(), {local.x, local.y, local.z}, descent.bounds, descent.exact}, point,
-      limitSquared);
+      std::min(limitSquared, std::numeric_limits<double>::max()));
 }
 
 }  // namespace
@@ -298,8 +303,36 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double lim
   return nearestWith(descentFor(isa), mesh, point, limitSquared);
 }
 
+Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
+                         const Nearest& nearest) noexcept {
+  // A winner whose square is positive is the least square, which no triangle underflowed to
+  // 0 beat: only squares tied at 0 need their distances at scale.
+  if (nearest.distanceSquared > 0.0) return nearest;
+  double best = distanceOf(mesh, point, nearest);
+  if (!(best > 0.0)) return nearest;
+  Nearest resolved = nearest;
+  for (std::size_t k = 0; k < mesh.size(); ++k) {
+    const Triangle triangle = mesh.triangle(k);
+    const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, triangle);
+    if (!(r.distanceSquared < kUnderflowingSquare)) continue;
+    const double distance = kernels::distanceAtScale(point, triangle);
+    if (distance < best || (distance == best && mesh.order[k] < resolved.triangle)) {
+      best = distance;
+      resolved.distanceSquared = r.distanceSquared;
+      resolved.triangle = mesh.order[k];
+      resolved.sorted = static_cast<std::uint32_t>(k);
+      resolved.closest = r;
+    }
+  }
+  return resolved;
+}
+
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {
-  if (!(nearest.distanceSquared > 0.0)) return false;  // on the surface
+  // Outside the box of the vertices is outside the solid. (Far from the mesh, beyond about 1e16
+  // of its size, the squared distances of all its triangles round alike and the nearest is the
+  // smallest id among them, whose feature's normal may face away: its side is no answer there.)
+  if (!mesh.bounds.contains(point)) return false;
+  if (!(distanceOf(mesh, point, nearest) > 0.0)) return false;  // on the surface
   // The features VertexA … EdgeCA are the pseudonormal slots 0 … 5, in that order; a face point
   // takes the face's own normal.
   static_assert(static_cast<int>(kernels::TriangleFeature::VertexA) == 0 &&

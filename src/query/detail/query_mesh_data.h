@@ -256,10 +256,37 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double lim
 Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
                         kernels::Isa isa) noexcept;
 
+/// Below this squared distance (2⁻⁹⁶⁰) a square may have lost precision to underflow, or be 0
+/// for a distance below about 1e-162 (coordinate_range.h).
+inline constexpr double kUnderflowingSquare = 0x1p-960;
+
+/// The distance from `point` to its nearest triangle (found): √distanceSquared, or, where the
+/// square may have underflowed, the same kernel run on the triangle and the point less its
+/// first vertex (the differences it takes itself) scaled by a power of two to about 1, which is
+/// exact: the kernel's distance at a scale where its square does not underflow, so that a point
+/// 1e-300 off a face is not reported on it.
+inline double distanceOf(const QueryMeshData& mesh, const Vec3& point,
+                         const Nearest& nearest) noexcept {
+  if (!(nearest.distanceSquared < kUnderflowingSquare)) return std::sqrt(nearest.distanceSquared);
+  return kernels::distanceAtScale(point, mesh.triangle(nearest.sorted));
+}
+
+/// The nearest triangle where the search's winner has a square that may have underflowed
+/// (`nearest.distanceSquared` < kUnderflowingSquare): those squares tie at 0 or nearly, so the
+/// triangles that may be nearer (every one whose square is below kUnderflowingSquare) are
+/// compared by their distances at scale (kernels::distanceAtScale), ties to the smallest id.
+/// Returns `nearest` itself, at once, where its square is positive (the least, which no square
+/// underflowed to 0 beat) or its distance at scale is 0 (the point lies on it: nothing is
+/// nearer, and it is the smallest id of the squares at 0); otherwise (squares at 0 by underflow:
+/// a point within 1e-162 of a triangle smaller than about 1e-77, not on it) a scan of every
+/// triangle, O(n), for such points only.
+Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
+                         const Nearest& nearest) noexcept;
+
 /// Whether `point` lies inside the closed mesh, given its nearest triangle: the sign of the
 /// offset from the closest point along the pseudonormal of the feature it lies on, or, where that
 /// is too close to zero to trust, the generalized winding number. False on the surface
-/// (distance 0). The mesh must be closed.
+/// (distanceOf 0). The mesh must be closed.
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept;
 
 }  // namespace delta::detail

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-/// Small allocation-free helpers for the format checks (format_checks.h): lines, tokens, numbers.
+/// Small allocation-free helpers for the mesh readers (mesh_readers.h): lines, tokens, numbers.
 namespace delta::io::detail {
 
 /// Walks a text line by line. A line ends at '\n', '\r' or '\f'; runs of line ends are skipped
@@ -43,6 +43,24 @@ bool startsLikeNumber(std::string_view token) noexcept;
 /// `token` as an unsigned decimal integer (digits only, no sign), or nullopt. Values too large
 /// for 64 bits come back as UINT64_MAX, so a caller can say "too large" rather than "garbled".
 std::optional<std::uint64_t> parseUnsigned(std::string_view token) noexcept;
+
+/// What parseReal made of a token.
+enum class RealStatus {
+  ok,          ///< the whole token is a decimal number (or "inf", "nan"), correctly rounded
+  notANumber,  ///< empty, garbled, or with characters after the number
+  outOfRange,  ///< a decimal beyond the range of double (1e999), or so small it rounds to 0
+};
+
+/// A token parsed as a real number.
+struct ParsedReal {
+  double value = 0.0;
+  RealStatus status = RealStatus::notANumber;
+};
+
+/// The whole of `token` as a double, correctly rounded from its decimal text (std::from_chars,
+/// general format; a leading '+' is allowed). "inf" and "nan" parse as such: callers check
+/// finiteness, to say "not finite".
+ParsedReal parseReal(std::string_view token) noexcept;
 
 /// Throws delta::Error if `text` holds a NUL byte: assimp's text readers stop there.
 void requireText(std::string_view text);

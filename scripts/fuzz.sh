@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Fuzzes every reader Δ owns (fuzz/: OFF, PLY, OBJ, STL meshes, query points, the DEM config)
+# with libFuzzer under AddressSanitizer + UndefinedBehaviorSanitizer: builds the targets with
+# clang (build-fuzz/), replays every regression input in tests/fuzz/TARGET/, then fuzzes each
+# target for SECONDS (default 20) from seeds: those regression inputs, assimp's test models and
+# CGAL's meshes of the target's format, and the corpus earlier runs grew in build-fuzz/corpus/.
+# Fails on the first crash, leak, hang (10 s an input) or sanitizer report, leaving the input in
+# build-fuzz/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a regression.
+#   scripts/fuzz.sh [SECONDS]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-20}
+
+CC=clang CXX=clang++ scripts/setup.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_TESTS=OFF \
+  -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
+
+# Seeds a target starts from, beside its regression inputs: files of its format under 64 KiB.
+seeds() {
+  case $1 in
+    load_off) find data/assimp/OFF data/meshes -maxdepth 2 -name '*.off' -size -64k ;;
+    load_ply) find data/assimp/PLY -name '*.ply' -size -64k ;;
+    load_obj) find data/assimp/OBJ -name '*.obj' -size -64k ;;
+    load_stl) find data/assimp/STL -iname '*.stl' -size -64k ;;
+  esac
+}
+
+total=0
+for target in load_off load_ply load_obj load_stl points dem_config; do
+  fuzzer=build-fuzz/fuzz/fuzz_$target
+  regressions=tests/fuzz/$target
+  corpus=build-fuzz/corpus/$target
+  seed_dir=build-fuzz/seeds/$target
+  crashes=build-fuzz/crashes/$target/
+  mkdir -p "$corpus" "$seed_dir" "$crashes"
+  seeds "$target" | while read -r seed; do cp -f "$seed" "$seed_dir/"; done
+  if compgen -G "$regressions/*" >/dev/null; then
+    replay=build-fuzz/replay_$target.log
+    if ! "$fuzzer" "$regressions"/* >"$replay" 2>&1; then
+      tail -n 60 "$replay"
+      echo "fuzz_$target: a regression input crashes again" >&2
+      exit 1
+    fi
+    echo "fuzz_$target: $(grep -c '^Executed' "$replay") regression inputs replayed, no crash"
+  fi
+  echo "== fuzz_$target: fuzzing for ${seconds}s"
+  log=build-fuzz/fuzz_$target.log
+  if ! "$fuzzer" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix="$crashes" "$corpus" "$seed_dir" \
+    $([ -d "$regressions" ] && echo "$regressions") >"$log" 2>&1; then
+    tail -n 60 "$log"
+    echo "fuzz_$target: a crash; the input is in $crashes" >&2
+    exit 1
+  fi
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
+  echo "fuzz_$target: ${runs:-?} inputs run, no crash"
+  total=$((total + ${runs:-0}))
+done
+echo "fuzzing: $total inputs run in all, no crash"

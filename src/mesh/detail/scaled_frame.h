@@ -1,0 +1,52 @@
+#pragma once
+
+#include <cmath>
+#include <string>
+
+#include "delta/core/aabb.h"
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/core/vec3.h"
+
+namespace delta::detail {
+
+/// The frame the mesh measures sum in (mass_properties.cpp, measures.cpp): the box's centre as
+/// origin, and the coordinates relative to it scaled by 2^-exponent (exact) so that the largest
+/// is about 1. The sums are of degree up to 5 in the coordinates (the inertia): unscaled, a mesh
+/// of size 1e62 overflows them and one of 1e-62 underflows them; scaled, any finite mesh sums
+/// them at full precision, and only the answer, scaled back, can leave the range of a double
+/// (then an error says so).
+struct ScaledFrame {
+  Vec3 origin;
+  double scale = 1.0;
+  int exponent = 0;
+
+  /// (p − origin)·scale, computed from p·scale and origin·scale: nothing overflows even where
+  /// the coordinates span the whole double range.
+  Vec3 operator()(const Vec3& p) const noexcept { return p * scale - origin * scale; }
+};
+
+inline ScaledFrame scaledFrame(const Aabb& box) noexcept {
+  ScaledFrame frame;
+  frame.origin = box.lower * 0.5 + box.upper * 0.5;  // no overflow, unlike (lower + upper)/2
+  const double halfExtent = maxAbs(box.upper * 0.5 - box.lower * 0.5);
+  if (halfExtent > 0.0 && std::isfinite(halfExtent)) {
+    frame.exponent = std::ilogb(halfExtent);
+    frame.scale = std::ldexp(1.0, -frame.exponent);
+  }
+  return frame;
+}
+
+/// `value`·2^exponent, exactly, or delta::Error naming `what` where that overflows a double or
+/// underflows below its smallest normal number (a rounded answer).
+inline double scaledBack(double value, int exponent, const char* caller, const char* what) {
+  const double result = std::ldexp(value, exponent);
+  if (std::isfinite(result) && (value == 0.0 || std::abs(result) >= 0x1p-1022)) return result;
+  throw Error(std::string(caller) + ": the " + what + " (" + toString(value) + " × 2^" +
+              std::to_string(exponent) + ") " +
+              (std::isfinite(result) ? "underflows below the smallest normal double"
+                                     : "overflows a double") +
+              "; scale the mesh by a power of two first");
+}
+
+}  // namespace delta::detail

@@ -1,0 +1,51 @@
+#include "placement.h"
+
+#include "delta/mesh/coordinate_range.h"
+
+namespace delta::detail {
+
+Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
+  Aabb moved;
+  if (box.empty()) return moved;
+  for (int corner = 0; corner < 8; ++corner)
+    moved.extend(motion.apply({corner & 1 ? box.upper.x : box.lower.x,
+                               corner & 2 ? box.upper.y : box.lower.y,
+                               corner & 4 ? box.upper.z : box.lower.z}));
+  return moved;
+}
+
+namespace {
+
+/// A sufficient test, one rotation instead of movedBox's eight: every point of `box` moved by
+/// `motion` lies within the ball about the moved centre of the box's half diagonal, so within
+/// the range when that ball's reach from the origin is (with a factor of two to spare for the
+/// rounding of these few operations). False also where it overflows or meets a NaN.
+bool surelyInRange(const Aabb& box, const RigidTransform& motion) noexcept {
+  if (box.empty()) return true;
+  const double reach =
+      length(motion.apply((box.lower + box.upper) * 0.5)) + 0.5 * length(box.upper - box.lower);
+  return reach <= 0.5 * kLargestCoordinate;
+}
+
+}  // namespace
+
+void checkPlacedPair(const QueryMesh& first, const QueryMesh& second, const char* query) {
+  if (!first.moved() && !second.moved()) return;  // where they were prepared: checked then
+  // Called for every pair of a DEM step: the exact boxes and the messages only where the quick
+  // test cannot tell.
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  if (surelyInRange(first.bounds(), first.pose()) &&
+      surelyInRange(second.bounds(), second.pose()) &&
+      surelyInRange(second.bounds(), secondToFirst))
+    return;
+  const Aabb placed[3] = {movedBox(first.bounds(), first.pose()),
+                          movedBox(second.bounds(), second.pose()),
+                          movedBox(second.bounds(), secondToFirst)};
+  constexpr const char* kWhich[3] = {": the first mesh", ": the second mesh",
+                                     ": the second mesh, carried into the first's frame,"};
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!boxInCoordinateRange(placed[i]))
+      checkCoordinateRange(placed[i], std::string(query) + kWhich[i]);
+}
+
+}  // namespace delta::detail
