@@ -78,3 +78,11 @@ def test_unsigned_grid_of_an_open_boundary_and_vtu(tmp_path):
     assert text.startswith(b"<?xml") and b'Name="distance"' in text
     with pytest.raises(delta.Error):
         delta.ib.AdaptiveGrid(quad, levels=0, signed=False)
+
+
+def test_a_grid_that_cannot_fit_is_refused_before_it_is_made():
+    # Issue 21: `delta ib --levels 12` on an 80-triangle granulate exhausted the memory; the
+    # Python module shares the ib layer's check, level by level, before the cells are made.
+    granulate = delta.granulate(1)
+    with pytest.raises(delta.Error, match="32-bit indices hold"):
+        delta.ib.AdaptiveGrid(granulate, levels=16)
