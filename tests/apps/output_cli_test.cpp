@@ -14,26 +14,19 @@
 #include "delta/query/contacts.h"
 
 #include "apps/cli_run.h"
+#include "io/test_files.h"
 
 namespace delta::test {
 namespace {
 
 namespace fs = std::filesystem;
+using io::namesIn;
 
 /// A shell prefix that simulates a full disk for the command after it: writes past `kilobytes`
 /// fail with EFBIG (SIGXFSZ ignored). The limit also applies to the captured streams, which stay
 /// far below it.
 std::string fullDiskAfter(int kilobytes) {
   return "trap '' XFSZ; ulimit -f " + std::to_string(2 * kilobytes) + ";";
-}
-
-/// The names in `folder`, sorted.
-std::vector<std::string> namesIn(const fs::path& folder) {
-  std::vector<std::string> names;
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder))
-    names.push_back(entry.path().filename().string());
-  std::sort(names.begin(), names.end());
-  return names;
 }
 
 /// Runs `delta ARGUMENTS` with standard output sent to /dev/full; stderr captured.

@@ -19,6 +19,7 @@
 #include "delta/mesh/primitives.h"
 
 #include "io/file_size_limit.h"
+#include "io/test_files.h"
 
 namespace delta::io {
 namespace {
@@ -48,15 +49,6 @@ std::string contentOf(const fs::path& path) {
 
 void put(const fs::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
-}
-
-/// The names in `folder`, sorted: what a write left behind.
-std::vector<std::string> namesIn(const fs::path& folder) {
-  std::vector<std::string> names;
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder))
-    names.push_back(entry.path().filename().string());
-  std::sort(names.begin(), names.end());
-  return names;
 }
 
 /// Runs `write`, which must throw delta::Error whose message contains every one of `needles`.

@@ -15,7 +15,7 @@
 #include "delta/core/error.h"
 #include "delta/io/mesh_io.h"
 
-#include "io/temp_dir.h"
+#include "io/test_files.h"
 
 // The sanitizers' runtimes: their shadow memory rules out an address-space limit, and their
 // allocators (GCC 12's AddressSanitizer, LLVM 14's ThreadSanitizer) do not take their locks
@@ -34,21 +34,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const fs::path kAssimp = fs::path(DELTA_DATA_DIR) / "assimp";
-
-std::string readBytes(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
-
-std::string loadError(const fs::path& path) {
-  try {
-    load(path);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "loading " << path << " did not throw delta::Error";
-  return {};
-}
 
 /// Mutations of assimp's test models that crash assimp 5.2 in-process with SIGSEGV (found by
 /// truncating and flipping bytes, each checked by a standalone fork-per-file run).

@@ -17,7 +17,7 @@
 
 #include "delta/core/error.h"
 
-#include "io/temp_dir.h"
+#include "io/test_files.h"
 
 namespace delta::io {
 namespace {
@@ -32,22 +32,6 @@ const fs::path kAssimp = kData / "assimp";
 testing::AssertionResult dataPresent(const fs::path& path) {
   if (fs::exists(path)) return testing::AssertionSuccess();
   return testing::AssertionFailure() << "test data " << path << " is missing: run scripts/setup.sh";
-}
-
-std::string readBytes(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
-
-/// The message of the delta::Error that loading `path` throws; fails the test if none is thrown.
-std::string loadError(const fs::path& path) {
-  try {
-    load(path);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "loading " << path << " did not throw delta::Error";
-  return {};
 }
 
 /// A closed unit cube: 8 vertices, 12 outward-facing triangles.

@@ -23,7 +23,7 @@
 #include "delta/io/detail/soup_builder.h"
 #include "delta/io/mesh_io.h"
 
-#include "io/temp_dir.h"
+#include "io/test_files.h"
 
 namespace delta::io {
 namespace {
@@ -31,16 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const fs::path kData = DELTA_DATA_DIR;
-
-std::string loadError(const fs::path& path) {
-  try {
-    load(path);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "loading " << path << " did not throw delta::Error";
-  return {};
-}
 
 template <typename Read>
 std::string readError(Read read, const std::string& bytes) {

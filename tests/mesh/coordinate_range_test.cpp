@@ -17,17 +17,10 @@
 #include "delta/mesh/triangle_soa.h"
 
 #include "core/expect_error.h"
+#include "mesh/tetrahedron.h"
 
 namespace delta {
 namespace {
-
-Mesh scaled(Mesh mesh, double factor) {
-  mesh.scale(factor);
-  return mesh;
-}
-
-const Mesh kTetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
 
 TEST(CoordinateRange, ChecksAndMessages) {
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -26,19 +26,12 @@
 #include "delta/query/winding_number.h"
 
 #include "core/expect_error.h"
+#include "mesh/tetrahedron.h"
 #include "query/detail/query_mesh_data.h"
 #include "query/probe_points.h"
 
 namespace delta::contactdetection {
 namespace {
-
-Mesh scaled(Mesh mesh, double factor) {
-  mesh.scale(factor);
-  return mesh;
-}
-
-const Mesh kTetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
 
 TEST(FarCoordinates, FarPointIsRefusedNotACrash) {
   // Issue 21: a point at 1e155 segfaulted the unlimited search (every distance overflowed, and

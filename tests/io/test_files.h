@@ -2,11 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
 #include <system_error>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/io/mesh_io.h"
 
 namespace delta::io {
 
@@ -39,5 +44,31 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+/// The whole file at `path` (empty if it cannot be read).
+inline std::string readBytes(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+}
+
+/// The message of the delta::Error that loading `path` throws; fails the test if none is thrown.
+inline std::string loadError(const std::filesystem::path& path) {
+  try {
+    load(path);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "loading " << path << " did not throw delta::Error";
+  return {};
+}
+
+/// The names in `folder`, sorted: what a write left behind.
+inline std::vector<std::string> namesIn(const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const std::filesystem::directory_entry& entry : std::filesystem::directory_iterator(folder))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 }  // namespace delta::io
