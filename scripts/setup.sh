@@ -14,6 +14,11 @@ packages=(
   libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
   libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
   python3-dev python3-numpy python3-pytest pybind11-dev  # the Python module delta (python/)
+  zlib1g-dev  # the VTK writers compress with zlib (src/io/vtk.cpp)
+  python3-vtk9  # VTK's own readers open what Δ writes (python/tests/test_vtk_files.py)
+  python3-build python3-venv  # the wheel (pyproject.toml) and the venv that tests it
+  pkg-config  # the test of delta.pc (scripts/test_packages.sh)
+  ccache  # every build goes through it: the builds of one run share what compiles alike
   doxygen  # the API reference (the docs target) and the test Docs.NoWarnings
   libopenmpi-dev openmpi-bin  # MPI: the distributed DEM (delta::mpi, `delta dem` under mpirun)
 )
@@ -39,7 +44,10 @@ ln -sfn /usr/share/assimp/models data/assimp
 
 build=${1:-build}
 shift || true
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+# ccache: builds that compile a file alike (the Release build, the wheel's, the shared library's:
+# the same flags, no debug information) share the object.
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache \
+  "$@" >/dev/null
 cmake --build "$build"
 
 # The Python module: a .pth file in Debian's Python's site-packages points at this build's

@@ -2,9 +2,11 @@
 # The whole test suite: set up (scripts/setup.sh); every test built with AddressSanitizer +
 # UndefinedBehaviorSanitizer; the readers Δ owns fuzzed (scripts/fuzz.sh, clang's libFuzzer under
 # ASan + UBSan, 15 s a reader); the threaded tests built with ThreadSanitizer (clang, LLVM
-# OpenMP); the library installed and the examples (find_package consumer, immersed boundary)
-# built against the installed copy and run; then every test in the Release build (its ctest
-# summary is the closing line CI reads). Fails on the first failure.
+# OpenMP); the library installed and the packages checked as users get them
+# (scripts/test_packages.sh: CMake and pkg-config consumers of the static and shared library, the
+# wheel in a fresh venv), the immersed-boundary example built against the install and run; then
+# every test in the Release build (its ctest summary is the closing line CI reads). Fails on the
+# first failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -26,16 +28,12 @@ CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebIn
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \
   ctest -j"$jobs" -R "Thread|ParallelFor" --no-tests=error --output-on-failure)
 
-echo "== install, and build and run the examples against the installed copy"
+echo "== install: the packages as users get them, and the examples against the installed copy"
 scripts/setup.sh build
-rm -rf build/install build/consumer build/examples
-cmake --install build --prefix build/install >/dev/null
-for example in find_package immersed_boundary; do
-  cmake -S examples/$example -B build/examples/$example -G Ninja \
-    -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
-  cmake --build build/examples/$example
-done
-./build/examples/find_package/consumer
+scripts/test_packages.sh  # installs into build/install; shared library, pkg-config, wheel in a venv
+cmake -S examples/immersed_boundary -B build/examples/immersed_boundary -G Ninja \
+  -DCMAKE_PREFIX_PATH="$PWD/build/install" >/dev/null
+cmake --build build/examples/immersed_boundary
 ./build/examples/immersed_boundary/immersed_boundary data/meshes/fandisk.off build/examples/ib
 
 echo "== release build: every test"

@@ -76,8 +76,11 @@ void writeCsv(const std::vector<ContactPoint>& contacts, const std::string& path
 void writeVtp(const std::vector<ContactPoint>& contacts, const std::string& path) {
   std::vector<Vec3> points;
   io::VtkArray normal{"normal", 3, {}}, direction{"direction", 3, {}};
-  io::VtkArray gap{"distance", 1, {}}, overlap{"overlap", 1, {}}, converged{"converged", 1, {}};
-  io::VtkArray triangleA{"triangle_a", 1, {}}, triangleB{"triangle_b", 1, {}};
+  io::VtkArray gap{"distance", 1, {}};
+  io::VtkArray overlap{"overlap", 1, {}, io::VtkType::UInt8};
+  io::VtkArray converged{"converged", 1, {}, io::VtkType::UInt8};
+  io::VtkArray triangleA{"triangle_a", 1, {}, io::VtkType::UInt32};
+  io::VtkArray triangleB{"triangle_b", 1, {}, io::VtkType::UInt32};
   for (const ContactPoint& c : contacts) {
     points.push_back(c.x);
     normal.values.insert(normal.values.end(), {c.normal.x, c.normal.y, c.normal.z});

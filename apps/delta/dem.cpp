@@ -44,9 +44,18 @@ struct DemOptions {
   std::string config;
   std::map<std::string, std::string> given;  ///< config key → text, from the options
   std::string out;
+  std::string frames = "state";  ///< --frames: DemFrames by name
   bool json = false;
   bool quiet = false;
 };
+
+/// --frames NAME as DemFrames; throws delta::Error on another name.
+DemFrames framesOf(const DemOptions& options) {
+  if (options.frames == "state") return DemFrames::State;
+  if (options.frames == "triangles") return DemFrames::Triangles;
+  if (options.frames == "both") return DemFrames::Both;
+  throw Error("--frames '" + options.frames + "' is not state, triangles or both");
+}
 
 /// The config file, overridden by the options.
 DemSettings resolve(const DemOptions& options) {
@@ -503,10 +512,13 @@ void runDistributed(const DemOptions& options) {
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
     std::unique_ptr<DemOutput> output;
     if (!options.out.empty()) {  // rank 0 makes the folder, then the others find it
-      if (root) orAbort([&] { output = std::make_unique<DemOutput>(options.out, 0, ranks); });
+      const DemFrames frames = framesOf(options);
+      if (root)
+        orAbort([&] { output = std::make_unique<DemOutput>(options.out, frames, 0, ranks); });
       MPI_Barrier(MPI_COMM_WORLD);
       if (!root)
-        orAbort([&] { output = std::make_unique<DemOutput>(options.out, mpi.rank(), ranks); });
+        orAbort(
+            [&] { output = std::make_unique<DemOutput>(options.out, frames, mpi.rank(), ranks); });
     }
     Prepared prepared = prepare(settings);
     dem::DistributedWorld world(MPI_COMM_WORLD, prepared.scenario.world);
@@ -537,7 +549,9 @@ void run(const DemOptions& options) {
 #endif
   const DemSettings settings = resolve(options);
   std::unique_ptr<DemOutput> output;
-  if (!options.out.empty()) output = std::make_unique<DemOutput>(options.out);  // fail early
+  const DemFrames frames = framesOf(options);
+  if (!options.out.empty())
+    output = std::make_unique<DemOutput>(options.out, frames);  // fail early
   Prepared prepared = prepare(settings);
   const RunSummary summary = simulate(prepared.scenario, prepared.steps, prepared.outputEvery,
                                       output.get(), showProgress(options.quiet || options.json));
@@ -561,7 +575,11 @@ each key at most once; options given on the command line override it.
   particle_radius = 0.01          # its bounding radius in m (default and at most: the
                                   # scenario's largest particle)
 
---out DIR writes particles.pvd (particles_NNNNNN.vtp: triangles, particle id, velocity),
+--out DIR writes, compressed (zlib; ParaView reads it), particles_state.pvd
+(particles_state_NNNNNN.vtp: a point per particle with its id, shape, velocity,
+angular_velocity, orientation quaternion w,x,y,z and bounding_radius) and shape_K.vtp (each
+shape in its body frame, to glyph at those points); with --frames triangles or both,
+particles.pvd (particles_NNNNNN.vtp: every particle's triangles, particle id, velocity);
 contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, overlap),
 obstacles.vtp and log.csv (energies, contacts and step times, one row per step).
 
@@ -604,6 +622,10 @@ void addDemCommand(CLI::App& app) {
   dem->add_option("--out", options->out,
                   "Write a ParaView series and log.csv into folder DIR (made if missing)")
       ->type_name("DIR");
+  dem->add_option("--frames", options->frames,
+                  "What each frame shows of the particles with --out: state (a point per "
+                  "particle, the default), triangles (their surfaces, ~16x larger) or both")
+      ->type_name("state|triangles|both");
   dem->add_flag("--json", options->json, "Print one JSON object instead of text");
   dem->add_flag("--quiet", options->quiet, "No progress line");
   dem->callback([options] { run(*options); });

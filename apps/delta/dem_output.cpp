@@ -20,7 +20,9 @@ void append(io::VtkArray& array, const Vec3& v) {
 /// Every particle's triangles where the particle is, with the velocity of each vertex.
 io::VtkPolyData particlesOf(const dem::World& world, std::span<const std::uint32_t> ids) {
   io::VtkPolyData data;
-  io::VtkArray velocity{"velocity", 3, {}}, particleId{"particle", 1, {}}, shapeId{"shape", 1, {}};
+  io::VtkArray velocity{"velocity", 3, {}};
+  io::VtkArray particleId{"particle", 1, {}, io::VtkType::UInt32};
+  io::VtkArray shapeId{"shape", 1, {}, io::VtkType::UInt32};
   const std::span<const dem::Particle> particles = world.particles();
   for (std::size_t p = 0; p < particles.size(); ++p) {
     const dem::Particle& particle = particles[p];
@@ -43,12 +45,41 @@ io::VtkPolyData particlesOf(const dem::World& world, std::span<const std::uint32
   return data;
 }
 
+/// Every particle as a point at its centre of mass, with what places its shape there.
+io::VtkPolyData statesOf(const dem::World& world, std::span<const std::uint32_t> ids) {
+  std::vector<Vec3> points;
+  io::VtkArray particleId{"particle", 1, {}, io::VtkType::UInt32};
+  io::VtkArray shapeId{"shape", 1, {}, io::VtkType::UInt32};
+  io::VtkArray velocity{"velocity", 3, {}}, angularVelocity{"angular_velocity", 3, {}};
+  io::VtkArray orientation{"orientation", 4, {}}, boundingRadius{"bounding_radius", 1, {}};
+  const std::span<const dem::Particle> particles = world.particles();
+  points.reserve(particles.size());
+  for (std::size_t p = 0; p < particles.size(); ++p) {
+    const dem::Particle& particle = particles[p];
+    points.push_back(particle.position);
+    particleId.values.push_back(static_cast<double>(ids.empty() ? p : ids[p]));
+    shapeId.values.push_back(particle.shape);
+    append(velocity, particle.velocity);
+    append(angularVelocity, particle.angularVelocity);
+    const Quaternion& q = particle.orientation;
+    orientation.values.insert(orientation.values.end(), {q.w, q.x, q.y, q.z});
+    boundingRadius.values.push_back(world.shapes()[particle.shape].boundingRadius());
+  }
+  io::VtkPolyData data = io::VtkPolyData::fromPoints(std::move(points));
+  data.pointData = {std::move(particleId),      std::move(shapeId),     std::move(velocity),
+                    std::move(angularVelocity), std::move(orientation), std::move(boundingRadius)};
+  return data;
+}
+
 io::VtkPolyData contactsOf(const dem::World& world) {
   std::vector<Vec3> points;
   io::VtkArray force{"force", 3, {}}, direction{"direction", 3, {}};
-  io::VtkArray depth{"depth", 1, {}}, distance{"distance", 1, {}}, overlap{"overlap", 1, {}};
-  io::VtkArray converged{"converged", 1, {}};
-  io::VtkArray first{"particle", 1, {}}, second{"other", 1, {}}, obstacle{"with_obstacle", 1, {}};
+  io::VtkArray depth{"depth", 1, {}}, distance{"distance", 1, {}};
+  io::VtkArray overlap{"overlap", 1, {}, io::VtkType::UInt8};
+  io::VtkArray converged{"converged", 1, {}, io::VtkType::UInt8};
+  io::VtkArray first{"particle", 1, {}, io::VtkType::UInt32};
+  io::VtkArray second{"other", 1, {}, io::VtkType::UInt32};
+  io::VtkArray obstacle{"with_obstacle", 1, {}, io::VtkType::UInt8};
   for (const dem::Contact& contact : world.contacts()) {
     points.push_back(contact.point.x);
     append(force, contact.force);
@@ -69,7 +100,8 @@ io::VtkPolyData contactsOf(const dem::World& world) {
 /// The obstacles where they are now, with the velocity of each vertex.
 io::VtkPolyData obstaclesOf(const dem::World& world) {
   io::VtkPolyData data;
-  io::VtkArray velocity{"velocity", 3, {}}, obstacleId{"obstacle", 1, {}};
+  io::VtkArray velocity{"velocity", 3, {}};
+  io::VtkArray obstacleId{"obstacle", 1, {}, io::VtkType::UInt32};
   const std::span<const dem::Obstacle> obstacles = world.obstacles();
   for (std::size_t o = 0; o < obstacles.size(); ++o) {
     const dem::Obstacle& obstacle = obstacles[o];
@@ -95,8 +127,8 @@ bool moves(const dem::Obstacle& obstacle) {
 
 }  // namespace
 
-DemOutput::DemOutput(std::filesystem::path directory, int piece, int pieces)
-    : directory_(std::move(directory)), piece_(piece), pieces_(pieces) {
+DemOutput::DemOutput(std::filesystem::path directory, DemFrames frames, int piece, int pieces)
+    : directory_(std::move(directory)), frames_(frames), piece_(piece), pieces_(pieces) {
   makeOutputFolder(directory_);
 }
 
@@ -108,6 +140,10 @@ void DemOutput::begin(const dem::World& world) {
   for (const dem::Obstacle& obstacle : world.obstacles())
     obstaclesMove_ = obstaclesMove_ || moves(obstacle);
   if (piece_ != 0) return;
+  if (frames_ != DemFrames::Triangles)
+    for (std::size_t k = 0; k < world.shapes().size(); ++k)
+      io::writeVtp(io::VtkPolyData::fromMesh(world.shapes()[k].mesh()),
+                   directory_ / ("shape_" + std::to_string(k) + ".vtp"));
   io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
   const std::filesystem::path path = directory_ / "log.csv";
   log_ = std::fopen(path.c_str(), "w");
@@ -169,7 +205,9 @@ void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids
     series.push_back({time, file});
     io::writePvd(series, directory_ / (std::string(name) + ".pvd"));
   };
-  add(particleSeries_, "particles", particlesOf(part, ids), true);
+  if (frames_ != DemFrames::Triangles)
+    add(stateSeries_, "particles_state", statesOf(part, ids), true);
+  if (frames_ != DemFrames::State) add(particleSeries_, "particles", particlesOf(part, ids), true);
   add(contactSeries_, "contacts", contactsOf(part), true);
   if (obstaclesMove_ && piece_ == 0) add(obstacleSeries_, "obstacles", obstaclesOf(part), false);
 }

@@ -11,11 +11,31 @@
 
 namespace delta::cli {
 
-/// Writes a DEM run into a folder for ParaView and for plotting:
+/// What each frame of a DEM run shows of the particles (`delta dem --frames`).
+enum class DemFrames {
+  State,      ///< particles_state: one point per particle (the default)
+  Triangles,  ///< particles: every particle's triangles where it is
+  Both,
+};
+
+/// Writes a DEM run into a folder for ParaView and for plotting. The VTK files are compressed
+/// (io/vtk.h: zlib, which ParaView reads); measured values are Float64 as computed, ids UInt32,
+/// flags UInt8.
 ///
-///   particles.pvd + particles_NNNNNN.vtp   every particle's triangles in world coordinates;
-///                                          cell data `particle` (index) and `shape`, point data
-///                                          `velocity` (of the material point, v + ω × (x − c))
+///   particles_state.pvd +                  one vertex per particle at its centre of mass; point
+///   particles_state_NNNNNN.vtp             data `particle` (id), `shape` (index of shape_K.vtp),
+///                                          `velocity`, `angular_velocity` (world frame),
+///                                          `orientation` (unit quaternion w, x, y, z: body frame
+///                                          to world) and `bounding_radius` (the shape's)
+///   shape_K.vtp                            shape K's triangles in its body frame (centre of
+///                                          mass at the origin), written once: a particle is
+///                                          shape_K.vtp turned by `orientation` and moved to its
+///                                          point, so a glyph of it at each point shows the
+///                                          particles exactly (docs/guide.md says how)
+///   particles.pvd + particles_NNNNNN.vtp   with DemFrames::Triangles or Both: every particle's
+///                                          triangles in world coordinates; cell data `particle`
+///                                          (id) and `shape`, point data `velocity` (of the
+///                                          material point, v + ω × (x − c))
 ///   contacts.pvd + contacts_NNNNNN.vtp     one vertex per contact point; point data `force` (on
 ///                                          `particle`), `direction` (unit, from the other body
 ///                                          toward `particle`), `depth` (into the ε-shell),
@@ -31,15 +51,20 @@ namespace delta::cli {
 ///                                          contact_pairs, step_seconds,
 ///                                          contact_detection_seconds
 ///
+/// The default, DemFrames::State, keeps a run's output small: a frame of the hopper's 1000
+/// particles takes 87 kB on average, a frame of their 80,000 triangles 1.4 MB compressed (5.9 MB
+/// before compression and integer ids): docs/performance.md, "Output sizes".
+///
 /// NNNNNN is the frame number; the .pvd files give each frame its simulated time and are
 /// rewritten after every frame (each file whole or not at all: io/atomic_file.h), so a run cut
 /// short leaves a series that opens; log.csv is flushed after every row.
 ///
 /// A run on P processes (`delta dem` under mpirun) writes a piece of each frame per rank,
-/// particles_NNNNNN_K.vtp and contacts_NNNNNN_K.vtp (K the rank, each with the particles it owns
-/// and the contacts of the pairs it evaluated; `particle` and `other` are particle ids), and
-/// rank 0 joins them in particles_NNNNNN.pvtp and contacts_NNNNNN.pvtp, which the .pvd series
-/// play; rank 0 alone writes obstacles and log.csv.
+/// particles_state_NNNNNN_K.vtp (particles_NNNNNN_K.vtp) and contacts_NNNNNN_K.vtp (K the rank,
+/// each with the particles it owns and the contacts of the pairs it evaluated; `particle` and
+/// `other` are particle ids), and rank 0 joins them in particles_state_NNNNNN.pvtp
+/// (particles_NNNNNN.pvtp) and contacts_NNNNNN.pvtp, which the .pvd series play; rank 0 alone
+/// writes the shapes, obstacles and log.csv.
 ///
 /// Threading: one object per run (per rank), used from one thread.
 class DemOutput {
@@ -56,22 +81,26 @@ class DemOutput {
   };
 
   /// Makes `directory` (and its parents) unless it exists. Throws delta::Error naming it when it
-  /// is a file or cannot be made. Writes nothing else yet. `piece` and `pieces`: this rank and
-  /// the number of ranks of a distributed run; pieces = 0: one process.
-  explicit DemOutput(std::filesystem::path directory, int piece = 0, int pieces = 0);
+  /// is a file or cannot be made. Writes nothing else yet. `frames`: what the particle frames
+  /// show. `piece` and `pieces`: this rank and the number of ranks of a distributed run;
+  /// pieces = 0: one process.
+  explicit DemOutput(std::filesystem::path directory, DemFrames frames = DemFrames::State,
+                     int piece = 0, int pieces = 0);
   ~DemOutput();
   DemOutput(const DemOutput&) = delete;
   DemOutput& operator=(const DemOutput&) = delete;
 
-  /// Writes obstacles.vtp and opens log.csv with its header (rank 0). Call once, before the
-  /// first step, with the world or any rank's part (their obstacles are the same).
+  /// Writes the shapes (with DemFrames::State or Both), obstacles.vtp and opens log.csv with its
+  /// header (rank 0). Call once, before the first step, with the world or any rank's part (their
+  /// shapes and obstacles are the same).
   void begin(const dem::World& world);
   /// Appends the world's current step to log.csv.
   void log(const dem::World& world);
   /// Appends a row to log.csv (rank 0; the others ignore it) and flushes it; throws delta::Error
   /// naming the file and the reason when it cannot be written (a full disk).
   void log(const LogRow& row);
-  /// Writes a frame of particles and contacts (and of moving obstacles) and updates the series.
+  /// Writes a frame of particles (as DemFrames says) and contacts (and of moving obstacles) and
+  /// updates the series.
   void frame(const dem::World& world) { frame(world, {}, world.time()); }
   /// Writes this rank's piece of a frame: the particles of `part` with their ids (empty: their
   /// indices), at simulated time `time`; rank 0 also joins the pieces and updates the series.
@@ -79,7 +108,7 @@ class DemOutput {
   /// Flushes log.csv; throws delta::Error when anything could not be written.
   void finish();
 
-  std::size_t frames() const noexcept { return particleSeries_.size(); }
+  std::size_t frames() const noexcept { return contactSeries_.size(); }
   const std::filesystem::path& directory() const noexcept { return directory_; }
 
  private:
@@ -87,10 +116,11 @@ class DemOutput {
   void flushLog();
 
   std::filesystem::path directory_;
+  DemFrames frames_ = DemFrames::State;
   int piece_ = 0, pieces_ = 0;
   std::FILE* log_ = nullptr;
   bool obstaclesMove_ = false;
-  std::vector<io::VtkSeriesEntry> particleSeries_, contactSeries_, obstacleSeries_;
+  std::vector<io::VtkSeriesEntry> stateSeries_, particleSeries_, contactSeries_, obstacleSeries_;
 };
 
 }  // namespace delta::cli

@@ -31,6 +31,7 @@ struct DistanceOptions {
   std::string points;
   std::optional<double> epsilon;
   bool signedDistance = false;
+  std::string sign;  ///< --sign: "pseudonormal" or "winding" (implies --signed)
   std::string out;
   bool json = false;
   bool quiet = false;
@@ -40,7 +41,13 @@ struct DistanceOptions {
 /// library's parallel loop over them pays.
 constexpr std::size_t kBatch = std::size_t{1} << 16;
 
+bool windingSign(const DistanceOptions& options) {
+  return options.sign == "winding";
+}
+
 void validate(const DistanceOptions& options) {
+  if (!options.sign.empty() && options.sign != "pseudonormal" && options.sign != "winding")
+    throw Error("--sign '" + options.sign + "': choose pseudonormal or winding");
   if (options.epsilon && !(std::isfinite(*options.epsilon) && *options.epsilon > 0.0))
     throw Error("--eps " + toString(*options.epsilon) + " must be finite and positive");
   const std::string extension = extensionOf(options.out);
@@ -50,10 +57,11 @@ void validate(const DistanceOptions& options) {
 
 void writeCsv(const std::vector<Vec3>& points,
               const std::vector<contactdetection::PointDistance>& answers, bool withInside,
-              const std::string& path) {
+              bool withAmbiguous, const std::string& path) {
   io::AtomicFile file(path);
-  file.write(withInside ? "index,distance,closest_x,closest_y,closest_z,triangle,inside\n"
-                        : "index,distance,closest_x,closest_y,closest_z,triangle\n");
+  file.write(std::string(withInside ? "index,distance,closest_x,closest_y,closest_z,triangle,inside"
+                                    : "index,distance,closest_x,closest_y,closest_z,triangle") +
+             (withAmbiguous ? ",ambiguous\n" : "\n"));
   char line[256];
   for (std::size_t i = 0; i < points.size(); ++i) {
     const contactdetection::PointDistance& a = answers[i];
@@ -62,7 +70,9 @@ void writeCsv(const std::vector<Vec3>& points,
                    : std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i,
                                    a.distance, a.closest.x, a.closest.y, a.closest.z, a.triangle,
                                    withInside ? (a.inside ? ",1" : ",0") : "");
-    file.write(std::string_view(line, static_cast<std::size_t>(length)));
+    file.write(std::string_view(line, static_cast<std::size_t>(length) - 1));
+    // The winding sign's ambiguity last, after the columns of the other modes.
+    file.write(!withAmbiguous ? "\n" : !a.found() ? ",\n" : a.ambiguous ? ",1\n" : ",0\n");
   }
   file.commit();
 }
@@ -73,7 +83,7 @@ void writeVtp(const std::vector<Vec3>& points,
               const std::vector<contactdetection::PointDistance>& answers, bool withInside,
               const std::string& path) {
   io::VtkArray distance{withInside ? "signed_distance" : "distance", 1, {}};
-  io::VtkArray closest{"closest", 3, {}}, triangle{"triangle", 1, {}};
+  io::VtkArray closest{"closest", 3, {}}, triangle{"triangle", 1, {}, io::VtkType::Int64};
   for (const contactdetection::PointDistance& a : answers) {
     distance.values.push_back(!a.found()   ? std::nan("")
                               : withInside ? a.signedDistance()
@@ -94,14 +104,18 @@ void run(const DistanceOptions& options) {
   const std::vector<Vec3> points = loadPointSource(options.points, mesh.bounds());
   const double loadSeconds = clock.restart();
   const QueryMesh query(mesh);
-  if (options.signedDistance && !query.closed())
+  const bool signedDistance = options.signedDistance || !options.sign.empty();
+  if (signedDistance && !windingSign(options) && !query.closed())
     throw Error("--signed: mesh '" + options.mesh + "' is not closed (" +
-                describeDefects(query.topology()) + "); unsigned distances work without --signed");
+                describeDefects(query.topology()) +
+                "); --sign winding signs it by its winding number, and unsigned distances work "
+                "without --signed");
   const double buildSeconds = clock.restart();
 
   contactdetection::PointQuery request;
   if (options.epsilon) request.epsilon = *options.epsilon;
-  request.signedDistance = options.signedDistance;
+  request.signedDistance = signedDistance;
+  if (windingSign(options)) request.sign = contactdetection::Sign::winding;
   std::vector<contactdetection::PointDistance> answers(points.size());
   {
     Progress progress("distance", points.size(), showProgress(options.quiet || options.json));
@@ -114,19 +128,19 @@ void run(const DistanceOptions& options) {
   }
   const double querySeconds = clock.restart();
 
-  std::size_t found = 0, inside = 0;
+  std::size_t found = 0, inside = 0, ambiguous = 0;
   double nearest = INFINITY, farthest = -INFINITY;
   for (const contactdetection::PointDistance& a : answers) {
     if (!a.found()) continue;
     ++found;
     inside += a.inside;
+    ambiguous += a.ambiguous;
     nearest = std::min(nearest, a.distance);
     farthest = std::max(farthest, a.distance);
   }
   if (extensionOf(options.out) == ".csv")
-    writeCsv(points, answers, options.signedDistance, options.out);
-  if (extensionOf(options.out) == ".vtp")
-    writeVtp(points, answers, options.signedDistance, options.out);
+    writeCsv(points, answers, signedDistance, windingSign(options), options.out);
+  if (extensionOf(options.out) == ".vtp") writeVtp(points, answers, signedDistance, options.out);
   const double writeSeconds = clock.restart();
 
   if (options.json) {
@@ -136,7 +150,8 @@ void run(const DistanceOptions& options) {
         .value("triangles", query.size())
         .value("closed", query.closed());
     if (options.epsilon) json.value("epsilon", *options.epsilon).value("within", found);
-    if (options.signedDistance) json.value("inside", inside);
+    if (signedDistance) json.value("inside", inside);
+    if (windingSign(options)) json.value("ambiguous", ambiguous);
     json.value("min_distance", found ? nearest : NAN)
         .value("max_distance", found ? farthest : NAN)
         .value("load_s", loadSeconds)
@@ -149,7 +164,8 @@ void run(const DistanceOptions& options) {
   }
   std::printf("%zu points against %zu triangles", points.size(), query.size());
   if (options.epsilon) std::printf(", %zu closer than %g", found, *options.epsilon);
-  if (options.signedDistance) std::printf(", %zu inside", inside);
+  if (signedDistance) std::printf(", %zu inside", inside);
+  if (windingSign(options)) std::printf(" (%zu ambiguous)", ambiguous);
   if (found) std::printf("; distances %.6g to %.6g", nearest, farthest);
   std::printf("\nload %.3f s, build %.3f s, query %.3f s (%.3g points/s)%s\n", loadSeconds,
               buildSeconds, querySeconds, static_cast<double>(points.size()) / querySeconds,
@@ -171,7 +187,13 @@ void addDistanceCommand(CLI::App& app) {
   distance->add_option("--eps", options->epsilon,
                        "Answer only points closer than ε (the others: empty distance)");
   distance->add_flag("--signed", options->signedDistance,
-                     "Also inside/outside (the mesh must be closed)");
+                     "Also inside/outside (by pseudonormals: the mesh must be closed and not "
+                     "cross itself; see --sign)");
+  distance->add_option("--sign", options->sign,
+                       "How --signed decides inside (implies --signed): pseudonormal (default; "
+                       "closed meshes that do not cross themselves) or winding (the generalized "
+                       "winding number > 1/2: any mesh, open or self-intersecting; --out .csv adds "
+                       "a last column 'ambiguous', 1 where it is within 0.05 of 1/2)");
   distance->add_option("--out", options->out,
                        "Write one row per point in input order: FILE.csv, or FILE.vtp (ParaView)");
   distance->add_flag("--json", options->json, "Print one JSON object instead of text");

@@ -6,6 +6,7 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/measures.h"
 #include "delta/mesh/topology.h"
+#include "delta/query/self_intersections.h"
 
 #include "commands.h"
 #include "json.h"
@@ -29,6 +30,7 @@ struct MeshReport {
   double area = 0.0;
   double volume = 0.0;  // meaningful when topology.closed && topology.consistentlyOriented
   Topology topology;
+  std::size_t selfIntersections = 0;  ///< crossing pairs of non-adjacent triangles
   EdgeLengths edges;
   io::LoadStatistics statistics;
   std::size_t meshBytes = 0;
@@ -51,6 +53,7 @@ MeshReport analyse(const std::string& source) {
   report.topology = analyzeTopology(mesh);
   if (report.topology.closed && report.topology.consistentlyOriented)
     report.volume = signedVolume(mesh);
+  report.selfIntersections = selfIntersections(QueryMesh(mesh)).count;
   report.edges = edgeLengths(mesh);
   report.statistics = loaded.statistics;
   report.meshBytes = mesh.memoryBytes();
@@ -87,6 +90,7 @@ void printJson(const std::string& source, const MeshReport& r) {
       .value("consistently_oriented", r.topology.consistentlyOriented)
       .value("boundary_edges", r.topology.boundaryEdges)
       .value("non_manifold_edges", r.topology.nonManifoldEdges)
+      .value("self_intersections", r.selfIntersections)
       .beginObject("mesh_size")
       .value("min_edge", r.edges.min)
       .value("mean_edge", r.edges.mean)
@@ -127,6 +131,8 @@ void printText(const std::string& source, const MeshReport& r) {
               r.topology.nonManifoldEdges);
   std::printf("oriented             %s (%zu misoriented edges)\n",
               yesNo(r.topology.consistentlyOriented), r.topology.misorientedEdges);
+  std::printf("self-intersections   %zu%s\n", r.selfIntersections,
+              r.selfIntersections == 0 ? "" : " pairs of triangles cross (--sign winding)");
   std::printf("mesh size h          min %.6g, mean %.6g, max %.6g (edge length)\n", r.edges.min,
               r.edges.mean, r.edges.max);
   std::printf("load                 %.3f s (analysis %.3f s)\n", r.loadSeconds, r.analyseSeconds);

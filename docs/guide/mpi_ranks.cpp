@@ -6,7 +6,8 @@
 // after another in this process, and checks that their contacts together are exactly those of
 // one rank that owns every particle. The MPI version (DELTA_GUIDE_WITH_MPI, below) is not
 // compiled by the tests, since Δ does not depend on MPI; build it yourself with
-//   mpicxx -std=c++20 -fopenmp -DDELTA_GUIDE_WITH_MPI mpi_ranks.cpp -ldelta ...
+//   mpicxx -DDELTA_GUIDE_WITH_MPI $(pkg-config --cflags delta-mpi) mpi_ranks.cpp
+//     $(pkg-config --libs delta-mpi)        (one line; delta-mpi.pc is installed with Δ)
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>

@@ -12,7 +12,7 @@ int main() {
   const delta::MassProperties mass = delta::massProperties(particle, /*density=*/2500.0);
 
   namespace cd = delta::contactdetection;
-  delta::QueryMesh a(particle), b(delta::primitives::granulate(8).translate({2.9, 2, 3}));
+  delta::QueryMesh a(particle), b(delta::primitives::granulate(8).translate({2.8, 2, 3}));
   const std::vector<delta::ContactPoint> touching = cd::contacts(a, b, 0.01);
   const std::vector<delta::Vec3> points = {{1, 2, 3}, {5, 5, 5}};
   const std::vector<cd::PointDistance> d = cd::distances(a, points, {.signedDistance = true});
@@ -22,7 +22,9 @@ int main() {
               mass.mass);
   std::printf("%zu contact points; the centre is %.3f inside, (5, 5, 5) %.3f outside\n",
               touching.size(), d[0].distance, d[1].distance);
-  const bool sane =
-      flat.size() == particle.triangleCount() && mass.volume > 0.0 && d[0].inside && !d[1].inside;
+  // The particles are 0.017 apart, closer than 2ε: they touch without overlapping.
+  const bool touch = !touching.empty() && !touching.front().overlap;
+  const bool sane = flat.size() == particle.triangleCount() && mass.volume > 0.0 && touch &&
+                    d[0].inside && !d[1].inside;
   return sane ? 0 : 1;
 }

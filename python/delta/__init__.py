@@ -23,6 +23,13 @@ Element Method) and delta.ib (immersed boundaries: an adaptive grid).
 import numpy as _np
 
 from . import _delta
+from ._signatures import attach as _attach
+
+# inspect.signature and help() see the extension's parameters (delta/_signatures.py).
+for _module in (_delta, _delta.dem, _delta.ib):
+    _attach(_module)
+del _module
+
 from ._delta import (
     NO_TRIANGLE,
     Error,

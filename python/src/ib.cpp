@@ -25,6 +25,8 @@
 #include "bindings.h"
 #include "handles.h"
 #include "interrupt.h"
+#include "records.h"
+#include "transforms.h"
 
 namespace delta::python {
 namespace {
@@ -102,8 +104,9 @@ std::optional<Aabb> domainFrom(const std::optional<ArrayLike>& given) {
 /// Builds without the GIL; Ctrl-C stops the build (KeyboardInterrupt, no grid made).
 PyGrid makeGrid(const Geometry& mesh, int levels, double refineFactor, bool signedDistance,
                 std::optional<double> exactBand, double padding,
-                const std::optional<ArrayLike>& domain) {
+                const std::optional<ArrayLike>& domain, const std::string& sign) {
   ib::GridOptions options;
+  options.sign = signNamed(sign);
   options.levels = levels;
   options.refineFactor = refineFactor;
   options.signedDistance = signedDistance;
@@ -122,9 +125,12 @@ void bindIb(py::module_& ib) {
   py::class_<PyGrid>(ib, "AdaptiveGrid", R"(An octree Cartesian grid refined around a boundary mesh.
 
 AdaptiveGrid(boundary, levels=7, refine_factor=1.0, signed=True, exact_band=None, padding=0.1,
-domain=None): `boundary` a Mesh or QueryMesh (signed distances need a closed one; delta.Error
-otherwise). The domain (default: the boundary's box made a cube and grown by padding times its
-longest side) is the root cell; a cell of level l < levels is split while the smallest |distance|
+domain=None, sign="pseudonormal"): `boundary` a Mesh or QueryMesh (signed distances by
+pseudonormals need a closed one that does not cross itself, delta.Error otherwise; sign="winding"
+signs by the generalized winding number any boundary, open or self-intersecting, and then
+queries every vertex again after a move; another string raises ValueError). The domain
+(default: the boundary's box made a cube and grown by padding times its longest side) is the root
+cell; a cell of level l < levels is split while the smallest |distance|
 at its corners is below refine_factor times its diagonal. Every grid vertex holds the boundary's
 exact distance (negative inside when signed), computed level by level by Delta's point queries
 without the GIL. `move_boundary(motion)` / `move_boundary_to(pose)` move the boundary rigidly and
@@ -143,24 +149,26 @@ Threading: one Python thread at a time moves a grid; other threads' calls on it 
 RuntimeError.)")
       .def(py::init(&makeGrid), "boundary"_a, "levels"_a = 7, "refine_factor"_a = 1.0,
            "signed"_a = true, "exact_band"_a = py::none(), "padding"_a = 0.1,
-           "domain"_a = py::none(),
+           "domain"_a = py::none(), "sign"_a = "pseudonormal",
            "Builds the grid around `boundary` (see the class); `domain`: (2, 3) lower and upper "
            "corner, or None.")
       .def(
           "move_boundary",
-          [](PyGrid& grid, const RigidTransform& motion) {
-            return statisticsDict(grid.move(motion, false));
+          [](PyGrid& grid, const Motion& motion) {
+            return statisticsDict(grid.move(motion.value, false));
           },
           "motion"_a,
-          "Moves the boundary by `motion` (its pose becomes motion * pose) and updates the grid; "
+          "Moves the boundary by `motion` (a RigidTransform or a 4×4 matrix; its pose becomes "
+          "motion * pose) and updates the grid; "
           "returns what the move did (statistics).")
       .def(
           "move_boundary_to",
-          [](PyGrid& grid, const RigidTransform& pose) {
-            return statisticsDict(grid.move(pose, true));
+          [](PyGrid& grid, const Motion& pose) {
+            return statisticsDict(grid.move(pose.value, true));
           },
           "pose"_a,
-          "Puts the boundary at `pose` (from the frame it was prepared in) and updates the grid.")
+          "Puts the boundary at `pose` (a RigidTransform or a 4×4 matrix, from the frame it was "
+          "prepared in) and updates the grid.")
       .def_property_readonly(
           "distances",
           [](const PyGrid& grid) {
@@ -254,7 +262,8 @@ RuntimeError.)")
           },
           "path"_a,
           "Writes the leaves as VTK voxels for ParaView (.vtu): point data signed_distance (or "
-          "distance) and error_bound, cell data level; as `delta ib --out`.")
+          "distance) and error_bound (Float64) and finest_level (UInt8), cell data level (UInt8), "
+          "zlib-compressed; as `delta ib --out --compression 1`.")
       .def("__repr__", [](const PyGrid& grid) {
         const ib::AdaptiveGrid& g = grid.read();
         return "<delta.ib.AdaptiveGrid: " + std::to_string(g.levels()) + " levels, " +

@@ -27,6 +27,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "handles.h"
+#include "transforms.h"
 
 namespace delta::python {
 namespace {
@@ -79,26 +80,6 @@ py::array homogeneous(const RigidTransform& motion) {
                        : column == 3 ? motion.translation[static_cast<std::size_t>(row)]
                                      : r(static_cast<int>(row), static_cast<int>(column));
   return matrix;
-}
-
-RigidTransform fromHomogeneous(const ArrayLike& object) {
-  const RealArray given = realArray(object.object);
-  if (!given.problem.empty())
-    throw py::type_error("RigidTransform.from_matrix: the matrix " + given.problem);
-  if (given.array.ndim() != 2 || given.array.shape(0) != 4 || given.array.shape(1) != 4)
-    throw Error("RigidTransform.from_matrix: the matrix must have shape (4, 4), not " +
-                shapeOf(given.array));
-  requireExactIntegers(given.array, "RigidTransform.from_matrix: the matrix");
-  const DoubleArray matrix = DoubleArray::ensure(given.array);
-  requireFinite({matrix.data(), 16}, "RigidTransform.from_matrix: the matrix");
-  const double* m = matrix.data();
-  if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0)
-    throw Error("RigidTransform.from_matrix: the last row must be (0, 0, 0, 1)");
-  Mat3 rotation;
-  for (int row = 0; row < 3; ++row)
-    for (int column = 0; column < 3; ++column)
-      rotation(row, column) = m[4 * row + column];
-  return {Quaternion::fromMatrix(rotation), {m[3], m[7], m[11]}};
 }
 
 /// The vertex indices of an (m, 3) integer array, each checked to fit a uint32 (Mesh checks
@@ -239,8 +220,12 @@ Mesh.transform and the immersed-boundary grid's moves take.)")
                   "The translation by `offset` (3 numbers).")
       .def_static("rotation_about", &RigidTransform::rotationAbout, "rotation"_a, "pivot"_a,
                   "The rotation about the line through `pivot` (not through the origin).")
-      .def_static("from_matrix", &fromHomogeneous, "matrix"_a,
-                  "From a 4x4 homogeneous matrix [R t; 0 1] (R a rotation to 1e-6).")
+      .def_static(
+          "from_matrix",
+          [](const ArrayLike& matrix) {
+            return fromHomogeneous(matrix.object, "RigidTransform.from_matrix: the matrix");
+          },
+          "matrix"_a, "From a 4x4 homogeneous matrix [R t; 0 1] (R a rotation to 1e-6).")
       .def_readwrite("rotation", &RigidTransform::rotation, "The rotation R, a Quaternion.")
       .def_property(
           "translation", [](const RigidTransform& motion) { return motion.translation; },
@@ -412,11 +397,13 @@ Threading: the GIL serialises methods; queries work on a snapshot without the GI
           "1e-6). Returns the mesh.")
       .def(
           "transform",
-          [](PyMesh& mesh, const RigidTransform& motion) -> PyMesh& {
-            mesh.change([&](Mesh& m) { m.transform(motion); });
+          [](PyMesh& mesh, const Motion& motion) -> PyMesh& {
+            mesh.change([&](Mesh& m) { m.transform(motion.value); });
             return mesh;
           },
-          "motion"_a, "Applies p -> R p + t to every vertex. Returns the mesh.")
+          "motion"_a,
+          "Applies p -> R p + t to every vertex (`motion`: a RigidTransform or a 4×4 matrix). "
+          "Returns the mesh.")
       .def(
           "copy", [](const PyMesh& mesh) { return PyMesh(mesh.mesh()); }, "An independent copy.")
       .def("__copy__", [](const PyMesh& mesh) { return PyMesh(mesh.mesh()); })
@@ -518,8 +505,10 @@ malformed file.)");
         io::save(*snapshot, path);
       },
       "mesh"_a, "path"_a,
-      "Writes the mesh as .stl, .ply (binary) or .obj, by the extension. Loading it again gives "
-      "the same triangles in the same order, coordinates rounded to single precision.");
+      "Writes the mesh as .stl, .ply (binary), .obj or .vtp (VTK, for ParaView; coordinates in "
+      "double), by the extension. Loading an .stl, .ply or .obj again gives the same triangles in "
+      "the same order, coordinates rounded to single precision. The file is replaced whole or "
+      "not at all.");
 }
 
 }  // namespace

@@ -4,11 +4,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -24,12 +26,14 @@
 #include "delta/query/minimum_distance.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
+#include "delta/query/self_intersections.h"
 
 #include "arrays.h"
 #include "bindings.h"
 #include "handles.h"
 #include "interrupt.h"
 #include "records.h"
+#include "transforms.h"
 
 namespace delta::python {
 namespace {
@@ -158,7 +162,9 @@ py::array checkedOutput(const py::array& out, const std::vector<py::ssize_t>& sh
 }
 
 py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<double> epsilon,
-                   bool signedDistance, std::optional<py::object> out) {
+                   bool signedDistance, std::optional<py::object> out,
+                   const std::optional<std::string>& sign) {
+  const std::optional<cd::Sign> how = sign ? std::optional(signNamed(*sign)) : std::nullopt;
   const DoubleArray coordinates = pointArray(points, "points", false);
   const std::vector<py::ssize_t> shape(coordinates.shape(),
                                        coordinates.shape() + coordinates.ndim() - 1);
@@ -172,7 +178,8 @@ py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<
   const std::span<const Vec3> query = asVec3(coordinates);
   cd::PointQuery request;
   if (epsilon) request.epsilon = *epsilon;
-  request.signedDistance = signedDistance;
+  request.signedDistance = signedDistance || how.has_value();
+  if (how) request.sign = *how;
   // Into a new array, or for `out` into a scratch one copied at the end: a query stopped by an
   // error or Ctrl-C leaves `out` as it was, never half-written.
   std::vector<cd::PointDistance> scratch;
@@ -212,23 +219,49 @@ Python threads may query one QueryMesh at once.)")
            "mesh"_a, "Prepares `mesh` (a Mesh) for queries, without the GIL.")
       .def(
           "transform",
-          [](QueryMesh& mesh, const RigidTransform& motion) -> QueryMesh& {
-            return mesh.transform(motion);
+          [](QueryMesh& mesh, const Motion& motion) -> QueryMesh& {
+            return mesh.transform(motion.value);
           },
           "motion"_a, py::return_value_policy::reference_internal,
-          "Moves the mesh rigidly: its pose becomes motion * pose. O(1). Returns the QueryMesh.")
+          "Moves the mesh rigidly by `motion` (a RigidTransform or a 4×4 matrix): its pose becomes "
+          "motion * pose. O(1). Returns the QueryMesh.")
       .def(
           "set_pose",
-          [](QueryMesh& mesh, const RigidTransform& pose) -> QueryMesh& {
-            return mesh.setPose(pose);
+          [](QueryMesh& mesh, const Motion& pose) -> QueryMesh& {
+            return mesh.setPose(pose.value);
           },
           "pose"_a, py::return_value_policy::reference_internal,
-          "Puts the mesh at `pose` (from the frame it was prepared in). O(1). Returns the "
-          "QueryMesh.")
+          "Puts the mesh at `pose` (a RigidTransform or a 4×4 matrix, from the frame it was "
+          "prepared in). O(1). Returns the QueryMesh.")
       .def_property_readonly(
           "pose", [](const QueryMesh& mesh) { return mesh.pose(); },
           "Where the mesh is: a RigidTransform (a copy) from the frame it was prepared in.")
       .def_property_readonly("moved", &QueryMesh::moved, "The pose is not the identity.")
+      .def(py::pickle(
+          // The mesh it was prepared from and its pose, bit for bit: unpickled, it is prepared
+          // again (O(n log n)) and answers as the original does (for multiprocessing).
+          [](const QueryMesh& mesh) {
+            const Quaternion& q = mesh.pose().rotation;
+            return py::make_tuple(py::cast(PyMesh(mesh.mesh())), mesh.moved(),
+                                  py::make_tuple(q.w, q.x, q.y, q.z), mesh.pose().translation);
+          },
+          [](const py::tuple& state) {
+            if (state.size() != 4)
+              throw Error(
+                  "QueryMesh: a pickled state is (mesh, moved, rotation, translation), "
+                  "not " +
+                  std::to_string(state.size()) + " values");
+            const std::shared_ptr<const Mesh> snapshot = state[0].cast<const PyMesh&>().snapshot();
+            const auto wxyz = state[2].cast<std::array<double, 4>>();
+            const RigidTransform pose{{wxyz[0], wxyz[1], wxyz[2], wxyz[3]}, state[3].cast<Vec3>()};
+            std::optional<QueryMesh> mesh;
+            {
+              py::gil_scoped_release release;
+              mesh.emplace(*snapshot);
+            }
+            if (state[1].cast<bool>()) mesh->setPose(pose);
+            return std::move(*mesh);
+          }))
       .def_property_readonly("triangle_count", &QueryMesh::size, "The number of triangles.")
       .def_property_readonly("closed", &QueryMesh::closed,
                              "Closed and consistently oriented: signed distances and inside "
@@ -239,6 +272,14 @@ Python threads may query one QueryMesh at once.)")
             return vec3Array(std::vector<Vec3>{mesh.bounds().lower, mesh.bounds().upper});
           },
           "The box of the vertices in the prepared frame, shape (2, 3).")
+      .def_property_readonly(
+          "self_intersections",
+          [](const QueryMesh& mesh) {
+            py::gil_scoped_release release;
+            return selfIntersections(mesh).count;
+          },
+          "The number of pairs of non-adjacent triangles that intersect (found on first use, "
+          "O(n log n), and kept; as `delta info`). Pseudonormal signs refuse a mesh with any.")
       .def_property_readonly("memory_bytes", &QueryMesh::memoryBytes,
                              "Bytes held on the heap (triangles, tree, pseudonormals).")
       .def(
@@ -294,15 +335,19 @@ finite and positive.)");
       "point), the mesh the second (Q = the closest point, triangle_b its triangle); `overlap` = "
       "inside a closed mesh. Ctrl-C stops it (KeyboardInterrupt).");
   module.def("distance", &distance, "mesh"_a, "points"_a, "eps"_a = py::none(), "signed"_a = false,
-             py::kw_only(), "out"_a = py::none(),
+             py::kw_only(), "out"_a = py::none(), "sign"_a = py::none(),
              R"(The distance from every point to the mesh (a Mesh or a QueryMesh).
 
 `points`: an array of shape (..., 3), used without a copy when it is C-contiguous float64
 (converted otherwise). Returns a structured array of delta.distance_dtype with the points' shape
 less the last axis, written in place by the query: `distance` (unsigned; +inf beyond eps),
 `closest` (3,) the closest point of the mesh, `triangle` (uint32, the smallest id of a tie;
-delta.NO_TRIANGLE beyond eps), `inside` (with signed=True; the mesh must be closed, delta.Error
-otherwise). The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
+delta.NO_TRIANGLE beyond eps), `inside` (with signed=True), `ambiguous` (with sign="winding": the
+winding number is within 0.05 of 1/2, as across a hole). `sign` (implies signed=True):
+"pseudonormal" (the default; the mesh must be closed and must not cross itself, delta.Error
+otherwise) or "winding" (inside where the generalized winding number exceeds 1/2: any mesh, open
+or self-intersecting; computed fast by Barill et al.'s hierarchy, exact in sign); another string
+raises ValueError. The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
 delta.signed_distance(r) computes it. `eps`: answer only points closer than eps (faster: the
 search stops near the root for the others). `out`: a C-contiguous, writeable array of
 delta.distance_dtype and that shape, sharing no memory with the points (delta.Error otherwise),

@@ -61,8 +61,15 @@ py::dtype distanceDtype() {
   return recordDtype({{"distance", "f8", offsetof(PointDistance, distance)},
                       {"closest", "(3,)f8", offsetof(PointDistance, closest)},
                       {"triangle", "u4", offsetof(PointDistance, triangle)},
-                      {"inside", "?", offsetof(PointDistance, inside)}},
+                      {"inside", "?", offsetof(PointDistance, inside)},
+                      {"ambiguous", "?", offsetof(PointDistance, ambiguous)}},
                      sizeof(PointDistance));
+}
+
+contactdetection::Sign signNamed(const std::string& name) {
+  if (name == "pseudonormal") return contactdetection::Sign::pseudonormal;
+  if (name == "winding") return contactdetection::Sign::winding;
+  throw py::value_error("sign must be \"pseudonormal\" or \"winding\", not \"" + name + "\"");
 }
 
 }  // namespace delta::python

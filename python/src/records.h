@@ -5,6 +5,9 @@
 #include <pybind11/numpy.h>
 
 #include <cstddef>
+#include <string>
+
+#include "delta/query/point_distance.h"
 
 namespace delta::python {
 
@@ -15,8 +18,11 @@ namespace py = pybind11;
 py::dtype contactDtype();
 
 /// delta.distance_dtype, over contactdetection::PointDistance: distance (float64), closest
-/// ((3,) float64), triangle (uint32), inside (bool).
+/// ((3,) float64), triangle (uint32), inside (bool), ambiguous (bool).
 py::dtype distanceDtype();
+
+/// The sign mode named `name` ("pseudonormal" or "winding"); ValueError for any other.
+contactdetection::Sign signNamed(const std::string& name);
 
 /// The fields of contact_dtype at `offset` in a larger record (DEM contacts hold a contact point).
 py::list contactFieldNames();

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "delta/core/cancel.h"
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/memory.h"
+#include "delta/query/self_intersections.h"
 
 namespace delta::ib {
 namespace {
@@ -122,10 +124,12 @@ void check(const GridOptions& options, const QueryMesh& boundary) {
       throw Error("GridOptions: domain " + toString(box.lower) + " to " + toString(box.upper) +
                   " must be finite with lower < upper on every axis");
   }
-  if (options.signedDistance && !boundary.closed())
-    throw Error("signed distances need a closed boundary, and this one is not (" +
+  if (options.signedDistance && options.sign == contactdetection::Sign::pseudonormal &&
+      !boundary.closed())
+    throw Error("signed distances by pseudonormals need a closed boundary, and this one is not (" +
                 describeDefects(boundary.topology()) +
-                "); unsigned distances work (GridOptions::signedDistance = false)");
+                "); the winding-number sign takes it (GridOptions::sign = Sign::winding), and "
+                "unsigned distances work (GridOptions::signedDistance = false)");
 }
 
 /// The domain of checked options: the one given, or the boundary's box made a cube and padded.
@@ -155,6 +159,10 @@ AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options
   options_.domain = domain_;
   resolution_ = std::uint32_t{1} << options_.levels;
   exactBand_ = options_.exactBand ? *options_.exactBand : cellDiagonal(options_.levels);
+  // A winding sign of an open or self-intersecting boundary may change away from it as it moves.
+  if (options_.signedDistance && options_.sign == contactdetection::Sign::winding &&
+      !(boundary_.closed() && !selfIntersections(boundary_).any()))
+    exactBand_ = std::numeric_limits<double>::infinity();
   rebuildTable(1024);
   poses_.push_back(boundary_.pose());
   refine();
@@ -423,6 +431,7 @@ void AdaptiveGrid::query() {
     batchPoints_[i] = position(pending_[i]);
   contactdetection::PointQuery request;
   request.signedDistance = options_.signedDistance;
+  request.sign = options_.sign;
   contactdetection::distances(boundary_, batchPoints_, pendingBounds_, request, batchAnswers_);
   const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
   for (std::size_t i = 0; i < n; ++i) {

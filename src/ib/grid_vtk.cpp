@@ -15,8 +15,9 @@ io::VtkVoxelGrid toVtk(const AdaptiveGrid& grid) {
                            std::vector<double>(distances.begin(), distances.end())});
   vtk.pointData.push_back({"error_bound", 1, grid.errorBounds()});
 
-  io::VtkArray level{"level", 1, {}};
-  io::VtkArray vertexLevel{"finest_level", 1, std::vector<double>(grid.vertexCount(), 0.0)};
+  io::VtkArray level{"level", 1, {}, io::VtkType::UInt8};  // levels are 0 to 20
+  io::VtkArray vertexLevel{"finest_level", 1, std::vector<double>(grid.vertexCount(), 0.0),
+                           io::VtkType::UInt8};
   vtk.voxels.reserve(grid.leafCount());
   level.values.reserve(grid.leafCount());
   for (int l = 0; l <= grid.levels(); ++l)

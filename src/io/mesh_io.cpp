@@ -28,6 +28,7 @@
 #include "delta/io/detail/mesh_readers.h"
 #include "delta/io/detail/text_scan.h"
 #include "delta/io/detail/vertex_join.h"
+#include "delta/io/vtk.h"
 
 namespace delta::io {
 namespace {
@@ -294,7 +295,7 @@ const char* exportFormat(const fs::path& path) {
   if (extension == ".ply") return "plyb";
   if (extension == ".obj") return "objnomtl";  // "obj" would also write a .mtl file beside it
   throw Error("unknown extension '" + path.extension().string() +
-              "': Δ writes .stl (binary), .ply (binary) and .obj");
+              "': Δ writes .stl (binary), .ply (binary), .obj and .vtp");
 }
 
 aiVector3D toSinglePrecision(const Vec3& p, std::size_t index) {
@@ -383,6 +384,14 @@ Mesh load(const fs::path& path) {
 }
 
 void save(const Mesh& mesh, const fs::path& path) {
+  if (lowerCaseExtension(path) == ".vtp") {  // VTK, for ParaView: every coordinate in double
+    try {
+      writeVtp(VtkPolyData::fromMesh(mesh), path);
+    } catch (const Error& error) {
+      throw Error("cannot save '" + path.string() + "': " + error.what());
+    }
+    return;
+  }
   // Exported to memory and written by Δ, whole or not at all (AtomicFile, whose errors name the
   // path): assimp's own file writing does not report a failed write such as a full disk.
   Assimp::Exporter exporter;

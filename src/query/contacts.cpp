@@ -375,12 +375,18 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   if (first.closed() && second.closed()) {
     // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
     const double limit = 4.0 * epsilon * epsilon;
-    a.pseudonormals();  // made here, where they may throw, not in the parallel loop
-    b.pseudonormals();
+    // A closed mesh that crosses itself is signed by its winding number (pseudonormals are
+    // wrong near the crossings). Made here, where they may throw, not in the parallel loop.
+    const bool aCrosses = a.selfIntersections().any(), bCrosses = b.selfIntersections().any();
+    aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
+    bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();
     const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
-    const auto inside = [limit](const detail::QueryMeshData& mesh, const Vec3& x) {
+    const auto inside = [limit, &a, aCrosses, bCrosses](const detail::QueryMeshData& mesh,
+                                                        const Vec3& x) {
       const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
-      return nearest.found() && detail::insideAt(mesh, x, nearest);
+      if (!nearest.found()) return false;
+      if (!(&mesh == &a ? aCrosses : bCrosses)) return detail::insideAt(mesh, x, nearest);
+      return detail::distanceOf(mesh, x, nearest) > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
     };
     parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i)

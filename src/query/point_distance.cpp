@@ -12,6 +12,7 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/mesh/coordinate_range.h"
+#include "delta/query/self_intersections.h"
 
 #include "detail/morton.h"
 #include "detail/query_mesh_data.h"
@@ -26,13 +27,44 @@ constexpr std::size_t kCoherentFrom = 4 * kGrain;
 /// A distance bound's square is searched with this growth (a few ulps of rounding allowed for).
 constexpr double kBoundGrowth = 1.0 + 1e-12;
 
-void validate(const QueryMesh& mesh, const PointQuery& query) {
+/// Checks the query and returns it as it runs: a winding sign on a closed mesh that does not
+/// cross itself is its pseudonormal sign, exactly (off the surface the winding number is 0 or 1
+/// there, and the pseudonormal decides its side exactly where the solid angles of a point
+/// within rounding of a face would not).
+PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
   if (std::isnan(query.epsilon) || !(query.epsilon > 0.0))
     throw Error("point distances: epsilon = " + toString(query.epsilon) + " must be positive");
-  if (query.signedDistance && !mesh.closed())
-    throw Error("signed distance needs a closed, consistently oriented mesh; this one has " +
-                describeDefects(mesh.topology()));
-  if (query.signedDistance) mesh.data().pseudonormals();  // made here, where it may throw
+  if (!(query.windingTolerance >= 0.0 && query.windingTolerance < 0.5))
+    throw Error("point distances: windingTolerance = " + toString(query.windingTolerance) +
+                " must be in [0, 0.5)");
+  if (!query.signedDistance) return query;
+  if (query.sign == Sign::winding) {
+    if (mesh.closed() && !selfIntersections(mesh).any()) {
+      mesh.data().pseudonormals();  // made here, where it may throw
+      PointQuery pseudonormal = query;
+      pseudonormal.sign = Sign::pseudonormal;
+      return pseudonormal;
+    }
+    mesh.data().windingTree();  // made here, where it may throw
+    return query;
+  }
+  if (!mesh.closed())
+    throw Error(
+        "signed distance by pseudonormals needs a closed, consistently oriented mesh; "
+        "this one has " +
+        describeDefects(mesh.topology()) +
+        "; the winding-number sign takes any mesh (C++ Sign::winding, Python "
+        "sign=\"winding\", CLI --sign winding)");
+  const SelfIntersections& crossings = selfIntersections(mesh);
+  if (crossings.any())
+    throw Error("signed distance by pseudonormals: the mesh crosses itself (" +
+                std::to_string(crossings.count) + " pairs of triangles intersect, such as " +
+                std::to_string(crossings.pairs.front().first) + " and " +
+                std::to_string(crossings.pairs.front().second) +
+                "), where pseudonormal signs are wrong; the winding-number sign is defined there "
+                "(C++ Sign::winding, Python sign=\"winding\", CLI --sign winding)");
+  mesh.data().pseudonormals();  // made here, where it may throw
+  return query;
 }
 
 /// Whether a point (world frame) and, carried into the mesh's prepared frame, `local` lie in
@@ -120,7 +152,15 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   result.closest =
       mesh.moved() ? mesh.pose().apply(nearest.closest.closest) : nearest.closest.closest;
   result.triangle = nearest.triangle;
-  if (query.signedDistance) result.inside = detail::insideAt(data, point, nearest);
+  if (query.signedDistance) {
+    if (query.sign == Sign::pseudonormal) {
+      result.inside = detail::insideAt(data, point, nearest);
+    } else if (result.distance > 0.0) {  // on the surface: neither inside nor ambiguous
+      const detail::WindingSign sign = detail::windingSign(data, point, query.windingTolerance);
+      result.inside = sign.inside;
+      result.ambiguous = sign.ambiguous;
+    }
+  }
   return result;
 }
 
@@ -226,9 +266,9 @@ void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& orde
 /// `upperBounds` is empty or one bound per point.
 template <typename PointAt>
 void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
-               const PointQuery& query, std::span<PointDistance> out,
+               const PointQuery& asked, std::span<PointDistance> out,
                std::span<const double> upperBounds = {}) {
-  validate(mesh, query);
+  const PointQuery query = validate(mesh, asked);
   const auto boundOf = [upperBounds](std::size_t i) {
     return upperBounds.empty() ? std::numeric_limits<double>::infinity() : upperBounds[i];
   };
@@ -305,8 +345,8 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
   return out;
 }
 
-PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& query) {
-  validate(mesh, query);
+PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuery& asked) {
+  const PointQuery query = validate(mesh, asked);
   validatePoints(mesh, 1, [&point](std::size_t) { return point; });
   return answer(mesh, point, query);
 }
@@ -315,8 +355,12 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
                                    double epsilon) {
   if (!std::isfinite(epsilon) || !(epsilon > 0.0))
     throw Error("point contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  // A closed mesh that crosses itself has its overlaps by winding number, where pseudonormal
+  // signs are wrong.
+  const bool closed = mesh.closed();
+  const Sign sign = closed && selfIntersections(mesh).any() ? Sign::winding : Sign::pseudonormal;
   const std::vector<PointDistance> near =
-      distances(mesh, points, {.epsilon = epsilon, .signedDistance = mesh.closed()});
+      distances(mesh, points, {.epsilon = epsilon, .signedDistance = closed, .sign = sign});
   const detail::QueryMeshData& data = mesh.data();
   std::vector<ContactPoint> found;
   for (std::size_t i = 0; i < near.size(); ++i) {

@@ -412,6 +412,14 @@ const Pseudonormals& QueryMeshData::pseudonormals() const {
   return pseudonormals_;
 }
 
+const WindingTree& QueryMeshData::windingTree() const {
+  std::call_once(windingTreeOnce_, [this] {
+    windingTree_ = buildWindingTree(*this);
+    windingTreeMade_.store(true, std::memory_order_release);
+  });
+  return windingTree_;
+}
+
 Vec3 QueryMeshData::pseudonormal(std::uint32_t sorted, std::size_t slot) const {
   const Pseudonormals& normals = pseudonormals();
   if (slot < 3) return normals.vertices[corners[sorted][slot]];
@@ -514,6 +522,13 @@ QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
   return *this;
 }
 
+Mesh QueryMesh::mesh() const {
+  std::vector<TriangleIndices> triangles(data_->corners.size());
+  for (std::size_t sorted = 0; sorted < triangles.size(); ++sorted)
+    triangles[data_->order[sorted]] = data_->corners[sorted];
+  return Mesh(data_->vertices, std::move(triangles));
+}
+
 std::size_t QueryMesh::size() const noexcept {
   return data_->size();
 }
@@ -534,6 +549,7 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
   const detail::QueryMeshData& data = *data_;
   std::size_t bytes = (data.meshOrderMade() ? data.meshOrder().memoryBytes() : 0) +
                       (data.pseudonormalsMade() ? data.pseudonormals().memoryBytes() : 0) +
+                      (data.windingTreeMade() ? data.windingTree().memoryBytes() : 0) +
                       data.vertices.capacity() * sizeof(Vec3) +
                       data.corners.capacity() * sizeof(TriangleIndices) +
                       data.order.capacity() * sizeof(std::uint32_t) + data.lanes.memoryBytes();

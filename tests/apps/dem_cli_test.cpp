@@ -101,21 +101,34 @@ VtpSummary readVtp(const fs::path& path) {
   const std::regex array(R"re(<DataArray [^>]*Name="([^"]+)"[^>]* offset="([0-9]+)"/>)re");
   std::size_t covered = 0;
   const std::string head = file.substr(0, raw);
+  // Compressed (the default): a header of UInt64 words, the number of blocks n, the block size,
+  // the last block's size, n compressed sizes, then the blocks. Raw: a UInt64 byte count.
+  const bool compressed = head.find("compressor=\"vtkZLibDataCompressor\"") != std::string::npos;
+  const auto word = [&](std::size_t at) {
+    std::uint64_t value = 0;
+    if (at + sizeof value <= block.size()) std::memcpy(&value, block.data() + at, sizeof value);
+    return value;
+  };
   for (auto it = std::sregex_iterator(head.begin(), head.end(), array);
        it != std::sregex_iterator(); ++it) {
     summary.arrays.push_back((*it)[1]);
     const std::size_t offset = std::stoull((*it)[2]);
-    std::uint64_t bytes = 0;
-    if (offset + sizeof bytes > block.size()) {
+    if (offset + 8 > block.size()) {
       summary.problem = "array " + summary.arrays.back() + " starts past the block";
       return summary;
     }
-    std::memcpy(&bytes, block.data() + offset, sizeof bytes);
-    if (offset + sizeof bytes + bytes > block.size()) {
+    std::size_t bytes = 8 + word(offset);
+    if (compressed) {
+      const std::uint64_t blocks = word(offset);
+      bytes = 8 * (3 + blocks);
+      for (std::uint64_t b = 0; b < blocks && offset + bytes <= block.size(); ++b)
+        bytes += word(offset + 8 * (3 + b));
+    }
+    if (offset + bytes > block.size()) {
       summary.problem = "array " + summary.arrays.back() + " ends past the block";
       return summary;
     }
-    covered += sizeof bytes + bytes;
+    covered += bytes;
   }
   if (covered != block.size()) {
     summary.problem = "the arrays cover " + std::to_string(covered) + " of " +
@@ -154,17 +167,52 @@ TEST(DemCli, SettleWritesASeriesParaViewOpens) {
   EXPECT_EQ(triangles, 8.0 * 80.0) << "granulates of 80 triangles";
   EXPECT_EQ(jsonNumber(run.out, "frames"), 4.0) << "steps 0, 5, 10 and the last, 12";
 
-  const std::vector<std::string> frames = seriesFiles(folder / "particles.pvd");
+  // The default frames: a point per particle, and the shapes to glyph there.
+  EXPECT_FALSE(fs::exists(folder / "particles.pvd")) << "the triangles only with --frames";
+  const std::vector<std::string> states = seriesFiles(folder / "particles_state.pvd");
+  ASSERT_EQ(states.size(), 4u);
+  for (const std::string& frame : states) {
+    const VtpSummary vtp = readVtp(folder / frame);
+    EXPECT_TRUE(vtp.wellFormed) << frame << ": " << vtp.problem;
+    EXPECT_EQ(vtp.points, 8u) << frame;
+    EXPECT_EQ(vtp.verts, 8u) << frame;
+    EXPECT_EQ(vtp.polys, 0u) << frame;
+    for (const char* name : {"particle", "shape", "velocity", "angular_velocity", "orientation",
+                             "bounding_radius", "Points"})
+      EXPECT_NE(std::find(vtp.arrays.begin(), vtp.arrays.end(), name), vtp.arrays.end()) << name;
+  }
+  const VtpSummary shape = readVtp(folder / "shape_0.vtp");
+  EXPECT_TRUE(shape.wellFormed) << shape.problem;
+  EXPECT_EQ(shape.polys, 80u) << "a granulate in its body frame";
+
+  const fs::path both = out.path / "both";
+  const CliRun withTriangles = runDelta(
+      "dem settle --particles 8 --steps 12 --output-every 5 --quiet --frames both --out '" +
+      both.string() + "'");
+  ASSERT_EQ(withTriangles.exitCode, 0) << withTriangles.err;
+  EXPECT_EQ(seriesFiles(both / "particles_state.pvd").size(), 4u);
+  const std::vector<std::string> frames = seriesFiles(both / "particles.pvd");
   ASSERT_EQ(frames.size(), 4u);
   for (const std::string& frame : frames) {
-    ASSERT_TRUE(fs::exists(folder / frame)) << frame;
-    const VtpSummary vtp = readVtp(folder / frame);
+    ASSERT_TRUE(fs::exists(both / frame)) << frame;
+    const VtpSummary vtp = readVtp(both / frame);
     EXPECT_TRUE(vtp.wellFormed) << frame << ": " << vtp.problem;
     EXPECT_EQ(static_cast<double>(vtp.polys), triangles) << frame;
     EXPECT_EQ(vtp.verts, 0u);
     for (const char* name : {"velocity", "particle", "Points", "connectivity"})
       EXPECT_NE(std::find(vtp.arrays.begin(), vtp.arrays.end(), name), vtp.arrays.end()) << name;
   }
+  const fs::path triangleOnly = out.path / "triangles";
+  ASSERT_EQ(runDelta("dem settle --particles 8 --steps 2 --quiet --frames triangles --out '" +
+                     triangleOnly.string() + "'")
+                .exitCode,
+            0);
+  EXPECT_TRUE(fs::exists(triangleOnly / "particles.pvd"));
+  EXPECT_FALSE(fs::exists(triangleOnly / "particles_state.pvd"));
+  EXPECT_FALSE(fs::exists(triangleOnly / "shape_0.vtp"));
+  expectOneLineError(
+      runDelta("dem settle --steps 1 --frames all --out '" + (out.path / "bad").string() + "'"),
+      "--frames 'all' is not state, triangles or both");
   const std::vector<std::string> contactFrames = seriesFiles(folder / "contacts.pvd");
   ASSERT_EQ(contactFrames.size(), 4u);
   for (const std::string& frame : contactFrames)

@@ -94,7 +94,7 @@ TEST(DemMpiCli, WritesOnePieceARankJoinedInAParallelSeries) {
             0);
   const CliRun run = runDeltaUnder(mpirun(2), arguments + "'" + two.path.string() + "'");
   ASSERT_EQ(run.exitCode, 0) << run.err;
-  for (const char* series : {"particles", "contacts"}) {
+  for (const char* series : {"particles_state", "contacts"}) {
     const std::vector<std::string> frames = seriesFiles(two.path / (std::string(series) + ".pvd"));
     ASSERT_EQ(frames.size(), 3u) << series;  // the start and two frames
     for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -110,6 +110,7 @@ TEST(DemMpiCli, WritesOnePieceARankJoinedInAParallelSeries) {
     }
   }
   EXPECT_TRUE(std::filesystem::is_regular_file(two.path / "obstacles.vtp"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(two.path / "shape_0.vtp"));
   // log.csv: the one process's rows, energies to round-off (sums over ranks in another order).
   const std::vector<std::vector<double>> expected = logRows(one.path / "log.csv");
   const std::vector<std::vector<double>> rows = logRows(two.path / "log.csv");

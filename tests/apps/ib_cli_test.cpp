@@ -105,6 +105,24 @@ TEST(IbCli, TextSummaryAndStaticFiles) {
   const std::string grid = slurp(out / "grid.vtu");
   for (const char* array : {"Name=\"signed_distance\"", "Name=\"error_bound\"", "Name=\"level\""})
     EXPECT_NE(grid.find(array), std::string::npos) << array;
+  EXPECT_EQ(grid.find("compressor="), std::string::npos) << "raw unless --compression";
+
+  // --compression 1: the same arrays, compressed, the values as they were.
+  const fs::path compressed = folder.path / "compressed";
+  ASSERT_EQ(runDelta("ib builtin:icosphere:2 --levels 4 --compression 1 --quiet --out '" +
+                     compressed.string() + "'")
+                .exitCode,
+            0);
+  const std::string small = slurp(compressed / "grid.vtu");
+  EXPECT_NE(small.find("compressor=\"vtkZLibDataCompressor\""), std::string::npos);
+  EXPECT_LT(small.size(), grid.size() / 2);
+  EXPECT_EQ(delta::test::readVtkArray<double>(small, "signed_distance"),
+            delta::test::readVtkArray<double>(grid, "signed_distance"));
+  EXPECT_EQ(delta::test::readVtkArray<std::uint8_t>(small, "level"),
+            delta::test::readVtkArray<std::uint8_t>(grid, "level"));
+  EXPECT_EQ(delta::test::readVtkArray<std::int32_t>(small, "connectivity"),
+            delta::test::readVtkArray<std::int32_t>(grid, "connectivity"));
+  EXPECT_EQ(vtuCells(compressed / "grid.vtu"), vtuCells(out / "grid.vtu"));
 }
 
 TEST(IbCli, MovingBoundaryWritesASeries) {
@@ -180,6 +198,8 @@ TEST(IbCli, RejectsBadInputAndWritesNothing) {
       {"--steps 1 --translate 1,2", "--translate"},
       {"--steps 1 --translate 1,x,2", "--translate"},
       {"--rotate 0,0,1,10", "--steps"},
+      {"--compression 10", "--compression"},
+      {"--compression -1", "--compression"},
   };
   for (const auto& [arguments, needle] : cases) {
     expectOneLineError(runDelta(box + arguments), needle);

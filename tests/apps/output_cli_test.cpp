@@ -114,8 +114,8 @@ TEST(DeltaCliOutput, IbAndDemOutputFailuresAreErrors) {
   EXPECT_NE(ib.err.find("cannot write '" + (folder.path / "ib").string()), std::string::npos)
       << ib.err;
   const CliRun dem =
-      runDeltaUnder(fullDiskAfter(16), "dem settle --particles 8 --steps 10 --quiet --out '" +
-                                           (folder.path / "dem").string() + "'");
+      runDeltaUnder(fullDiskAfter(1), "dem settle --particles 8 --steps 10 --quiet --out '" +
+                                          (folder.path / "dem").string() + "'");
   expectOneLineError(dem, "File too large");
   EXPECT_NE(dem.err.find((folder.path / "dem").string()), std::string::npos) << dem.err;
   // log.csv, flushed every row: a full disk stops the run at the row that does not fit, with

@@ -115,8 +115,12 @@ TEST(GridVtk, AWrittenGridReadsBack) {
                       "\" NumberOfCells=\"" + std::to_string(grid.leafCount()) + "\""),
             std::string::npos);
   EXPECT_EQ(test::readVtkArray<double>(file, "signed_distance"), vtk.pointData[0].values);
-  EXPECT_EQ(test::readVtkArray<double>(file, "level"), vtk.cellData[0].values);
-  EXPECT_EQ(test::readVtkArray<std::int64_t>(file, "connectivity").size(), 8 * grid.leafCount());
+  const std::vector<std::uint8_t> levels = test::readVtkArray<std::uint8_t>(file, "level");
+  EXPECT_EQ(std::vector<double>(levels.begin(), levels.end()), vtk.cellData[0].values);
+  const std::vector<std::uint8_t> finest = test::readVtkArray<std::uint8_t>(file, "finest_level");
+  EXPECT_EQ(std::vector<double>(finest.begin(), finest.end()), vtk.pointData[2].values);
+  EXPECT_EQ(vtk.cellData[0].type, io::VtkType::UInt8);
+  EXPECT_EQ(test::readVtkArray<std::int32_t>(file, "connectivity").size(), 8 * grid.leafCount());
   EXPECT_EQ(test::readVtkArray<std::uint8_t>(file, "types"),
             std::vector<std::uint8_t>(grid.leafCount(), 11));
 }

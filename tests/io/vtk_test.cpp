@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <iterator>
 #include <regex>
@@ -56,10 +57,10 @@ TEST(Vtk, WritesAMeshWithDataThatReadsBack) {
   }
   EXPECT_EQ(readVtkArray<double>(file, "height"), height.values);
   EXPECT_EQ(readVtkArray<double>(file, "triangle id"), id.values);
-  const std::vector<std::int64_t> connectivity = readVtkArray<std::int64_t>(file, "connectivity");
+  const std::vector<std::int32_t> connectivity = readVtkArray<std::int32_t>(file, "connectivity");
   // Verts come first (empty here), then Polys: the second "connectivity" is the triangles'.
   EXPECT_TRUE(connectivity.empty());
-  const std::vector<std::int64_t> offsets = readVtkArray<std::int64_t>(file, "offsets");
+  const std::vector<std::int32_t> offsets = readVtkArray<std::int32_t>(file, "offsets");
   EXPECT_TRUE(offsets.empty());
 }
 
@@ -72,8 +73,8 @@ TEST(Vtk, WritesPointsAsVertexCells) {
   const std::string file = readFile(path);
   fs::remove(path);
   EXPECT_NE(file.find("NumberOfPoints=\"3\" NumberOfVerts=\"3\""), std::string::npos);
-  EXPECT_EQ(readVtkArray<std::int64_t>(file, "connectivity"), (std::vector<std::int64_t>{0, 1, 2}));
-  EXPECT_EQ(readVtkArray<std::int64_t>(file, "offsets"), (std::vector<std::int64_t>{1, 2, 3}));
+  EXPECT_EQ(readVtkArray<std::int32_t>(file, "connectivity"), (std::vector<std::int32_t>{0, 1, 2}));
+  EXPECT_EQ(readVtkArray<std::int32_t>(file, "offsets"), (std::vector<std::int32_t>{1, 2, 3}));
   EXPECT_EQ(readVtkArray<double>(file, "Points").back(), 1e300);
   EXPECT_EQ(readVtkArray<double>(file, "normal").size(), 9u);
 }
@@ -221,12 +222,12 @@ TEST(Vtk, WritesVoxelsThatReadBack) {
     EXPECT_EQ(points[3 * i + 1], grid.points[i].y);
     EXPECT_EQ(points[3 * i + 2], grid.points[i].z);
   }
-  const std::vector<std::int64_t> connectivity = readVtkArray<std::int64_t>(file, "connectivity");
+  const std::vector<std::int32_t> connectivity = readVtkArray<std::int32_t>(file, "connectivity");
   ASSERT_EQ(connectivity.size(), 16u);
   for (std::size_t v = 0; v < 2; ++v)
     for (std::size_t c = 0; c < 8; ++c)
-      EXPECT_EQ(connectivity[8 * v + c], grid.voxels[v][c]);
-  EXPECT_EQ(readVtkArray<std::int64_t>(file, "offsets"), (std::vector<std::int64_t>{8, 16}));
+      EXPECT_EQ(connectivity[8 * v + c], static_cast<std::int32_t>(grid.voxels[v][c]));
+  EXPECT_EQ(readVtkArray<std::int32_t>(file, "offsets"), (std::vector<std::int32_t>{8, 16}));
   EXPECT_EQ(readVtkArray<std::uint8_t>(file, "types"), (std::vector<std::uint8_t>{11, 11}));
   EXPECT_EQ(readVtkArray<double>(file, "height"), height.values);
   EXPECT_EQ(readVtkArray<double>(file, "gradient").size(), 36u);
@@ -296,6 +297,189 @@ TEST(Vtk, RejectsANonFiniteTimeOrAnUnwritablePvd) {
   EXPECT_FALSE(fs::exists(path));
   const std::vector<VtkSeriesEntry> good = {{0.0, "a.vtp"}};
   EXPECT_THROW(writePvd(good, "/nonexistent/dir/x.pvd"), Error);
+}
+
+/// The UInt64 words of the compression header of the appended array declared with `name`:
+/// blocks, block size, last block's size, each block's compressed size.
+std::vector<std::uint64_t> compressionHeader(const std::string& file, const std::string& name) {
+  const std::regex element("Name=\"" + name + "\"[^>]* offset=\"([0-9]+)\"");
+  std::smatch match;
+  EXPECT_TRUE(std::regex_search(file, match, element)) << name;
+  if (match.empty()) return {};
+  const std::string marker = "<AppendedData encoding=\"raw\">\n_";
+  const std::size_t at = file.find(marker) + marker.size() + std::stoull(match[1]);
+  std::uint64_t blocks = 0;
+  std::memcpy(&blocks, file.data() + at, sizeof blocks);
+  std::vector<std::uint64_t> header(3 + blocks);
+  std::memcpy(header.data(), file.data() + at, header.size() * sizeof(std::uint64_t));
+  return header;
+}
+
+TEST(Vtk, CompressesInBlocksAsVtkZLibDataCompressorDoes) {
+  // 10,000 doubles are 80,000 bytes: two whole blocks of 32 KiB and a last one of 14,464 bytes;
+  // 4,096 doubles fill exactly one block (the last size is then 0); an empty array has none.
+  VtkPolyData data = VtkPolyData::fromPoints(std::vector<Vec3>(10000));
+  for (std::size_t i = 0; i < data.points.size(); ++i)
+    data.points[i] = {std::sin(double(i)), double(i) / 3.0, 1e300 / double(i + 1)};
+  VtkArray noise{"noise", 1, {}}, exact{"exact", 1, {}};
+  for (std::size_t i = 0; i < 10000; ++i) {
+    noise.values.push_back(std::cos(double(i) * 0.37) * 1e-3);
+    exact.values.push_back(i % 4096 == 0 ? std::nan("") : -0.0);
+  }
+  data.pointData = {noise, exact};
+  data.cellData.push_back({"id", 1, std::vector<double>(10000, 7.0), VtkType::UInt32});
+  const fs::path path = tempFile("blocks.vtp");
+  writeVtp(data, path);
+  const std::string file = readFile(path);
+  fs::remove(path);
+  EXPECT_NE(file.find("<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                      "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">"),
+            std::string::npos)
+      << file.substr(0, 200);
+  const std::vector<std::uint64_t> header = compressionHeader(file, "noise");
+  ASSERT_EQ(header.size(), 6u);
+  EXPECT_EQ(header[0], 3u);
+  EXPECT_EQ(header[1], kVtkBlockBytes);
+  EXPECT_EQ(header[2], 80000u - 2 * kVtkBlockBytes);
+  // Every value back, bit for bit (NaN and −0 included), through zlib's own uncompress().
+  const std::vector<double> noiseBack = readVtkArray<double>(file, "noise");
+  ASSERT_EQ(noiseBack.size(), noise.values.size());
+  EXPECT_EQ(std::memcmp(noiseBack.data(), noise.values.data(), 80000), 0);
+  const std::vector<double> exactBack = readVtkArray<double>(file, "exact");
+  ASSERT_EQ(exactBack.size(), exact.values.size());
+  EXPECT_EQ(std::memcmp(exactBack.data(), exact.values.data(), 80000), 0);
+  const std::vector<double> points = readVtkArray<double>(file, "Points");
+  ASSERT_EQ(points.size(), 30000u);
+  EXPECT_EQ(std::memcmp(points.data(), data.points.data(), 240000), 0);
+  EXPECT_EQ(readVtkArray<std::uint32_t>(file, "id"), std::vector<std::uint32_t>(10000, 7));
+  EXPECT_LT(file.size(), 240000u + 2 * 80000u) << "compressible arrays shrink";
+
+  VtkPolyData triangles;
+  triangles.points = {{1, 2, 3}};
+  triangles.triangles.assign(1366, {0, 0, 0});
+  triangles.cellData.push_back({"filled", 1, std::vector<double>(1366, 0.5)});
+  writeVtp(triangles, path);
+  const std::string second = readFile(path);
+  fs::remove(path);
+  const std::vector<std::uint64_t> empty = compressionHeader(second, "connectivity");
+  EXPECT_EQ(empty, (std::vector<std::uint64_t>{0, kVtkBlockBytes, 0})) << "the empty Verts";
+  EXPECT_TRUE(readVtkArray<std::int32_t>(second, "connectivity").empty());
+  // 1,366 doubles: one partial block (a whole one: the next test).
+  EXPECT_EQ(compressionHeader(second, "filled")[0], 1u);
+  EXPECT_EQ(compressionHeader(second, "filled")[2], 1366u * 8u);
+}
+
+TEST(Vtk, AWholeLastBlockHasSizeZeroInTheHeader) {
+  VtkVoxelGrid grid = twoVoxels();
+  constexpr int kComponents = kVtkBlockBytes / sizeof(double) / 2;  // two voxels fill one block
+  grid.cellData.push_back({"block", kComponents, std::vector<double>(2 * kComponents, 1.5)});
+  const fs::path path = tempFile("whole.vtu");
+  writeVtu(grid, path);
+  const std::string file = readFile(path);
+  fs::remove(path);
+  const std::vector<std::uint64_t> header = compressionHeader(file, "block");
+  ASSERT_EQ(header.size(), 4u);
+  EXPECT_EQ(header[0], 1u);
+  EXPECT_EQ(header[1], kVtkBlockBytes);
+  EXPECT_EQ(header[2], 0u) << "the one block is whole";
+  EXPECT_EQ(readVtkArray<double>(file, "block"), std::vector<double>(2 * kComponents, 1.5));
+}
+
+TEST(Vtk, WritesRawDataWhenAskedAndEveryCompressionLevel) {
+  VtkVoxelGrid grid = twoVoxels();
+  grid.cellData.push_back({"level", 1, {3, 4}, VtkType::UInt8});
+  const fs::path path = tempFile("levels.vtu");
+  for (int level = 0; level <= 9; ++level) {
+    writeVtu(grid, path, {level});
+    const std::string file = readFile(path);
+    EXPECT_EQ(file.find("compressor="), level == 0 ? std::string::npos : file.find("compressor="))
+        << level;
+    EXPECT_EQ(file.find("vtkZLibDataCompressor") == std::string::npos, level == 0) << level;
+    EXPECT_EQ(readVtkArray<std::uint8_t>(file, "level"), (std::vector<std::uint8_t>{3, 4}));
+    EXPECT_EQ(readVtkArray<std::int32_t>(file, "offsets"), (std::vector<std::int32_t>{8, 16}));
+  }
+  fs::remove(path);
+  for (int level : {-1, 10}) {
+    try {
+      writeVtu(grid, path, {level});
+      ADD_FAILURE() << "level " << level << " was accepted";
+    } catch (const Error& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+      EXPECT_NE(message.find("compression level " + std::to_string(level)), std::string::npos)
+          << message;
+    }
+    EXPECT_FALSE(fs::exists(path));
+  }
+}
+
+TEST(Vtk, WritesIntegerArraysExactlyAndDeclaresTheirTypes) {
+  VtkPolyData data = VtkPolyData::fromPoints({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}});
+  data.pointData = {
+      {"flag", 1, {0, 1, 255}, VtkType::UInt8},
+      {"id", 1, {0, 4294967295.0, 7}, VtkType::UInt32},
+      {"signed", 1, {-2147483648.0, 2147483647.0, -0.0}, VtkType::Int32},
+      {"big", 2, {-9007199254740992.0, 9007199254740992.0, -1, 1, 0, 3}, VtkType::Int64},
+      {"value", 1, {0.1, -2.5, 1e-300}}};
+  const fs::path directory = tempFile("integers");
+  fs::create_directories(directory);
+  writeVtp(data, directory / "piece.vtp");
+  const std::string file = readFile(directory / "piece.vtp");
+  EXPECT_EQ(readVtkArray<std::uint8_t>(file, "flag"), (std::vector<std::uint8_t>{0, 1, 255}));
+  EXPECT_EQ(readVtkArray<std::uint32_t>(file, "id"),
+            (std::vector<std::uint32_t>{0, 4294967295u, 7}));
+  EXPECT_EQ(readVtkArray<std::int32_t>(file, "signed"),
+            (std::vector<std::int32_t>{-2147483647 - 1, 2147483647, 0}));
+  EXPECT_EQ(readVtkArray<std::int64_t>(file, "big"),
+            (std::vector<std::int64_t>{-9007199254740992, 9007199254740992, -1, 1, 0, 3}));
+  EXPECT_EQ(readVtkArray<double>(file, "value"), (std::vector<double>{0.1, -2.5, 1e-300}));
+  EXPECT_EQ(std::string(vtkTypeName(VtkType::UInt32)), "UInt32");
+
+  // The .pvtp declares each array's type as the pieces store it.
+  const std::vector<fs::path> pieces = {"piece.vtp"};
+  writePvtp(data, pieces, directory / "all.pvtp");
+  const std::string joined = readFile(directory / "all.pvtp");
+  for (const char* declared :
+       {"<PDataArray type=\"UInt8\" Name=\"flag\" NumberOfComponents=\"1\"/>",
+        "<PDataArray type=\"UInt32\" Name=\"id\" NumberOfComponents=\"1\"/>",
+        "<PDataArray type=\"Int32\" Name=\"signed\" NumberOfComponents=\"1\"/>",
+        "<PDataArray type=\"Int64\" Name=\"big\" NumberOfComponents=\"2\"/>",
+        "<PDataArray type=\"Float64\" Name=\"value\" NumberOfComponents=\"1\"/>"})
+    EXPECT_NE(joined.find(declared), std::string::npos) << declared << " in " << joined;
+  fs::remove_all(directory);
+}
+
+TEST(Vtk, RefusesToRoundAValueIntoAnIntegerType) {
+  struct Case {
+    VtkType type;
+    double value;
+    const char* shown;
+  };
+  const Case cases[] = {{VtkType::UInt8, 2.5, "2.5"},
+                        {VtkType::UInt8, -1.0, "-1"},
+                        {VtkType::UInt8, 256.0, "256"},
+                        {VtkType::Int32, 2147483648.0, "2147483648"},
+                        {VtkType::UInt32, 4294967296.0, "4294967296"},
+                        {VtkType::Int64, 9223372036854775808.0, "9.2233720368547758e+18"},
+                        {VtkType::Int64, std::nan(""), "nan"},
+                        {VtkType::Int32, INFINITY, "inf"}};
+  const fs::path path = tempFile("rounded.vtp");
+  for (const Case& c : cases) {
+    VtkPolyData data = VtkPolyData::fromPoints({{0, 0, 0}, {1, 0, 0}});
+    data.cellData.push_back({"particle", 1, {0.0, c.value}, c.type});
+    try {
+      writeVtp(data, path);
+      ADD_FAILURE() << c.shown << " was written as " << vtkTypeName(c.type);
+    } catch (const Error& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+      EXPECT_NE(message.find("cell array 'particle' holds "), std::string::npos) << message;
+      EXPECT_NE(message.find("(element 1)"), std::string::npos) << message;
+      EXPECT_NE(message.find(std::string("not an ") + vtkTypeName(c.type)), std::string::npos)
+          << message;
+    }
+    EXPECT_FALSE(fs::exists(path)) << c.shown;
+  }
 }
 
 }  // namespace

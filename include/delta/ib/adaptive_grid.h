@@ -29,9 +29,16 @@ struct GridOptions {
   /// refineFactor × its diagonal. Every point of a cell lies within half a diagonal of a corner,
   /// so any factor ≥ ½ refines every cell the boundary passes through. > 0, finite.
   double refineFactor = 1.0;
-  /// Signed distances (negative inside; the boundary must be closed, delta::Error otherwise) or
-  /// unsigned.
+  /// Signed distances (negative inside; with Sign::pseudonormal the boundary must be closed and
+  /// not cross itself, delta::Error otherwise) or unsigned.
   bool signedDistance = true;
+  /// How signed distances decide inside (contactdetection::Sign): by pseudonormals (the
+  /// default), or by the generalized winding number, which takes open and self-intersecting
+  /// boundaries (CAD and scanned meshes with holes). A winding sign can change away from the
+  /// surface when such a boundary moves (across a hole), so after a move every vertex is queried
+  /// again there (as with exactBand = +∞); on a closed boundary that does not cross itself the
+  /// winding sign is the pseudonormal sign and nothing changes.
+  contactdetection::Sign sign = contactdetection::Sign::pseudonormal;
   /// The domain the root cell covers: finite, with lower < upper on every axis (delta::Error
   /// otherwise; an inverted box is refused, not replaced). None (the default): the boundary's
   /// box where it is when the grid is made, made a cube about its centre and grown by `padding` ×
@@ -105,14 +112,13 @@ struct GridStatistics {
 ///
 /// Throws delta::Error for bad options (naming the field), for a default domain around a
 /// boundary whose vertices all coincide (the domain would have no extent), and for
-/// `signedDistance` with a boundary that is not closed (the message says how it is open and that
-/// unsigned distances work), and for a grid that would not fit: before each level of a build is
-/// made, the cells it leads to are estimated from the cells refined so far (each finer level
-/// about 4 times more) and refused, with the estimate and the limit, beyond 32-bit cell indices
-/// or the memory limit (core/memory.h; about 200 bytes a cell). Degenerate triangles are part
-/// of the boundary like any other. Only
-/// the domain is gridded: a boundary that moves (partly) out of it is simply not resolved
-/// there.
+/// `signedDistance` by pseudonormals with a boundary that is not closed (the message says how it
+/// is open and that unsigned distances and the winding sign work) or that crosses itself, and for a
+/// grid that would not fit: before each level of a build is made, the cells it leads to are
+/// estimated from the cells refined so far (each finer level about 4 times more) and refused, with
+/// the estimate and the limit, beyond 32-bit cell indices or the memory limit (core/memory.h; about
+/// 200 bytes a cell). Degenerate triangles are part of the boundary like any other. Only the domain
+/// is gridded: a boundary that moves (partly) out of it is simply not resolved there.
 ///
 /// Cancellation (core/cancel.h): a build made in a CancelScope polls it between batches of cells
 /// and of queries (some tens of milliseconds of work each), on the calling thread; when the poll

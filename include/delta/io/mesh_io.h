@@ -100,16 +100,17 @@ LoadedMesh loadWithStatistics(const std::filesystem::path& path);
 Mesh load(const std::filesystem::path& path);
 
 /// Writes the mesh to `path` in the format its extension names, case-insensitive: .stl (binary),
-/// .ply (binary) or .obj (no material file), through assimp's exporters. Loading the file again
-/// gives the same triangles in the same order, with coordinates rounded to single precision
-/// (assimp's precision, and the formats'); vertices are joined on loading, so an STL comes back
-/// with shared vertices.
+/// .ply (binary) or .obj (no material file), through assimp's exporters, or .vtp (VTK XML
+/// PolyData for ParaView, io/vtk.h: coordinates in double, bit for bit). Loading an .stl, .ply or
+/// .obj file again gives the same triangles in the same order, with coordinates rounded to
+/// single precision (assimp's precision, and the formats'); vertices are joined on loading, so an
+/// STL comes back with shared vertices. Δ does not read .vtp.
 ///
 /// Throws delta::Error, naming the path and the reason, for another extension, a coordinate
-/// beyond single precision, or when writing fails (a full disk, /dev/full). The file is written
-/// whole or not at all (io/atomic_file.h): an existing file is replaced only by a complete one,
-/// and left as it was when writing fails; a symlink at `path` is kept and its target replaced.
-/// Degenerate triangles are written as they are.
+/// beyond single precision (.stl, .ply, .obj), or when writing fails (a full disk, /dev/full). The
+/// file is written whole or not at all (io/atomic_file.h): an existing file is replaced only by a
+/// complete one, and left as it was when writing fails; a symlink at `path` is kept and its target
+/// replaced. Degenerate triangles are written as they are.
 ///
 /// Threading: may be called from several threads at once, for different paths.
 void save(const Mesh& mesh, const std::filesystem::path& path);

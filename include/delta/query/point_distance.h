@@ -24,11 +24,34 @@ struct PointDistance {
   /// The triangle it lies on: the smallest id of a tie, such as a point exactly on a vertex or
   /// an edge, which every triangle sharing it is at distance 0 from.
   std::uint32_t triangle = kNoTriangle;
-  bool inside = false;  ///< inside the closed mesh (signed queries only)
+  bool inside = false;  ///< inside the mesh (signed queries only; see PointQuery::sign)
+  /// Sign::winding queries only: the generalized winding number lies within
+  /// PointQuery::windingTolerance of ½, where inside and outside are a coin toss (across a hole,
+  /// where two sheets cross); `inside` then still says w > ½. False for pseudonormal queries.
+  bool ambiguous = false;
 
   bool found() const noexcept { return triangle != kNoTriangle; }
   /// The distance, negative inside (signed queries).
   double signedDistance() const noexcept { return inside ? -distance : distance; }
+};
+
+/// How a signed query decides inside from outside.
+enum class Sign {
+  /// The angle-weighted pseudonormal of the closest feature (Bærentzen and Aanæs 2005): O(1)
+  /// once the closest point is known and exact off the surface, but only for a closed,
+  /// consistently oriented mesh that does not cross itself; other meshes are refused.
+  pseudonormal,
+  /// The generalized winding number w (Jacobson et al. 2013) exceeds ½, taken relative to the
+  /// mesh's orientation (query_mesh.h): defined for any mesh — open (holes), self-intersecting,
+  /// a soup of patches. Evaluated by the hierarchical dipole expansion of Barill et al., "Fast
+  /// Winding Numbers for Soups and Clouds" (SIGGRAPH 2018), over the QueryMesh's tree with a
+  /// rigorous error bound, and over all triangles exactly where that bound leaves the side of ½
+  /// in doubt: the sign is always that of the exact winding number (the O(n) sum of
+  /// delta::windingNumber), up to its rounding. On a closed mesh that does not cross itself
+  /// (selfIntersections(), found by the first such query) the winding number off the surface is
+  /// 0 or 1 and the pseudonormal sign is its sign, exactly also within rounding of a face, where
+  /// solid angles are not: that is what runs there, at the pseudonormal's cost.
+  winding,
 };
 
 /// What a points–mesh query asks.
@@ -38,11 +61,21 @@ struct PointQuery {
   /// Answer only points closer than ε (strictly); the others get distance +∞ and no triangle.
   /// A finite ε lets the search stop near the root for points far from the mesh.
   double epsilon = std::numeric_limits<double>::infinity();
-  /// Also decide inside/outside (the mesh must be closed): by the angle-weighted pseudonormal of
-  /// the feature (vertex, edge or face) the closest point lies on, which is exact for any point
-  /// off the surface, with the generalized winding number where rounding leaves that in doubt.
-  /// A point on the surface (distance 0) is not inside.
+  /// Also decide inside/outside, as `sign` says. Sign::pseudonormal (the mesh must be closed and
+  /// not cross itself): by the angle-weighted pseudonormal of the feature (vertex, edge or face)
+  /// the closest point lies on, which is exact for any point off the surface, with the
+  /// generalized winding number where rounding leaves that in doubt. Sign::winding: by the
+  /// winding number, for any mesh. A point on the surface (distance 0) is not inside.
   bool signedDistance = false;
+  /// How signedDistance decides (ignored without it). Sign::pseudonormal, the default, refuses
+  /// a mesh that is not closed and one that crosses itself (selfIntersections() > 0: there the
+  /// pseudonormals give wrong signs near the crossings), with a delta::Error that names
+  /// Sign::winding, which answers both.
+  Sign sign = Sign::pseudonormal;
+  /// Sign::winding: a point is `ambiguous` where |w − ½| ≤ windingTolerance (in [0, ½); NaN and
+  /// others: delta::Error). The default 0.05 flags points near a hole's rim or a crossing whose
+  /// winding number is within 5% of the threshold.
+  double windingTolerance = 0.05;
 };
 
 /// The distance from every point to the mesh, in input order: the exact minimum over all
@@ -55,8 +88,8 @@ struct PointQuery {
 /// get the same answer; a point on the surface gets distance 0 (within rounding) and is not
 /// inside; a point exactly on a vertex or an edge gets distance exactly 0, itself as the closest
 /// point and the smallest id of the triangles sharing it (kernels::closestPointOnTriangle decides
-/// it exactly). A closed mesh that intersects itself has no well-defined inside: its signs are
-/// those of the closest feature's pseudonormal; a point outside the mesh's box is outside.
+/// it exactly). A mesh that intersects itself is refused by pseudonormal signs (they are wrong
+/// near the crossings) and signed by Sign::winding: inside where the winding number exceeds ½.
 ///
 /// Coordinates (mesh/coordinate_range.h): every point, where it is and carried into the mesh's
 /// prepared frame by its pose, must lie within ±2²⁰⁰ (kLargestCoordinate, 1.6e60), where squared
@@ -68,8 +101,13 @@ struct PointQuery {
 ///
 /// Throws delta::Error when ε is NaN or not positive, a point has a non-finite coordinate or one
 /// beyond ±2²⁰⁰ where it is or in the mesh's frame (the error names its index, the coordinates
-/// and the range), or `signedDistance` is asked of a mesh that is not closed (the error says how:
-/// boundary, non-manifold or misoriented edges). No points: an empty result.
+/// and the range), or `signedDistance` with Sign::pseudonormal is asked of a mesh that is not
+/// closed (the error says how: boundary, non-manifold or misoriented edges) or that crosses
+/// itself (the error gives the number of crossing pairs); both errors name Sign::winding, which
+/// signs any mesh. Also for a windingTolerance outside [0, ½). No points: an empty result.
+///
+/// The first pseudonormal query of a QueryMesh finds its self-intersections (selfIntersections,
+/// O(n log n), kept), the first winding query builds the tree's winding moments (O(n), kept).
 ///
 /// Threading: reads its inputs only; any number of threads may query one QueryMesh at once (in
 /// an enclosing OpenMP parallel region each call runs serially on its own thread).
@@ -108,7 +146,9 @@ PointDistance distance(const QueryMesh& mesh, const Vec3& point, const PointQuer
 /// point whose first geometry is the point (id = its index, P = the point) and second the mesh
 /// (Q = the closest point, `second` = its triangle): x = (P + Q)/2, normal = P − x, distance
 /// |P − Q|, direction the unit vector from Q to P (for a point on the surface, the triangle's
-/// outward face normal), and, for a closed mesh, `overlap` = the point lies inside.
+/// outward face normal), and, for a closed mesh, `overlap` = the point lies inside (by
+/// pseudonormals, or, where the closed mesh crosses itself, by winding number: the first call
+/// finds its self-intersections).
 ///
 /// Throws delta::Error as distances() does, and when ε is not finite.
 ///

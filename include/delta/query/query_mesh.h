@@ -29,15 +29,20 @@ struct QueryMeshData;
 /// pseudonormals of its vertices and edges (Bærentzen and Aanæs, "Signed distance computation using
 /// the angle weighted pseudonormal", IEEE TVCG 2005) that sign a distance in O(1) once the closest
 /// point is known, made by the first query that needs them (thread-safe; 24 bytes a triangle that
-/// unsigned queries never pay). About 85 bytes a triangle in all before the pseudonormals.
+/// unsigned queries never pay), and, made likewise by the first query that needs them, its
+/// self-intersections (query/self_intersections.h) and per tree node the moments of the
+/// hierarchical winding number (Sign::winding, about 20 bytes a triangle). About 85 bytes a
+/// triangle in all before the pseudonormals.
 ///
 /// Built once, in O(n log n), and then queried any number of times (query/point_distance.h,
 /// query/contacts.h). Like a TriangleSoA it is a snapshot: moving the Mesh afterwards does not
 /// move it. Triangle ids in every answer are the mesh's triangle order.
 ///
 /// `closed()` — every edge shared by exactly two triangles that traverse it oppositely — is what
-/// signed queries and the "inside both meshes" overlap marker need. An inside-out closed mesh
-/// (negative signed volume) is handled: inside is where its winding number is −1.
+/// pseudonormal signs and the "inside both meshes" overlap marker need (with no
+/// self-intersections); winding-number signs take any mesh. An inside-out closed mesh (negative
+/// signed volume) is handled: inside is where its winding number is −1. An open mesh's
+/// orientation, for winding signs, is the sign of its signed volume about its box's centre.
 ///
 /// A QueryMesh can be moved rigidly (`transform`) in O(1): the tree, the pseudonormals and
 /// everything built from them move with it, nothing is rebuilt — queries carry points into the
@@ -76,6 +81,12 @@ class QueryMesh {
 
   /// The number of triangles.
   std::size_t size() const noexcept;
+  /// The mesh it was prepared from, in the frame it was prepared in: its triangles in their
+  /// order, over the vertices they use (renumbered in the order the tree meets them; vertices no
+  /// triangle uses are gone). A QueryMesh prepared from it answers every query as this one does
+  /// at the same pose (what pickling a QueryMesh in Python relies on). O(n); may throw
+  /// std::bad_alloc.
+  Mesh mesh() const;
   /// The flattened triangles in the mesh's order, in the frame the mesh was prepared in (apply
   /// pose() for where they are now). Made on the first call (72 bytes a triangle, shared by the
   /// copies; the queries do not need them) and kept; thread-safe. May throw std::bad_alloc.
@@ -87,7 +98,7 @@ class QueryMesh {
   const Aabb& bounds() const noexcept;
   /// Bytes held on the heap (the triangles in tree order, and in mesh order once triangles() has
   /// made them; tree boxes; the distance-bound grid; the pseudonormals once a signed query has
-  /// made them).
+  /// made them; the winding-number moments once a Sign::winding query has made them).
   std::size_t memoryBytes() const noexcept;
 
   /// The prepared data, for the query implementations.

@@ -18,8 +18,10 @@
 #include "delta/mesh/mesh.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/self_intersections.h"
 
 #include "bound_grid.h"
+#include "winding_tree.h"
 
 namespace delta::detail {
 
@@ -229,6 +231,15 @@ struct QueryMeshData {
   }
   const Pseudonormals& pseudonormals() const;
 
+  /// The mesh's self-intersections (query/self_intersections.h), found on the first call and
+  /// kept. Thread-safe.
+  const SelfIntersections& selfIntersections() const;
+  /// The tree's winding-number moments (winding_tree.h), made on the first call (only winding
+  /// signs need them, about 20 bytes a triangle). Thread-safe.
+  const WindingTree& windingTree() const;
+  /// Whether windingTree() has been made (then its bytes count in memoryBytes()).
+  bool windingTreeMade() const noexcept { return windingTreeMade_.load(std::memory_order_acquire); }
+
  private:
   mutable std::once_flag meshOrderOnce_;
   mutable TriangleSoA meshOrder_;
@@ -236,6 +247,11 @@ struct QueryMeshData {
   mutable std::once_flag pseudonormalsOnce_;
   mutable Pseudonormals pseudonormals_;
   mutable std::atomic<bool> pseudonormalsMade_{false};
+  mutable std::once_flag selfIntersectionsOnce_;
+  mutable SelfIntersections selfIntersections_;
+  mutable std::once_flag windingTreeOnce_;
+  mutable WindingTree windingTree_;
+  mutable std::atomic<bool> windingTreeMade_{false};
 };
 
 /// The closest triangle to a point.

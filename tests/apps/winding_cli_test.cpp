@@ -1,0 +1,71 @@
+// `--sign winding` of `delta distance` and `delta ib`, and `delta info`'s self-intersections
+// (issue 22), on CGAL's meshes: ChineseDragon-10kv (open), camel (closed, crossing itself).
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "apps/cli_run.h"
+
+namespace delta::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kMeshes = fs::path(DELTA_DATA_DIR) / "meshes";
+
+std::string quoted(const fs::path& path) {
+  std::string text(1, '\'');  // appended, not concatenated: GCC 12 warns on "'" + string
+  text.append(path.string());
+  text.push_back('\'');
+  return text;
+}
+
+TEST(WindingCli, InfoReportsSelfIntersections) {
+  if (!fs::exists(kMeshes / "camel.off")) GTEST_SKIP() << "no data/meshes";
+  const CliRun camel = runDelta("info --json " + quoted(kMeshes / "camel.off"));
+  ASSERT_EQ(camel.exitCode, 0) << camel.err;
+  EXPECT_EQ(jsonNumber(camel.out, "self_intersections"), 20.0) << camel.out;
+  const CliRun text = runDelta("info " + quoted(kMeshes / "armadillo.off"));
+  ASSERT_EQ(text.exitCode, 0) << text.err;
+  EXPECT_NE(text.out.find("self-intersections   0\n"), std::string::npos) << text.out;
+}
+
+TEST(WindingCli, DistanceSignsOpenAndCrossingMeshes) {
+  if (!fs::exists(kMeshes / "camel.off")) GTEST_SKIP() << "no data/meshes";
+  const std::string dragon = quoted(kMeshes / "ChineseDragon-10kv.off");
+  const std::string camel = quoted(kMeshes / "camel.off");
+  expectOneLineError(runDelta("distance " + dragon + " --points builtin:uniform:10 --signed"),
+                     "--sign winding");
+  expectOneLineError(runDelta("distance " + camel + " --points builtin:uniform:10 --signed"),
+                     "crosses itself (20 pairs");
+  expectOneLineError(runDelta("distance " + camel + " --points builtin:uniform:10 --sign ray"),
+                     "--sign 'ray'");
+  const TemporaryFolder folder("winding");
+  const fs::path csv = folder.path / "signs.csv";
+  const CliRun run =
+      runDelta("distance " + dragon +
+               " --points builtin:uniform:2000 --sign winding --json --out " + quoted(csv));
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_GT(jsonNumber(run.out, "inside"), 0.0) << run.out;
+  EXPECT_GE(jsonNumber(run.out, "ambiguous"), 0.0) << run.out;
+  const std::string rows = slurp(csv);
+  EXPECT_EQ(
+      rows.rfind("index,distance,closest_x,closest_y,closest_z,triangle,inside,ambiguous\n", 0), 0u)
+      << rows.substr(0, 100);
+  EXPECT_TRUE(rows.ends_with(",0\n") || rows.ends_with(",1\n"));
+}
+
+TEST(WindingCli, IbAcceptsAnOpenMeshWithTheWindingSign) {
+  if (!fs::exists(kMeshes / "ChineseDragon-10kv.off")) GTEST_SKIP() << "no data/meshes";
+  const std::string dragon = quoted(kMeshes / "ChineseDragon-10kv.off");
+  expectOneLineError(runDelta("ib " + dragon + " --levels 3"), "--sign winding");
+  const CliRun run = runDelta("ib " + dragon + " --levels 4 --sign winding --json");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_NE(run.out.find("\"sign\":\"winding\""), std::string::npos) << run.out;
+  EXPECT_GT(jsonNumber(run.out, "cells"), 0.0);
+}
+
+}  // namespace
+}  // namespace delta::test
