@@ -12,11 +12,11 @@ cd "$(dirname "$0")/.."
 scripts/setup.sh build
 ./build/delta --version
 ./build/delta dem two-particles --restitution 0.5 --quiet
-./build/delta dem settle --particles 27 --out build/dem_settle
+./build/delta dem settle --particles 27 --overwrite --out build/dem_settle
 # the same settling split over two MPI ranks (one .pvtp piece a rank, build/dem_settle_mpi/);
 # the same trajectories as one process
 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 \
-  mpirun -np 2 --oversubscribe ./build/delta dem settle --particles 27 --out build/dem_settle_mpi
+  mpirun -np 2 --oversubscribe ./build/delta dem settle --particles 27 --overwrite --out build/dem_settle_mpi
 ./build/delta ib data/meshes/fandisk.off --levels 6 --steps 5 --rotate 0,0,1,2 --out build/ib_fandisk
 ./build/delta info data/meshes/armadillo.off
 ./build/delta info builtin:granulate:1

@@ -3,6 +3,7 @@
 // series and a CSV log (dem_output.h).
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -17,17 +18,22 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
+#include "delta/dem/checkpoint.h"
 #include "delta/dem/scenarios.h"
 #ifdef DELTA_WITH_MPI
 #include "delta/dem/mpi/distributed_world.h"
 #endif
 
 #include "commands.h"
+#include "dem_checkpoint.h"
 #include "dem_output.h"
 #include "dem_settings.h"
+#include "dem_warnings.h"
+#include "files.h"
 #include "json.h"
 #include "mesh_source.h"
 #include "progress.h"
+#include "run_lock.h"
 #include "stopwatch.h"
 
 namespace delta::cli {
@@ -47,6 +53,10 @@ struct DemOptions {
   std::string frames = "state";  ///< --frames: DemFrames by name
   bool json = false;
   bool quiet = false;
+  bool overwrite = false;           ///< --overwrite: replace an earlier run's output in --out
+  std::size_t checkpointEvery = 0;  ///< --checkpoint-every N (0: only when stopped)
+  std::string restart;              ///< --restart FILE
+  bool continuing = false;          ///< --restart into the checkpoint's folder: its output goes on
 };
 
 /// --frames NAME as DemFrames; throws delta::Error on another name.
@@ -55,6 +65,13 @@ DemFrames framesOf(const DemOptions& options) {
   if (options.frames == "triangles") return DemFrames::Triangles;
   if (options.frames == "both") return DemFrames::Both;
   throw Error("--frames '" + options.frames + "' is not state, triangles or both");
+}
+
+/// What --out does with an earlier run's files: --overwrite replaces them; otherwise refused.
+/// (--restart continues instead: restart() passes EarlierOutput::Continue for its own folder.)
+EarlierOutput earlierOutput(const DemOptions& options) {
+  if (options.continuing) return EarlierOutput::Continue;
+  return options.overwrite ? EarlierOutput::Overwrite : EarlierOutput::Refuse;
 }
 
 /// The config file, overridden by the options.
@@ -112,11 +129,11 @@ dem::ParticleShape particleShape(const std::string& source, double radius, doubl
 /// shape starts as far from the other as the spheres did: the scenario's run is timed for that
 /// gap. The shape's extent along ±x is taken in its body frame (the particles start unturned).
 void keepTheGap(std::vector<dem::ParticleState>& states, const dem::World& old,
-                const dem::ParticleShape& shape) {
+                const dem::ParticleShape& shape, double scale) {
   dem::ParticleState& left = states[0];
   dem::ParticleState& right = states[1];
   const double sphereRadius = old.shapes()[old.particles()[0].shape].boundingRadius();
-  const double gap = right.position.x - left.position.x - 2.0 * sphereRadius;
+  const double gap = (right.position.x - left.position.x - 2.0 * sphereRadius) * scale;
   const double middle = 0.5 * (left.position.x + right.position.x);
   double ahead = -INFINITY, behind = INFINITY;
   for (const Vec3& vertex : shape.mesh().vertices()) {
@@ -131,13 +148,19 @@ void keepTheGap(std::vector<dem::ParticleState>& states, const dem::World& old,
 /// friction for settle and hopper, another particle shape for any. Particles keep their places
 /// and motion; a new shape gets the stiffness scaled by its mass over the heaviest old one (the
 /// scenarios size k for an impact depth of ε, k ∝ m), and the time step and the number of steps
-/// follow so that the run covers the same simulated time.
+/// follow so that the run covers the same simulated time. A new shape of bounding radius R
+/// (--particle-radius) smaller than the scenario's largest r scales ε and h by s = R/r (they are
+/// fractions of the particle size) and k by a further 1/s², so that impacts at the scenario's
+/// speeds stop as deep into the shell as before; the time step shrinks by s. two-particles also
+/// shrinks its gap by s and keeps its number of steps; settle and hopper keep their places and
+/// drop heights, so their default number of steps grows by 1/s.
 dem::Scenario remade(dem::Scenario scenario, const DemSettings& settings) {
   const dem::World& old = scenario.world;
   dem::Parameters parameters = old.parameters();
   if (settings.restitution) parameters.restitution = *settings.restitution;
   if (settings.friction) parameters.friction = *settings.friction;
   std::optional<dem::ParticleShape> shape;
+  double scale = 1.0;
   if (!settings.particleMesh.empty()) {
     const auto [largest, heaviest] = largestRadiusAndMass(old);
     const double radius = settings.particleRadius.value_or(largest);
@@ -148,6 +171,10 @@ dem::Scenario remade(dem::Scenario scenario, const DemSettings& settings) {
     const std::string origin = settings.origins.at("particle_mesh");
     shape = particleShape(settings.particleMesh, radius, old.shapes().front().density(), origin);
     parameters.stiffness *= shape->mass() / heaviest;
+    scale = radius / largest;  // exactly 1 without --particle-radius: nothing below changes
+    parameters.epsilon *= scale;
+    parameters.filterDistance *= scale;
+    parameters.stiffness /= scale * scale;
   }
   dem::World world(parameters);
   if (shape)
@@ -159,13 +186,14 @@ dem::Scenario remade(dem::Scenario scenario, const DemSettings& settings) {
   for (const dem::Particle& particle : old.particles())
     states.push_back(
         {particle.position, particle.orientation, particle.velocity, particle.angularVelocity});
-  if (shape && scenario.name == "two-particles") keepTheGap(states, old, *shape);
+  if (shape && scenario.name == "two-particles") keepTheGap(states, old, *shape, scale);
   for (std::size_t p = 0; p < states.size(); ++p)
     world.addParticle(shape ? 0 : old.particles()[p].shape, states[p]);
   for (const dem::Obstacle& obstacle : old.obstacles())
     world.addObstacle(obstacle.mesh, obstacle.motion);
   if (shape) {
-    const double stretch = parameters.timeStep / world.suggestedTimeStep();
+    double stretch = parameters.timeStep / world.suggestedTimeStep();
+    if (scenario.name == "two-particles") stretch *= scale;  // its gap shrank with the time step
     world.setTimeStep(world.suggestedTimeStep());
     const auto scaled = [&](std::size_t steps) {
       return std::max<std::size_t>(
@@ -212,8 +240,14 @@ struct RunSummary {
   double runSeconds = 0.0;  ///< wall clock of the steps alone
   double writeSeconds = 0.0;
   double restitution = NAN;
-  double energyChange = NAN;
-  double time = 0.0;  ///< simulated, at the end
+  double energyChange = NAN;          ///< (E_end − E_start) / |E_start|, total energy
+  double energyChangeAbsolute = NAN;  ///< E_end − E_start
+  std::vector<std::string> warnings;  ///< DemWarnings::all()
+  double time = 0.0;                  ///< simulated, at the end
+  std::string digest;                 ///< dem::stateDigest at the end
+  std::size_t checkpoints = 0;        ///< written (dem_checkpoint.h)
+  std::size_t checkpointBytes = 0;    ///< the last one's size
+  double checkpointSeconds = 0.0;     ///< writing them, all
   /// A distributed run's: ranks (0: one process), rebalances and every rank's load.
   int ranks = 0;
   std::size_t rebalances = 0;
@@ -232,41 +266,68 @@ struct RunSummary {
   }
 };
 
+/// What simulate() does besides stepping: checkpoints (dem_checkpoint.h), and for a run
+/// restarted from one, the output it continues.
+struct Continuation {
+  DemCheckpoints* checkpoints = nullptr;
+  bool restarted = false;  ///< no restitution meter: it would start mid-run
+  /// The output folder holds the stopped run's frames, these many, at these times: continue
+  /// its series and log.csv (DemOutput::resume) instead of starting them.
+  bool resumeOutput = false;
+  std::vector<double> frameTimes;
+};
+
 RunSummary simulate(dem::Scenario& scenario, std::size_t steps, std::size_t outputEvery,
-                    DemOutput* output, bool showLine) {
+                    DemOutput* output, bool showLine, const Continuation& continuation = {}) {
   dem::World& world = scenario.world;
   std::optional<dem::RestitutionMeter> meter;
-  if (scenario.name == "two-particles") meter.emplace(world);
+  if (scenario.name == "two-particles" && !continuation.restarted) meter.emplace(world);
   const double startEnergy = world.energies().total();
   RunSummary summary;
+  DemWarnings warnings(true);
+  warnings.atStart(world);
   Stopwatch writing;
-  if (output) {
+  if (output && continuation.resumeOutput) {
+    output->resume(world, continuation.frameTimes, world.stepCount());
+  } else if (output) {
     output->begin(world);
     output->log(world);
     output->frame(world);
   }
   summary.writeSeconds += writing.seconds();
   Progress progress("dem " + scenario.name, steps, showLine);
-  for (std::size_t step = 1; step <= steps; ++step) {
+  int stopSignal = 0;
+  for (std::size_t step = 1; step <= steps && stopSignal == 0; ++step) {
     const Stopwatch stepping;
     world.step();
     summary.runSeconds += stepping.seconds();
     summary.add(world.statistics());
+    if (step == 1 && !continuation.restarted) warnings.afterFirstStep(world.statistics());
     if (meter) meter->observe(world);
     if (output) {
       writing.restart();
       output->log(world);
-      if (step % outputEvery == 0 || step == steps) output->frame(world);
+      // By the step count, so that a restarted run writes the frames the whole run would.
+      if (world.stepCount() % outputEvery == 0 || step == steps) output->frame(world);
       summary.writeSeconds += writing.seconds();
     }
+    if (continuation.checkpoints) stopSignal = continuation.checkpoints->afterStep(world, output);
     progress.update(step);
   }
+  if (continuation.checkpoints &&
+      (stopSignal != 0 || steps == 0 || continuation.checkpoints->every() > 0))
+    continuation.checkpoints->write(world, output);  // the latest state, kept
   if (output) output->finish();
+  if (stopSignal != 0) throw StoppedBySignal{stopSignal, world.stepCount(), true};
+  summary.checkpointSeconds = continuation.checkpoints ? continuation.checkpoints->seconds() : 0.0;
+  summary.checkpointBytes = continuation.checkpoints ? continuation.checkpoints->bytes() : 0;
+  summary.checkpoints = continuation.checkpoints ? continuation.checkpoints->written() : 0;
+  summary.digest = world.stateDigest();
   summary.time = world.time();
-  if (meter) {
-    summary.restitution = meter->restitution();
-    summary.energyChange = (world.energies().total() - startEnergy) / std::fabs(startEnergy);
-  }
+  summary.energyChangeAbsolute = world.energies().total() - startEnergy;
+  summary.energyChange = summary.energyChangeAbsolute / std::fabs(startEnergy);
+  if (meter) summary.restitution = meter->restitution();
+  summary.warnings = warnings.all();
   return summary;
 }
 
@@ -316,10 +377,10 @@ void orAbort(Action&& action) {
 /// of each frame.
 RunSummary simulateDistributed(dem::Scenario& scenario, dem::DistributedWorld& world,
                                std::size_t steps, std::size_t outputEvery, DemOutput* output,
-                               bool showLine) {
+                               bool showLine, const Continuation& continuation = {}) {
   const bool root = world.rank() == 0;
   std::optional<dem::RestitutionMeter> meter;
-  const bool measure = scenario.name == "two-particles";
+  const bool measure = scenario.name == "two-particles" && !continuation.restarted;
   if (measure) {
     const std::vector<dem::Particle> particles = world.gatherParticles();
     if (root) meter.emplace(particles);
@@ -327,6 +388,8 @@ RunSummary simulateDistributed(dem::Scenario& scenario, dem::DistributedWorld& w
   const double startEnergy = world.energies().total();
   RunSummary summary;
   summary.ranks = world.size();
+  DemWarnings warnings(root);
+  warnings.atStart(scenario.world);
   Stopwatch writing;
   const auto write = [&](bool frame) {
     const dem::Energies energies = world.energies();
@@ -339,17 +402,30 @@ RunSummary simulateDistributed(dem::Scenario& scenario, dem::DistributedWorld& w
       if (frame) output->frame(world.part(), world.ids(), world.time());
     });
   };
-  if (output) {
+  if (output && continuation.resumeOutput) {
+    orAbort([&] { output->resume(world.part(), continuation.frameTimes, world.stepCount()); });
+  } else if (output) {
     orAbort([&] { output->begin(scenario.world); });
     write(true);
   }
+  // The whole state gathered on rank 0, which writes it (dem_checkpoint.h); once a step.
+  DemCheckpoints* const checkpoints = continuation.checkpoints;
+  std::size_t checkpointed = static_cast<std::size_t>(-1);
+  const auto checkpoint = [&] {
+    if (!checkpoints || !checkpoints->enabled() || checkpointed == world.stepCount()) return;
+    const std::optional<dem::World> whole = world.gatherWorld();
+    if (whole) orAbort([&] { checkpoints->write(*whole, output); });
+    checkpointed = world.stepCount();
+  };
+  int stopSignal = 0;
   summary.writeSeconds += writing.seconds();
   Progress progress("dem " + scenario.name, steps, showLine && root);
-  for (std::size_t step = 1; step <= steps; ++step) {
+  for (std::size_t step = 1; step <= steps && stopSignal == 0; ++step) {
     const Stopwatch stepping;
     world.step();
     summary.runSeconds += stepping.seconds();
     summary.add(world.statistics());
+    if (step == 1 && !continuation.restarted) warnings.afterFirstStep(world.statistics());
     if (measure) {
       const std::vector<dem::Particle> particles = world.gatherParticles();
       const std::vector<dem::Contact> contacts = world.gatherContacts();
@@ -357,18 +433,33 @@ RunSummary simulateDistributed(dem::Scenario& scenario, dem::DistributedWorld& w
     }
     if (output) {
       writing.restart();
-      write(step % outputEvery == 0 || step == steps);
+      write(world.stepCount() % outputEvery == 0 || step == steps);
       summary.writeSeconds += writing.seconds();
+    }
+    if (checkpoints) {  // every rank stops after the same step
+      stopSignal = checkpoints->pendingSignal();
+      MPI_Allreduce(MPI_IN_PLACE, &stopSignal, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+      if (stopSignal != 0 || checkpoints->due(world.stepCount())) checkpoint();
     }
     progress.update(step);
   }
+  if (checkpoints && (stopSignal != 0 || steps == 0 || checkpoints->every() > 0)) checkpoint();
   if (output) orAbort([&] { output->finish(); });
+  if (stopSignal != 0) throw StoppedBySignal{stopSignal, world.stepCount(), root};
+  if (const std::optional<dem::World> whole = world.gatherWorld()) {
+    summary.digest = whole->stateDigest();
+    if (checkpoints) {
+      summary.checkpointSeconds = checkpoints->seconds();
+      summary.checkpointBytes = checkpoints->bytes();
+      summary.checkpoints = checkpoints->written();
+    }
+  }
   const double endEnergy = world.energies().total();
   summary.time = world.time();
-  if (meter) {
-    summary.restitution = meter->restitution();
-    summary.energyChange = (endEnergy - startEnergy) / std::fabs(startEnergy);
-  }
+  summary.energyChangeAbsolute = endEnergy - startEnergy;
+  summary.energyChange = summary.energyChangeAbsolute / std::fabs(startEnergy);
+  if (meter) summary.restitution = meter->restitution();
+  summary.warnings = warnings.all();
   summary.rebalances = world.rebalances();
   summary.loads = world.gatherLoads();
   return summary;
@@ -399,9 +490,19 @@ void printJson(const dem::Scenario& scenario, std::size_t triangles, double buil
       .value("run_s", run.runSeconds)
       .value("write_s", run.writeSeconds)
       .value("frames", output ? output->frames() : std::size_t{0})
-      .value("threads", threadCount());
-  if (scenario.name == "two-particles")
-    json.value("restitution", run.restitution).value("energy_change", run.energyChange);
+      .value("threads", threadCount())
+      .value("state_digest", run.digest);
+  if (run.checkpoints > 0)
+    json.value("checkpoints", run.checkpoints)
+        .value("checkpoint_bytes", run.checkpointBytes)
+        .value("checkpoint_s", run.checkpointSeconds);
+  if (scenario.name == "two-particles") json.value("restitution", run.restitution);
+  json.value("energy_change", run.energyChange)
+      .value("energy_change_absolute", run.energyChangeAbsolute)
+      .beginArray("warnings");
+  for (const std::string& warning : run.warnings)
+    json.value({}, warning);
+  json.endArray();
   if (run.ranks > 0) {
     json.value("ranks", run.ranks).value("rebalances", run.rebalances).beginArray("rank_loads");
     for (std::size_t r = 0; r < run.loads.size(); ++r) {
@@ -450,6 +551,10 @@ void printText(const dem::Scenario& scenario, std::size_t triangles, double buil
       std::printf("restitution %.4f (asked %.4g), total energy changed by %.3g%%\n",
                   run.restitution, world.parameters().restitution, 100.0 * run.energyChange);
   }
+  std::printf("total energy changed by %.6g J (%.3g%% of the start's)\n", run.energyChangeAbsolute,
+              100.0 * run.energyChange);
+  for (const std::string& warning : run.warnings)
+    std::printf("warning: %s\n", warning.c_str());
   if (run.ranks > 0) {
     std::printf(
         "%d ranks, split again %zu times; per rank (last step: particles, ghosts, "
@@ -499,32 +604,139 @@ void report(const DemOptions& options, const Prepared& prepared, const RunSummar
     printText(prepared.scenario, prepared.triangles, prepared.buildSeconds, summary, output);
 }
 
+/// The note a run's checkpoints carry (dem_checkpoint.h).
+DemRunNote noteOf(const DemOptions& options, const Prepared& prepared) {
+  DemRunNote note;
+  note.scenario = prepared.scenario.name;
+  note.steps = prepared.scenario.world.stepCount() + prepared.steps;
+  note.outputEvery = prepared.outputEvery;
+  note.frames = options.frames;
+  note.checkpointEvery = options.checkpointEvery;
+  return note;
+}
+
+/// `delta dem --restart FILE`, checked and loaded: the run the checkpoint holds, to go on to
+/// --steps in all (its own total by default), into --out (by default the checkpoint's folder,
+/// whose series and log.csv it continues).
+struct RestartPlan {
+  Prepared prepared;
+  DemRunNote note;
+  DemOptions options;  ///< as given, with --out, --frames and `continuing` set from the checkpoint
+  std::size_t checkpointEvery = 0;
+  Continuation continuation;  ///< without its DemCheckpoints
+};
+
+RestartPlan planRestart(const DemOptions& options) {
+  if (!options.scenario.empty() || !options.config.empty())
+    throw Error("--restart continues the run its checkpoint holds: give no SCENARIO or --config");
+  for (const auto& [key, text] : options.given)
+    if (key != "steps") {
+      std::string option = "--" + key;
+      std::replace(option.begin(), option.end(), '_', '-');
+      throw Error("--restart continues the run its checkpoint holds: " + option +
+                  " cannot change it (only --steps, --out, --checkpoint-every, --json, --quiet)");
+    }
+  const std::filesystem::path file = options.restart;
+  const Stopwatch clock;
+  dem::Checkpoint checkpoint = dem::loadCheckpoint(file);
+  DemRunNote note = DemRunNote::parse(checkpoint.note, file.string());
+  std::size_t total = note.steps;
+  if (options.given.count("steps")) {
+    DemSettings command;
+    setDemSetting(command, "steps", options.given.at("steps"), "--steps");
+    total = command.steps.value_or(total);
+  }
+  const std::size_t done = checkpoint.world.stepCount();
+  if (total < done)
+    throw Error("--steps " + std::to_string(total) + " is fewer than the " + std::to_string(done) +
+                " steps '" + file.string() + "' has run (--steps is the run's total)");
+  const std::filesystem::path folder =
+      file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  RestartPlan plan{Prepared{dem::Scenario{note.scenario, std::move(checkpoint.world), note.steps,
+                                          note.outputEvery}},
+                   note, options,
+                   options.checkpointEvery > 0 ? options.checkpointEvery : note.checkpointEvery,
+                   Continuation{nullptr, true, false, {}}};
+  plan.options.frames = note.frames;
+  if (plan.options.out.empty()) plan.options.out = folder.string();
+  std::error_code error;
+  plan.options.continuing = std::filesystem::equivalent(plan.options.out, folder, error);
+  plan.continuation.resumeOutput = plan.options.continuing;
+  plan.continuation.frameTimes = note.frameTimes;
+  Prepared& prepared = plan.prepared;
+  prepared.buildSeconds = clock.seconds();
+  prepared.steps = total - done;
+  prepared.outputEvery = note.outputEvery;
+  for (const dem::Particle& particle : prepared.scenario.world.particles())
+    prepared.triangles += prepared.scenario.world.shapes()[particle.shape].mesh().triangleCount();
+  return plan;
+}
+
+/// `delta dem --restart FILE` in one process.
+void restart(const DemOptions& given) {
+  RestartPlan plan = planRestart(given);
+  const DemOptions& options = plan.options;
+  makeOutputFolder(options.out);
+  const RunLock lock(options.out, "delta dem");  // held until the output is closed
+  if (!lock.note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock.note().c_str());
+  prepareOutputFolder(options.out, earlierOutput(options));
+  DemOutput output(options.out, framesOf(options));
+  DemCheckpoints checkpoints(options.out, plan.checkpointEvery, plan.note);
+  plan.continuation.checkpoints = &checkpoints;
+  const RunSummary summary =
+      simulate(plan.prepared.scenario, plan.prepared.steps, plan.prepared.outputEvery, &output,
+               showProgress(options.quiet || options.json), plan.continuation);
+  report(options, plan.prepared, summary, &output);
+}
+
 #ifdef DELTA_WITH_MPI
 /// `delta dem` under mpirun: the scenario built on every rank, split over the ranks
 /// (dem::DistributedWorld), the summary from rank 0. An error every rank meets (bad settings)
 /// is reported once, by rank 0.
-void runDistributed(const DemOptions& options) {
+void runDistributed(const DemOptions& given) {
   MpiSession mpi;
   const bool root = mpi.rank() == 0;
   try {
-    const DemSettings settings = resolve(options);
+    std::optional<RestartPlan> restarting;  // --restart: the run and options a checkpoint holds
+    std::optional<DemSettings> settings;
+    if (!given.restart.empty())
+      restarting.emplace(planRestart(given));
+    else
+      settings = resolve(given);
+    if (given.checkpointEvery > 0 && given.out.empty() && !restarting)
+      throw Error("--checkpoint-every needs --out DIR: the checkpoint is kept there");
+    const DemOptions& options = restarting ? restarting->options : given;
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    std::unique_ptr<RunLock> lock;  // rank 0's, held until the output is closed
     std::unique_ptr<DemOutput> output;
     if (!options.out.empty()) {  // rank 0 makes the folder, then the others find it
       const DemFrames frames = framesOf(options);
       if (root)
-        orAbort([&] { output = std::make_unique<DemOutput>(options.out, frames, 0, ranks); });
+        orAbort([&] {
+          makeOutputFolder(options.out);
+          lock = std::make_unique<RunLock>(options.out, "delta dem");
+          prepareOutputFolder(options.out, earlierOutput(options));
+          output = std::make_unique<DemOutput>(options.out, frames, 0, ranks);
+        });
       MPI_Barrier(MPI_COMM_WORLD);
       if (!root)
         orAbort(
             [&] { output = std::make_unique<DemOutput>(options.out, frames, mpi.rank(), ranks); });
+      // Every rank's piece of a frame is in place before rank 0 lists it (dem_output.h).
+      output->setPieceBarrier([] { MPI_Barrier(MPI_COMM_WORLD); });
     }
-    Prepared prepared = prepare(settings);
+    Prepared prepared = restarting ? std::move(restarting->prepared) : prepare(*settings);
     dem::DistributedWorld world(MPI_COMM_WORLD, prepared.scenario.world);
-    const RunSummary summary =
-        simulateDistributed(prepared.scenario, world, prepared.steps, prepared.outputEvery,
-                            output.get(), showProgress(options.quiet || options.json));
+    DemCheckpoints checkpoints(options.out,
+                               restarting ? restarting->checkpointEvery : options.checkpointEvery,
+                               restarting ? restarting->note : noteOf(options, prepared));
+    Continuation continuation;
+    if (restarting) continuation = restarting->continuation;
+    continuation.checkpoints = &checkpoints;
+    const RunSummary summary = simulateDistributed(
+        prepared.scenario, world, prepared.steps, prepared.outputEvery, output.get(),
+        showProgress(options.quiet || options.json), continuation);
     if (root) report(options, prepared, summary, output.get());
   } catch (const Error& error) {
     // Every rank meets it; rank 0 reports it before any rank leaves: mpirun stops the others
@@ -547,14 +759,25 @@ void run(const DemOptions& options) {
 #ifdef DELTA_WITH_MPI
   if (startedByMpirun()) return runDistributed(options);
 #endif
+  if (!options.restart.empty()) return restart(options);
+  if (options.checkpointEvery > 0 && options.out.empty())
+    throw Error("--checkpoint-every needs --out DIR: the checkpoint is kept there");
   const DemSettings settings = resolve(options);
   std::unique_ptr<DemOutput> output;
   const DemFrames frames = framesOf(options);
-  if (!options.out.empty())
-    output = std::make_unique<DemOutput>(options.out, frames);  // fail early
+  std::unique_ptr<RunLock> lock;  // held until the output is closed (declared before it)
+  if (!options.out.empty()) {     // fail early
+    makeOutputFolder(options.out);
+    lock = std::make_unique<RunLock>(options.out, "delta dem");
+    if (!lock->note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock->note().c_str());
+    prepareOutputFolder(options.out, earlierOutput(options));
+    output = std::make_unique<DemOutput>(options.out, frames);
+  }
   Prepared prepared = prepare(settings);
+  DemCheckpoints checkpoints(options.out, options.checkpointEvery, noteOf(options, prepared));
   const RunSummary summary = simulate(prepared.scenario, prepared.steps, prepared.outputEvery,
-                                      output.get(), showProgress(options.quiet || options.json));
+                                      output.get(), showProgress(options.quiet || options.json),
+                                      Continuation{&checkpoints, false, false, {}});
   report(options, prepared, summary, output.get());
 }
 
@@ -581,7 +804,22 @@ angular_velocity, orientation quaternion w,x,y,z and bounding_radius) and shape_
 shape in its body frame, to glyph at those points); with --frames triangles or both,
 particles.pvd (particles_NNNNNN.vtp: every particle's triangles, particle id, velocity);
 contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, overlap),
-obstacles.vtp and log.csv (energies, contacts and step times, one row per step).
+obstacles.vtp and log.csv (energies, contacts, step times and energy_change, one row per
+step). Every file is written whole or not at all, a frame before the .pvd that lists it, so
+the folder is valid at any instant, kill -9 included. A run holds DIR/.delta.lock while it
+writes: a second run into DIR is refused while the first is running, and a run into a folder
+that holds an earlier run's output is refused unless --overwrite (which removes only those
+files).
+
+Guards: a time step above the stable one and particles that start overlapping are reported
+(stderr and the summary's warnings); a state that stops being finite, or a particle that
+would move farther in a step than the contact shell catches, stops the run with an error
+naming the particle and the largest safe time step.
+
+Checkpoints: --checkpoint-every N keeps DIR/checkpoint.delta (every N steps and at the end);
+SIGINT and SIGTERM finish the step, write it (with --out) and exit 130 and 143. delta dem
+--restart DIR/checkpoint.delta [--steps TOTAL] goes on from it, bit for bit: the same
+state_digest (--json) as a run that was never stopped, on any thread or rank count.
 
 Under mpirun (where delta was built with MPI): mpirun -np P delta dem ... splits the particles
 over P ranks (recursive coordinate bisection, split again when the counts drift 10% apart),
@@ -626,9 +864,45 @@ void addDemCommand(CLI::App& app) {
                   "What each frame shows of the particles with --out: state (a point per "
                   "particle, the default), triangles (their surfaces, ~16x larger) or both")
       ->type_name("state|triangles|both");
+  dem->add_flag("--overwrite", options->overwrite,
+                "Replace the output of an earlier run in --out (a run is refused otherwise)");
   dem->add_flag("--json", options->json, "Print one JSON object instead of text");
   dem->add_flag("--quiet", options->quiet, "No progress line");
-  dem->callback([options] { run(*options); });
+  dem->add_option("--checkpoint-every", options->checkpointEvery,
+                  "Keep a checkpoint of the run, DIR/checkpoint.delta (--out DIR), written every "
+                  "N steps and at the end (and when stopped by SIGINT or SIGTERM)")
+      ->type_name("N");
+  dem->add_option("--restart", options->restart,
+                  "Continue the run a checkpoint holds; --steps is then the run's total, --out "
+                  "defaults to the checkpoint's folder")
+      ->type_name("FILE");
+  dem->callback([options] {
+    try {
+      run(*options);
+    } catch (const StoppedBySignal& stopped) {
+      // The files are closed and the lock released (unwound); say where to go on from.
+      std::fflush(stdout);
+      if (!stopped.report) std::exit(128 + stopped.signal);  // another rank's line says it
+      const char* name = stopped.signal == SIGINT ? "SIGINT" : "SIGTERM";
+      if (options->out.empty() && options->restart.empty())
+        std::fprintf(stderr, "\ndelta: stopped by %s after step %zu (no --out: no checkpoint)\n",
+                     name, stopped.step);
+      else {
+        const std::filesystem::path folder =
+            !options->out.empty() ? std::filesystem::path(options->out)
+            : std::filesystem::path(options->restart).has_parent_path()
+                ? std::filesystem::path(options->restart).parent_path()
+                : std::filesystem::path(".");
+        const std::string path = (folder / kCheckpointName).string();
+        std::fprintf(stderr,
+                     "\ndelta: stopped by %s after step %zu; checkpoint %s (continue: delta dem "
+                     "--restart %s)\n",
+                     name, stopped.step, path.c_str(), path.c_str());
+      }
+      std::fflush(stderr);
+      std::exit(128 + stopped.signal);
+    }
+  });
 }
 
 }  // namespace delta::cli

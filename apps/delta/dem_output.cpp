@@ -1,12 +1,19 @@
 #include "dem_output.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <system_error>
 #include <utility>
 
 #include "delta/core/error.h"
+#include "delta/io/atomic_file.h"
 
 #include "files.h"
 
@@ -133,7 +140,7 @@ DemOutput::DemOutput(std::filesystem::path directory, DemFrames frames, int piec
 }
 
 DemOutput::~DemOutput() {
-  if (log_) std::fclose(log_);
+  if (log_ >= 0) ::close(log_);
 }
 
 void DemOutput::begin(const dem::World& world) {
@@ -145,24 +152,36 @@ void DemOutput::begin(const dem::World& world) {
       io::writeVtp(io::VtkPolyData::fromMesh(world.shapes()[k].mesh()),
                    directory_ / ("shape_" + std::to_string(k) + ".vtp"));
   io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
+  // The header as a whole file first: a run killed at any instant leaves a log.csv that is
+  // absent or starts with its header, never empty.
   const std::filesystem::path path = directory_ / "log.csv";
-  log_ = std::fopen(path.c_str(), "w");
-  if (!log_)
+  io::writeFileAtomically(path, kLogHeader);
+  log_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (log_ < 0)
     throw Error("cannot write '" + path.string() + "': " + std::generic_category().message(errno));
-  std::fprintf(log_,
-               "step,time,kinetic_energy,potential_energy,elastic_energy,total_energy,contacts,"
-               "contact_pairs,step_seconds,contact_detection_seconds\n");
-  flushLog();
+  logBytes_ = kLogHeader.size();
 }
 
-void DemOutput::flushLog() {
-  errno = 0;
-  if (std::fflush(log_) == 0 && !std::ferror(log_)) return;
-  const int error = errno;
-  std::fclose(log_);
-  log_ = nullptr;
-  throw Error("writing '" + (directory_ / "log.csv").string() + "' failed: " +
-              (error != 0 ? std::generic_category().message(error) : "a write failed"));
+void DemOutput::writeLog(std::string_view line) {
+  std::size_t written = 0;
+  while (written < line.size()) {
+    const ssize_t wrote = ::write(log_, line.data() + written, line.size() - written);
+    if (wrote > 0) {
+      written += static_cast<std::size_t>(wrote);
+      continue;
+    }
+    if (wrote < 0 && errno == EINTR) continue;
+    const int error = wrote < 0 ? errno : ENOSPC;
+    // No half row: the file ends on its last whole row, as a reader expects of a CSV.
+    if (::ftruncate(log_, static_cast<off_t>(logBytes_)) != 0) {
+      // Nothing more to do: the error reported is the write's.
+    }
+    ::close(log_);
+    log_ = -1;
+    throw Error("writing '" + (directory_ / "log.csv").string() +
+                "' failed: " + std::generic_category().message(error));
+  }
+  logBytes_ += line.size();
 }
 
 void DemOutput::log(const dem::World& world) {
@@ -174,12 +193,19 @@ void DemOutput::log(const dem::World& world) {
 }
 
 void DemOutput::log(const LogRow& row) {
-  if (!log_) return;
+  if (log_ < 0) return;
   const dem::Energies& energies = row.energies;
-  std::fprintf(log_, "%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,%zu,%.6g,%.6g\n", row.step, row.time,
-               energies.kinetic(), energies.gravitational, energies.elastic, energies.total(),
-               row.contacts, row.contactPairs, row.stepSeconds, row.contactDetectionSeconds);
-  flushLog();  // a row a step: what a run cut short has logged is on disk, and a full disk stops it
+  if (!startEnergy_) startEnergy_ = energies.total();
+  char line[512];
+  const int length = std::snprintf(
+      line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,%zu,%.6g,%.6g,%.17g\n", row.step,
+      row.time, energies.kinetic(), energies.gravitational, energies.elastic, energies.total(),
+      row.contacts, row.contactPairs, row.stepSeconds, row.contactDetectionSeconds,
+      energies.total() - *startEnergy_);
+  // A row a step, in one write: what a run cut short has logged is there, whole, and a full
+  // disk stops the run at the row that does not fit.
+  writeLog(
+      std::string_view(line, static_cast<std::size_t>(std::min(length, int{sizeof line} - 1))));
 }
 
 void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids, double time) {
@@ -190,7 +216,8 @@ void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids
     if (pieced && pieces_ > 0) {
       const std::string stem = frameFileName(name, frame, "");
       io::writeVtp(data, directory_ / (stem + "_" + std::to_string(piece_) + ".vtp"));
-      if (piece_ != 0) {  // rank 0 keeps the series; the others only count frames
+      if (pieceBarrier_) pieceBarrier_();  // every piece in place before the .pvtp names it
+      if (piece_ != 0) {                   // rank 0 keeps the series; the others only count frames
         series.push_back({time, {}});
         return;
       }
@@ -213,12 +240,88 @@ void DemOutput::frame(const dem::World& part, std::span<const std::uint32_t> ids
 }
 
 void DemOutput::finish() {
-  if (!log_) return;
-  const bool failed = std::ferror(log_) != 0;
-  const int closed = std::fclose(log_);
-  log_ = nullptr;
-  if (failed || closed != 0)
-    throw Error("writing '" + (directory_ / "log.csv").string() + "' failed");
+  if (log_ < 0) return;
+  const int closed = ::close(log_);
+  log_ = -1;
+  if (closed != 0)
+    throw Error("writing '" + (directory_ / "log.csv").string() +
+                "' failed: " + std::generic_category().message(errno));
+}
+
+std::vector<double> DemOutput::frameTimes() const {
+  std::vector<double> times;
+  for (const io::VtkSeriesEntry& entry : contactSeries_)
+    times.push_back(entry.time);
+  return times;
+}
+
+void DemOutput::resume(const dem::World& world, std::span<const double> frameTimes,
+                       std::size_t step) {
+  for (const dem::Obstacle& obstacle : world.obstacles())
+    obstaclesMove_ = obstaclesMove_ || moves(obstacle);
+  const auto series = [&](std::vector<io::VtkSeriesEntry>& entries, const char* name, bool pieced) {
+    entries.clear();
+    for (std::size_t frame = 0; frame < frameTimes.size(); ++frame) {
+      const std::string file = pieced && pieces_ > 0 ? frameFileName(name, frame, ".pvtp")
+                                                     : frameFileName(name, frame, ".vtp");
+      entries.push_back(
+          {frameTimes[frame], piece_ == 0 ? std::filesystem::path(file) : std::filesystem::path()});
+    }
+    if (piece_ == 0) io::writePvd(entries, directory_ / (std::string(name) + ".pvd"));
+  };
+  if (frames_ != DemFrames::Triangles) series(stateSeries_, "particles_state", true);
+  if (frames_ != DemFrames::State) series(particleSeries_, "particles", true);
+  series(contactSeries_, "contacts", true);
+  if (obstaclesMove_ && piece_ == 0) series(obstacleSeries_, "obstacles", false);
+  if (piece_ != 0) return;
+  if (frames_ != DemFrames::Triangles)
+    for (std::size_t k = 0; k < world.shapes().size(); ++k) {
+      const std::filesystem::path shape = directory_ / ("shape_" + std::to_string(k) + ".vtp");
+      if (!std::filesystem::exists(shape))
+        io::writeVtp(io::VtkPolyData::fromMesh(world.shapes()[k].mesh()), shape);
+    }
+  if (!std::filesystem::exists(directory_ / "obstacles.vtp"))
+    io::writeVtp(obstaclesOf(world), directory_ / "obstacles.vtp");
+
+  // log.csv: the header and the rows up to `step`, whole, then appended to.
+  const std::filesystem::path path = directory_ / "log.csv";
+  std::string kept(kLogHeader);
+  if (std::filesystem::exists(path)) {
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file)
+      throw Error("cannot read '" + path.string() + "': " + std::generic_category().message(errno));
+    std::string text;
+    char buffer[1 << 16];
+    for (std::size_t got; (got = std::fread(buffer, 1, sizeof buffer, file)) > 0;)
+      text.append(buffer, got);
+    std::fclose(file);
+    std::size_t begin = text.find('\n');
+    if (begin != std::string::npos) {
+      kept = text.substr(0, begin + 1);
+      for (++begin; begin < text.size();) {
+        const std::size_t end = text.find('\n', begin);
+        if (end == std::string::npos) break;  // a part row: dropped
+        const std::string row = text.substr(begin, end - begin);
+        char* digitsEnd = nullptr;
+        const unsigned long long rowStep = std::strtoull(row.c_str(), &digitsEnd, 10);
+        if (digitsEnd == row.c_str() || rowStep > step) break;
+        if (!startEnergy_) {  // total_energy, the sixth column, of the first row
+          std::size_t column = 0;
+          for (int comma = 0; comma < 5 && column != std::string::npos; ++comma)
+            column = row.find(',', column + 1);
+          if (column != std::string::npos)
+            startEnergy_ = std::strtod(row.c_str() + column + 1, nullptr);
+        }
+        kept += row + "\n";
+        begin = end + 1;
+      }
+    }
+  }
+  io::writeFileAtomically(path, kept);
+  log_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (log_ < 0)
+    throw Error("cannot write '" + path.string() + "': " + std::generic_category().message(errno));
+  logBytes_ = kept.size();
 }
 
 }  // namespace delta::cli

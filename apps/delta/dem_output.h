@@ -1,9 +1,13 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <span>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "delta/dem/world.h"
@@ -49,15 +53,21 @@ enum class DemFrames {
 ///                                          kinetic_energy, potential_energy (gravity),
 ///                                          elastic_energy, total_energy, contacts,
 ///                                          contact_pairs, step_seconds,
-///                                          contact_detection_seconds
+///                                          contact_detection_seconds, energy_change (total
+///                                          energy minus that of the first row logged)
 ///
 /// The default, DemFrames::State, keeps a run's output small: a frame of the hopper's 1000
 /// particles takes 87 kB on average, a frame of their 80,000 triangles 1.4 MB compressed (5.9 MB
 /// before compression and integer ids): docs/performance.md, "Output sizes".
 ///
 /// NNNNNN is the frame number; the .pvd files give each frame its simulated time and are
-/// rewritten after every frame (each file whole or not at all: io/atomic_file.h), so a run cut
-/// short leaves a series that opens; log.csv is flushed after every row.
+/// rewritten after every frame, after the frame's files (each file whole or not at all:
+/// io/atomic_file.h), so a run stopped at any instant, kill -9 included, leaves series that
+/// open and list only complete frames. log.csv starts as a whole file holding its header; each
+/// row then goes to the operating system in one write(2) as it is logged (no buffer in the
+/// process: the log never lags the frames and a killed run leaves whole rows; rows are not
+/// fsynced, so a power cut, unlike a crash, may lose the last ones). A write that fails cuts
+/// the file back to its last whole row before the error.
 ///
 /// A run on P processes (`delta dem` under mpirun) writes a piece of each frame per rank,
 /// particles_state_NNNNNN_K.vtp (particles_NNNNNN_K.vtp) and contacts_NNNNNN_K.vtp (K the rank,
@@ -80,6 +90,11 @@ class DemOutput {
     double contactDetectionSeconds = 0.0;
   };
 
+  /// log.csv's header line (with its newline).
+  static constexpr std::string_view kLogHeader =
+      "step,time,kinetic_energy,potential_energy,elastic_energy,total_energy,contacts,"
+      "contact_pairs,step_seconds,contact_detection_seconds,energy_change\n";
+
   /// Makes `directory` (and its parents) unless it exists. Throws delta::Error naming it when it
   /// is a file or cannot be made. Writes nothing else yet. `frames`: what the particle frames
   /// show. `piece` and `pieces`: this rank and the number of ranks of a distributed run;
@@ -96,8 +111,9 @@ class DemOutput {
   void begin(const dem::World& world);
   /// Appends the world's current step to log.csv.
   void log(const dem::World& world);
-  /// Appends a row to log.csv (rank 0; the others ignore it) and flushes it; throws delta::Error
-  /// naming the file and the reason when it cannot be written (a full disk).
+  /// Appends a row to log.csv (rank 0; the others ignore it) in one write; throws delta::Error
+  /// naming the file and the reason when it cannot be written (a full disk), leaving the file
+  /// at its last whole row.
   void log(const LogRow& row);
   /// Writes a frame of particles (as DemFrames says) and contacts (and of moving obstacles) and
   /// updates the series.
@@ -105,22 +121,41 @@ class DemOutput {
   /// Writes this rank's piece of a frame: the particles of `part` with their ids (empty: their
   /// indices), at simulated time `time`; rank 0 also joins the pieces and updates the series.
   void frame(const dem::World& part, std::span<const std::uint32_t> ids, double time);
-  /// Flushes log.csv; throws delta::Error when anything could not be written.
+  /// Closes log.csv; throws delta::Error when that fails.
   void finish();
+
+  /// Continues the output of a run restarted from a checkpoint (`delta dem --restart`) instead
+  /// of begin(): the series list the `frameTimes.size()` frames written before the checkpoint
+  /// (their files as frame() named them; later ones, of a run stopped after its checkpoint, are
+  /// dropped from the series and written again), log.csv keeps its header and its rows up to
+  /// step `step` and new rows are appended (energy_change still from its first row), and
+  /// shape_K.vtp and obstacles.vtp are written only where missing. Throws delta::Error naming a
+  /// file that cannot be read or written.
+  void resume(const dem::World& world, std::span<const double> frameTimes, std::size_t step);
+  /// The simulated time of every frame written (resumed ones first).
+  std::vector<double> frameTimes() const;
+  /// Sets what every rank calls after writing its piece of a frame and before rank 0 joins the
+  /// pieces (an MPI barrier), so that a .pvtp, and the .pvd after it, name only pieces that
+  /// are in place. Collective once set: every rank writes every frame. None: no waiting.
+  void setPieceBarrier(std::function<void()> barrier) { pieceBarrier_ = std::move(barrier); }
 
   std::size_t frames() const noexcept { return contactSeries_.size(); }
   const std::filesystem::path& directory() const noexcept { return directory_; }
 
  private:
-  /// Flushes log.csv; closes it and throws delta::Error when a write has failed.
-  void flushLog();
+  /// Writes `line` (whole rows) to log.csv; on failure cuts it back to its last whole row,
+  /// closes it and throws delta::Error naming it and the reason.
+  void writeLog(std::string_view line);
 
   std::filesystem::path directory_;
   DemFrames frames_ = DemFrames::State;
   int piece_ = 0, pieces_ = 0;
-  std::FILE* log_ = nullptr;
+  int log_ = -1;                       ///< log.csv, open for appending; -1: not written here
+  std::uintmax_t logBytes_ = 0;        ///< its length up to its last whole row
+  std::optional<double> startEnergy_;  ///< the total energy of the first row logged
   bool obstaclesMove_ = false;
   std::vector<io::VtkSeriesEntry> stateSeries_, particleSeries_, contactSeries_, obstacleSeries_;
+  std::function<void()> pieceBarrier_;
 };
 
 }  // namespace delta::cli

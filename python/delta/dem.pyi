@@ -245,6 +245,12 @@ class World:
         Sum of m v, (3,).
         """
         ...
+    @staticmethod
+    def load(path: str) -> World:
+        """
+        The World a checkpoint file holds (delta.Error when it is missing, not a checkpoint, of another version, truncated or corrupt).
+        """
+        ...
     def meter_restitution(self, first: int = ..., second: int = ...) -> RestitutionMeter:
         """
         A RestitutionMeter for the collision of two particles from now on.
@@ -291,6 +297,11 @@ class World:
         Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps).
         """
         ...
+    def save(self, path: str) -> None:
+        """
+        Writes a checkpoint of the whole state to `path`, atomically (delta.Error naming the path and the reason). World.load(path) continues bit for bit where this world would.
+        """
+        ...
     def set_angular_velocity(self, particle: int, angular_velocity: numpy.ndarray) -> None:
         """
         Sets a particle's angular velocity (world frame).
@@ -315,6 +326,12 @@ class World:
     def shapes(self) -> List[ParticleShape]:
         """
         The particle shapes (copies sharing the prepared meshes).
+        """
+        ...
+    @property
+    def state_digest(self) -> str:
+        """
+        16 hex digits of a hash of the state (time, step, every particle's pose, velocities, angular momentum, forces, and the friction springs): equal states, equal digests.
         """
         ...
     @property

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "delta/core/error.h"
+#include "delta/dem/checkpoint.h"
 #include "delta/dem/particle_shape.h"
 #include "delta/dem/scenarios.h"
 #include "delta/dem/world.h"
@@ -360,6 +361,40 @@ RuntimeError.)")
           },
           "first"_a = 0, "second"_a = 1,
           "A RestitutionMeter for the collision of two particles from now on.")
+      .def(
+          "save",
+          [](const PyWorld& world, const std::string& path) {
+            const dem::World& read = world.read();
+            py::gil_scoped_release release;
+            read.save(path);
+          },
+          "path"_a,
+          "Writes a checkpoint of the whole state to `path`, atomically (delta.Error naming the "
+          "path and the reason). World.load(path) continues bit for bit where this world "
+          "would.")
+      .def_static(
+          "load",
+          [](const std::string& path) {
+            std::optional<dem::World> loaded;
+            {
+              py::gil_scoped_release release;
+              loaded.emplace(dem::World::load(path));
+            }
+            return std::make_shared<PyWorld>(std::move(*loaded));
+          },
+          "path"_a,
+          "The World a checkpoint file holds (delta.Error when it is missing, not a checkpoint, "
+          "of another version, truncated or corrupt).")
+      .def_property_readonly(
+          "state_digest", [](const PyWorld& world) { return world.read().stateDigest(); },
+          "16 hex digits of a hash of the state (time, step, every particle's pose, velocities, "
+          "angular momentum, forces, and the friction springs): equal states, equal digests.")
+      .def(py::pickle(
+          [](const PyWorld& world) { return py::bytes(dem::checkpointBytes(world.read())); },
+          [](const py::bytes& bytes) {
+            return std::make_shared<PyWorld>(
+                std::move(dem::readCheckpoint(std::string(bytes), "pickled World").world));
+          }))
       .def_property_readonly(
           "parameters", [](const PyWorld& world) { return world.read().parameters(); },
           "The Parameters (a copy).")

@@ -79,6 +79,19 @@ ParticleShape ParticleShape::sphere(double radius, double density, int displaySu
                                              properties, density, radius});
 }
 
+ParticleShape detail::restoredShape(const Mesh& body, double density,
+                                    const MassProperties& properties, double sphereRadius) {
+  requireDensity(density);
+  for (const double value : {properties.volume, properties.mass})
+    if (!std::isfinite(value) || !(value > 0.0))
+      throw Error("particle shape: volume and mass must be finite and positive (not " +
+                  toString(value) + ")");
+  if (!std::isfinite(sphereRadius) || sphereRadius < 0.0)
+    throw Error("particle shape: sphere radius = " + toString(sphereRadius) +
+                " must be finite and non-negative");
+  return ParticleShape(detail::PreparedShape{body, properties, density, sphereRadius});
+}
+
 ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
     : mesh_(prepared.body),
       queryMesh_(mesh_),

@@ -530,7 +530,8 @@ void World::requireFiniteParticles(Exchange* exchange) const {
   if (failed != std::numeric_limits<std::uint32_t>::max())
     throw Error("dem: particle " + std::to_string(failed) + " is no longer finite at step " +
                 std::to_string(stepCount_ + 1) + " (time step " + toString(parameters_.timeStep) +
-                " too large for stiffness " + toString(parameters_.stiffness) + "?)");
+                " too large for stiffness " + toString(parameters_.stiffness) +
+                "? the suggested one is " + toString(suggestedTimeStep()) + ")");
 }
 
 void World::advance(Exchange* exchange) {
@@ -549,6 +550,8 @@ void World::advance(Exchange* exchange) {
     communication += statistics_.communicationSeconds;
   }
   Clock::time_point phase = Clock::now();
+  // One process only: a DistributedWorld would need every rank to agree to stop (dem/mpi).
+  if (!exchange) requireCatchableMotion();
   halfKick();
   drift();
   requireFiniteParticles(exchange);  // before the broad phase meets it

@@ -101,4 +101,12 @@ inline std::vector<std::string> seriesFiles(const std::filesystem::path& pvd) {
   return files;
 }
 
+/// `path` in single quotes, as the CLI's messages name paths.
+inline std::string quoted(const std::filesystem::path& path) {
+  std::string text(1, '\'');  // appended, not concatenated: GCC 12 warns on "'" + string
+  text.append(path.string());
+  text.push_back('\'');
+  return text;
+}
+
 }  // namespace delta::test

@@ -226,7 +226,7 @@ TEST(DemCli, SettleWritesASeriesParaViewOpens) {
   std::getline(log, header);
   EXPECT_EQ(header,
             "step,time,kinetic_energy,potential_energy,elastic_energy,total_energy,contacts,"
-            "contact_pairs,step_seconds,contact_detection_seconds");
+            "contact_pairs,step_seconds,contact_detection_seconds,energy_change");
   std::size_t rows = 0;
   while (std::getline(log, row))
     ++rows;

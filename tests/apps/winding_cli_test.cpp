@@ -15,13 +15,6 @@ namespace fs = std::filesystem;
 
 const fs::path kMeshes = fs::path(DELTA_DATA_DIR) / "meshes";
 
-std::string quoted(const fs::path& path) {
-  std::string text(1, '\'');  // appended, not concatenated: GCC 12 warns on "'" + string
-  text.append(path.string());
-  text.push_back('\'');
-  return text;
-}
-
 TEST(WindingCli, InfoReportsSelfIntersections) {
   if (!fs::exists(kMeshes / "camel.off")) GTEST_SKIP() << "no data/meshes";
   const CliRun camel = runDelta("info --json " + quoted(kMeshes / "camel.off"));

@@ -4,14 +4,23 @@
 
 #include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
+#include "delta/mesh/mass_properties.h"
 #include "delta/mesh/mesh.h"
 #include "delta/query/query_mesh.h"
 
 namespace delta::dem {
 
+class ParticleShape;
+
 namespace detail {
 struct PreparedShape;
-}
+/// A shape exactly as it was saved (dem/checkpoint.h): `body` already in the body frame and the
+/// mass properties as stored, not derived again (moving a mesh to its centre of mass a second
+/// time would change the last bits). `sphereRadius` > 0 makes a sphere shape shown as `body`.
+/// Throws delta::Error for a density, volume, mass or radius that is not finite and positive.
+ParticleShape restoredShape(const Mesh& body, double density, const MassProperties& properties,
+                            double sphereRadius);
+}  // namespace detail
 
 /// What a particle's contacts are computed against: its triangles, or an exact sphere.
 ///
@@ -75,6 +84,7 @@ class ParticleShape {
   const Vec3& centroid() const noexcept { return centroid_; }
 
  private:
+  friend ParticleShape detail::restoredShape(const Mesh&, double, const MassProperties&, double);
   explicit ParticleShape(const detail::PreparedShape& prepared);
 
   Mesh mesh_;

@@ -2,7 +2,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -192,8 +194,24 @@ struct Energies {
 /// Friction keeps one tangential and one torsion spring per touching pair from one step to the
 /// next (keyed by the pair's indices); a pair that loses contact for a step forgets them.
 ///
+/// No pass-through: contacts are found only where two surfaces are closer than 2ε, so two bodies
+/// must not approach by 2ε or more in one step, or they could pass through each other unseen.
+/// Before each step (in one process) the World bounds how far every body's surface moves in it:
+/// a particle's by (|v| + |ω|·r)·dt with the velocities of the step's drift and r its bounding
+/// radius, an obstacle's by its prescribed motion (about its pivot, r from the pivot to the
+/// corners of its box). Where the two largest of these sum to less than 2ε nothing can pass
+/// (one comparison a step). Otherwise each pair whose motions sum to 2ε or more is looked at:
+/// two particles whose bounding spheres, grown by their turning and 2ε, can meet along the
+/// straight drift of their centres, or a particle whose swept box comes within its bounding
+/// radius, turning, 2ε and the obstacle's motion of an obstacle's box, make step() throw
+/// delta::Error naming the particle, its speed and angular speed, the other body and the largest
+/// time step that keeps their motions below 2ε, before moving anything; a fast body far from
+/// everything is not stopped. The check only reads the state, so runs it never stops are bitwise
+/// those of a World without it.
+///
 /// Throws delta::Error for invalid parameters, shapes, states or indices (naming them), and from
-/// step() when a particle's state stops being finite (a time step too large for the stiffness).
+/// step() when a particle's state stops being finite (a time step too large for the stiffness)
+/// or would move farther in the step than the contact shell catches (above).
 ///
 /// Threading: not thread-safe: one thread at a time may change a World or step it, and no other
 /// may read it meanwhile; const member functions may be called concurrently between steps.
@@ -231,8 +249,10 @@ class World {
   // Running.
 
   /// Advances by one time step. Throws delta::Error when a particle's state stops being finite
-  /// (a time step too large for the stiffness), leaving the state as that step made it. A world
-  /// with no particles only moves its obstacles and its clock.
+  /// (a time step too large for the stiffness), leaving the state as that step made it; and,
+  /// before changing anything, when bodies would move farther in the step than the contact
+  /// shell catches (the class comment: "No pass-through"). A world with no particles only moves
+  /// its obstacles and its clock.
   void step();
   /// Advances by `steps` time steps (step() `steps` times; 0 does nothing).
   void run(std::size_t steps);
@@ -260,6 +280,18 @@ class World {
   /// suggestedTimeStep(k, smallest particle mass) (contact_model.h); 0 without particles.
   double suggestedTimeStep() const noexcept;
 
+  // Checkpoints (dem/checkpoint.h: what they hold, the format, the errors).
+
+  /// Writes a checkpoint of this World to `path`, atomically; throws delta::Error naming the
+  /// path and the reason. Loading it and stepping M times ends bit for bit where stepping this
+  /// World M times does.
+  void save(const std::filesystem::path& path) const;
+  /// The World a checkpoint file holds; throws delta::Error naming the path when it is missing,
+  /// not a checkpoint, of another version, truncated or corrupt.
+  static World load(const std::filesystem::path& path);
+  /// stateDigest(*this) (dem/checkpoint.h): 16 hex digits; equal states, equal digests.
+  std::string stateDigest() const;
+
  private:
   struct Interaction;
   struct PairOutcome;
@@ -267,6 +299,7 @@ class World {
   // owns, then ghosts (copies of other processes' particles near its part), and steps it with an
   // Exchange between the phases.
   friend class DistributedWorld;
+  friend class CheckpointCodec;  // dem/checkpoint.cpp: reads and restores every member
 
   /// A contact point's force on a ghost, for the process that owns it: a pair is evaluated by
   /// the process owning its first particle (the lower id), so the ghost is the pair's second,
@@ -299,6 +332,9 @@ class World {
   /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
   /// finite.
   void requireFiniteParticles(Exchange* exchange) const;
+  /// Throws delta::Error when the coming drift could carry two surfaces through each other
+  /// unseen (the class comment: "No pass-through"); reads the state only (src/dem/guards.cpp).
+  void requireCatchableMotion() const;
   std::vector<Interaction> findPairs();
   /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
   /// other pairs), viewing sphereObstacleFound_.

@@ -255,6 +255,9 @@ DistributedWorld::DistributedWorld(MPI_Comm communicator, const World& whole,
   std::erase_if(part.particleSprings_, notMine);
   std::erase_if(part.obstacleSprings_, notMine);
   start();
+  // A stepped World's particles carry the forces of its last evaluation (each one's own, whole):
+  // the next step's first half kick uses them, as World::step would, instead of evaluating again.
+  part_.forcesCurrent_ = whole.forcesCurrent_;
 }
 
 DistributedWorld::DistributedWorld(MPI_Comm communicator, const World& share,
@@ -539,6 +542,46 @@ std::vector<Contact> DistributedWorld::gatherContacts(int root) const {
            std::tuple(b.withObstacle, b.first, b.second);
   });
   return all;
+}
+
+std::optional<World> DistributedWorld::gatherWorld(int root) const {
+  std::vector<ParticleRecord> particles;
+  for (std::size_t i = 0; i < part_.owned_; ++i)
+    particles.push_back({part_.ids_[i], part_.particles_[i]});
+  particles = gather(communicator_, root, particles);
+  std::vector<SpringRecord> springs;
+  for (const auto& [key, spring] : part_.particleSprings_)
+    springs.push_back({key, spring, 0});
+  for (const auto& [key, spring] : part_.obstacleSprings_)
+    springs.push_back({key, spring, 1});
+  springs = gather(communicator_, root, springs);
+  std::vector<Contact> contacts = gatherContacts(root);
+  double elastic = 0.0;
+  check(MPI_Reduce(&part_.elasticEnergy_, &elastic, 1, MPI_DOUBLE, MPI_SUM, root, communicator_),
+        "MPI_Reduce");
+  if (rank_ != root) return std::nullopt;
+  // The parameters, shapes, obstacles, time and step count are every rank's.
+  World whole = part_;
+  std::sort(particles.begin(), particles.end(),
+            [](const ParticleRecord& a, const ParticleRecord& b) { return a.id < b.id; });
+  whole.particles_.clear();
+  whole.ids_.clear();
+  for (const ParticleRecord& record : particles) {
+    whole.particles_.push_back(record.particle);
+    whole.ids_.push_back(record.id);
+  }
+  whole.owned_ = whole.particles_.size();
+  std::sort(springs.begin(), springs.end(),
+            [](const SpringRecord& a, const SpringRecord& b) { return a.key < b.key; });
+  whole.particleSprings_.clear();
+  whole.obstacleSprings_.clear();
+  for (const SpringRecord& record : springs)
+    (record.withObstacle ? whole.obstacleSprings_ : whole.particleSprings_)
+        .push_back({record.key, record.spring});
+  whole.contacts_ = std::move(contacts);
+  whole.elasticEnergy_ = elastic;
+  whole.placed_.clear();
+  return whole;
 }
 
 std::vector<RankLoad> DistributedWorld::gatherLoads(int root) const {

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -58,7 +59,9 @@ class DistributedWorld {
  public:
   /// Splits `whole` over the ranks of `communicator` (duplicated; the caller keeps its own):
   /// every rank passes the same World (same parameters, shapes, obstacles and particles, e.g.
-  /// a scenario each rank builds) and keeps only its part. Particle ids are their indices in
+  /// a scenario each rank builds, or one loaded from a checkpoint) and keeps only its part. A
+  /// World that was stepped keeps its last forces and friction springs: the next step goes on
+  /// bit for bit as whole.step() would. Particle ids are their indices in
   /// `whole`. Throws delta::Error (on every rank) for a World with no shapes, or options out of
   /// range. Memory: every rank holds `whole` while this runs; for a simulation too large for
   /// one node, use the next constructor.
@@ -122,6 +125,13 @@ class DistributedWorld {
   std::vector<Particle> gatherParticles(int root = 0) const;
   /// Every contact point of the last step, sorted as World::contacts() sorts them, on `root`.
   std::vector<Contact> gatherContacts(int root = 0) const;
+  /// The whole simulation as one World, on rank `root` (std::nullopt on the others): every
+  /// particle by id (its index there) with the forces of the last step, the friction springs
+  /// of every pair, the last step's contacts (sorted as World's), the time and the step count.
+  /// Stepping it goes on bit for bit as this DistributedWorld would, and so does a
+  /// DistributedWorld made from it on any number of ranks: checkpoints (dem/checkpoint.h) of a
+  /// distributed run are those of this World, and restart on any rank count.
+  std::optional<World> gatherWorld(int root = 0) const;
   /// Every rank's load, by rank, on `root`; empty on the others.
   std::vector<RankLoad> gatherLoads(int root = 0) const;
 

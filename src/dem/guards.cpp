@@ -1,0 +1,148 @@
+// World's guard against bodies passing through each other within one step (world.h, "No
+// pass-through"): the rule and its message, apart from the stepping it guards.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "delta/core/aabb.h"
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/core/parallel.h"
+#include "delta/core/rotation.h"
+#include "delta/dem/world.h"
+
+namespace delta::dem {
+namespace {
+
+/// Particles per parallel chunk: a bound costs about as much as a half kick.
+constexpr std::size_t kParticleGrain = 512;
+
+/// The farthest a point of `box` lies from `pivot`: the farthest corner (a box is convex).
+double reachFrom(const Aabb& box, const Vec3& pivot) noexcept {
+  double farthest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 x{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
+                 (corner & 4) ? box.upper.z : box.lower.z};
+    farthest = std::max(farthest, length(x - pivot));
+  }
+  return farthest;
+}
+
+/// The least distance from the origin to the segment from `a` to `a + d`.
+double closestApproach(const Vec3& a, const Vec3& d) noexcept {
+  const double dd = dot(d, d);
+  const double t = dd > 0.0 ? std::clamp(-dot(a, d) / dd, 0.0, 1.0) : 0.0;
+  return length(a + d * t);
+}
+
+/// The box of `box`'s corners carried by `pose`.
+Aabb movedBox(const Aabb& box, const RigidTransform& pose) noexcept {
+  Aabb moved;
+  for (int corner = 0; corner < 8; ++corner)
+    moved.extend(pose.apply(Vec3{(corner & 1) ? box.upper.x : box.lower.x,
+                                 (corner & 2) ? box.upper.y : box.lower.y,
+                                 (corner & 4) ? box.upper.z : box.lower.z}));
+  return moved;
+}
+
+}  // namespace
+
+void World::requireCatchableMotion() const {
+  const double dt = parameters_.timeStep, half = 0.5 * dt;
+  const double shell = 2.0 * law_.epsilon;
+  // Each particle's drift in the coming step, with the velocities the half kick will give it
+  // (computed as halfKick() does: World::step in world.h), and how far its surface may move
+  // about its centre by turning (|ω|·r·dt).
+  std::vector<Vec3> drift(owned_);
+  std::vector<double> turn(owned_), speeds(owned_);
+  parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Particle& particle = particles_[i];
+      const ParticleShape& shape = shapes_[particle.shape];
+      const Vec3 velocity =
+          particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * half;
+      Particle kicked = particle;
+      kicked.angularMomentum = particle.angularMomentum + particle.torque * half;
+      const double angular = length(angularVelocityOf(kicked, particle.orientation));
+      drift[i] = velocity * dt;
+      turn[i] = angular * shape.boundingRadius() * dt;
+      speeds[i] = length(velocity) + angular * shape.boundingRadius();
+    }
+  });
+  // The cheap bound first: the two fastest particles (not finite: the step goes on and
+  // requireFiniteParticles names the particle after it) and the fastest obstacle.
+  double first = 0.0, second = 0.0;
+  for (std::size_t i = 0; i < owned_; ++i) {
+    const double speed = speeds[i];
+    if (!std::isfinite(speed)) continue;
+    if (speed > first) {
+      second = first;
+      first = speed;
+    } else if (speed > second) {
+      second = speed;
+    }
+  }
+  std::vector<double> wallSpeed(obstacles_.size(), 0.0);
+  std::vector<Aabb> wallBox(obstacles_.size());
+  double obstacle = 0.0;
+  for (std::size_t o = 0; o < obstacles_.size(); ++o) {
+    const Obstacle& wall = obstacles_[o];
+    const ObstacleMotion& motion = wall.motion;
+    wallBox[o] = movedBox(wall.queryMesh.bounds(), wall.pose);
+    if (motion.velocity == Vec3{} && motion.angularVelocity == Vec3{}) continue;
+    wallSpeed[o] =
+        length(motion.velocity) +
+        length(motion.angularVelocity) * reachFrom(wallBox[o], wall.pose.apply(motion.pivot));
+    obstacle = std::max(obstacle, wallSpeed[o]);
+  }
+  if ((first + std::max(second, obstacle)) * dt < shell) return;
+
+  // Some two bodies could approach by 2ε: look at the pairs that could, where one moves by ε or
+  // more. A pair is unsafe when its bounding spheres (grown by their turning and the shell) can
+  // meet along the straight drift of their centres, or a particle's swept box can meet an
+  // obstacle's box (grown by the obstacle's motion), and their motions sum to 2ε or more.
+  const auto fail = [&](std::size_t i, const std::string& other, double otherSpeed) {
+    const Particle& particle = particles_[i];
+    const double safe = shell / (speeds[i] + otherSpeed);
+    throw Error("dem: particle " + std::to_string(ids_[i]) + " (speed " +
+                toString(length(particle.velocity)) + ", angular speed " +
+                toString(length(particle.angularVelocity)) + ") would move " +
+                toString(speeds[i] * dt) + " in step " + std::to_string(stepCount_ + 1) +
+                " within reach of " + other + ": together they could approach by " +
+                toString((speeds[i] + otherSpeed) * dt) +
+                ", more than the contact shell 2ε = " + toString(shell) +
+                " catches, and pass through each other unseen; the largest safe time step is "
+                "about " +
+                toString(safe) + " (now " + toString(dt) + ")");
+  };
+  const double epsilon = law_.epsilon;
+  for (std::size_t i = 0; i < owned_; ++i) {
+    const double mi = speeds[i] * dt;
+    if (!std::isfinite(mi)) continue;
+    const Particle& a = particles_[i];
+    const double ra = shapes_[a.shape].boundingRadius();
+    for (std::size_t j = 0; j < owned_; ++j) {
+      const double mj = speeds[j] * dt;
+      if (j == i || !std::isfinite(mj) || std::max(mi, mj) < epsilon || mi + mj < shell) continue;
+      if (mj > mi || (mj == mi && j < i)) continue;  // each pair once, from its faster body
+      const Particle& b = particles_[j];
+      const double reach = ra + shapes_[b.shape].boundingRadius() + turn[i] + turn[j] + shell;
+      if (closestApproach(b.position - a.position, drift[j] - drift[i]) <= reach)
+        fail(i, "particle " + std::to_string(ids_[j]), speeds[j]);
+    }
+    for (std::size_t o = 0; o < obstacles_.size(); ++o) {
+      const double mo = wallSpeed[o] * dt;
+      if (std::max(mi, mo) < epsilon || mi + mo < shell) continue;
+      Aabb swept;
+      swept.extend(a.position);
+      swept.extend(a.position + drift[i]);
+      const double grow = ra + turn[i] + shell + mo;
+      if (distanceSquared(swept, wallBox[o]) <= grow * grow)
+        fail(i, "obstacle " + std::to_string(o), wallSpeed[o]);
+    }
+  }
+}
+
+}  // namespace delta::dem

@@ -1,0 +1,211 @@
+// `delta dem --checkpoint-every N`, `--restart FILE` and stopping on SIGINT/SIGTERM: a run
+// stopped and continued ends bit for bit where the whole run ends (state_digest), with the same
+// log rows and series.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "apps/cli_run.h"
+
+namespace {
+
+using delta::test::CliRun;
+using delta::test::expectOneLineError;
+using delta::test::jsonNumber;
+using delta::test::runDelta;
+using delta::test::seriesFiles;
+using delta::test::slurp;
+using delta::test::TemporaryFolder;
+
+/// The string after "key":" in a JSON line ("" when missing).
+std::string jsonString(const std::string& json, const std::string& key) {
+  const std::string marker = "\"" + key + "\":\"";
+  const std::size_t at = json.find(marker);
+  if (at == std::string::npos) return "";
+  const std::size_t begin = at + marker.size();
+  return json.substr(begin, json.find('"', begin) - begin);
+}
+
+/// log.csv's rows without the timing columns (step_seconds, contact_detection_seconds).
+std::vector<std::string> logRows(const std::filesystem::path& log) {
+  std::istringstream lines(slurp(log));
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(lines, line);) {
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');)
+      fields.push_back(cell);
+    std::string row;
+    for (std::size_t f = 0; f < fields.size(); ++f)
+      if (f != 8 && f != 9) row += fields[f] + ",";
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+const std::string kSettle = "dem settle --particles 20 --output-every 50 --json --quiet";
+
+TEST(DemCheckpointCli, AStoppedAndRestartedRunEndsBitForBitWhereTheWholeRunEnds) {
+  const TemporaryFolder folder("checkpoint_restart");
+  const std::filesystem::path whole = folder.path / "whole", parts = folder.path / "parts";
+  const CliRun reference = runDelta(kSettle + " --steps 400 --out '" + whole.string() + "'");
+  ASSERT_EQ(reference.exitCode, 0) << reference.err;
+  const std::string digest = jsonString(reference.out, "state_digest");
+  EXPECT_EQ(digest.size(), 16u) << reference.out;
+
+  const CliRun first =
+      runDelta(kSettle + " --steps 200 --checkpoint-every 100 --out '" + parts.string() + "'");
+  ASSERT_EQ(first.exitCode, 0) << first.err;
+  EXPECT_EQ(jsonNumber(first.out, "checkpoints"), 2.0) << "steps 100 and 200, the end";
+  EXPECT_GT(jsonNumber(first.out, "checkpoint_bytes"), 0.0);
+  ASSERT_TRUE(std::filesystem::exists(parts / "checkpoint.delta"));
+  EXPECT_NE(jsonString(first.out, "state_digest"), digest);
+
+  // --steps is the total; --out defaults to the checkpoint's folder; 2 threads now.
+  const CliRun second =
+      runDelta("--threads 2 dem --restart '" + (parts / "checkpoint.delta").string() +
+               "' --steps 400 --json --quiet");
+  ASSERT_EQ(second.exitCode, 0) << second.err;
+  EXPECT_EQ(jsonNumber(second.out, "steps"), 200.0) << second.out;
+  EXPECT_EQ(jsonString(second.out, "state_digest"), digest) << second.out;
+  EXPECT_EQ(logRows(parts / "log.csv"), logRows(whole / "log.csv"));
+  EXPECT_EQ(seriesFiles(parts / "particles_state.pvd"), seriesFiles(whole / "particles_state.pvd"));
+  EXPECT_EQ(slurp(parts / "particles_state.pvd"), slurp(whole / "particles_state.pvd"));
+  EXPECT_EQ(slurp(parts / "particles_state_000008.vtp"),
+            slurp(whole / "particles_state_000008.vtp"));
+
+  // Into another folder: a new series there, the same end.
+  const CliRun elsewhere =
+      runDelta("dem --restart '" + (parts / "checkpoint.delta").string() + "' --out '" +
+               (folder.path / "elsewhere").string() + "' --steps 450 --json --quiet");
+  ASSERT_EQ(elsewhere.exitCode, 0) << elsewhere.err;
+  EXPECT_EQ(jsonNumber(elsewhere.out, "steps"), 50.0) << elsewhere.out;
+}
+
+TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
+  const TemporaryFolder folder("checkpoint_errors");
+  const std::filesystem::path foreign = folder.path / "foreign.delta";
+  { std::ofstream(foreign) << "solid x\n"; }
+  expectOneLineError(runDelta("dem --restart '" + foreign.string() + "'"),
+                     "not a Δ DEM checkpoint");
+  expectOneLineError(runDelta("dem --restart '" + (folder.path / "none").string() + "'"), "none");
+  expectOneLineError(runDelta("dem settle --steps 5 --checkpoint-every 2"), "--out");
+
+  const std::filesystem::path run = folder.path / "run";
+  ASSERT_EQ(
+      runDelta(kSettle + " --steps 20 --checkpoint-every 10 --out '" + run.string() + "'").exitCode,
+      0);
+  const std::string checkpoint = (run / "checkpoint.delta").string();
+  expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --particles 5"), "--particles");
+  expectOneLineError(runDelta("dem settle --restart '" + checkpoint + "'"), "SCENARIO");
+  expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --steps 10"), "fewer than");
+  std::string cut = slurp(checkpoint);
+  cut.resize(cut.size() / 2);
+  { std::ofstream(folder.path / "cut.delta", std::ios::binary) << cut; }
+  expectOneLineError(runDelta("dem --restart '" + (folder.path / "cut.delta").string() + "'"),
+                     "truncated");
+}
+
+/// Starts `delta dem ...` (no shell) with its streams into `folder`; returns its pid.
+pid_t startDelta(const std::vector<std::string>& arguments, const std::filesystem::path& folder) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int out = ::open((folder / "stdout").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err = ::open((folder / "stderr").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(err, 2);
+    std::vector<char*> argv{const_cast<char*>(DELTA_CLI)};
+    for (const std::string& argument : arguments)
+      argv.push_back(const_cast<char*>(argument.c_str()));
+    argv.push_back(nullptr);
+    ::execv(DELTA_CLI, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+/// Stops a long run with `signal` once it has logged some steps; checks its exit code, the
+/// checkpoint, and that a restart to a fixed total ends where an uninterrupted run does.
+void stopAndRestart(int signal, int expectedExit) {
+  const TemporaryFolder folder("checkpoint_signal_" + std::to_string(signal));
+  const std::filesystem::path out = folder.path / "out";
+  const pid_t pid = startDelta({"dem", "settle", "--particles", "20", "--steps", "1000000",
+                                "--output-every", "50", "--quiet", "--out", out.string()},
+                               folder.path);
+  ASSERT_GT(pid, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (logRows(out / "log.csv").size() < 30 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(pid, signal);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), expectedExit) << slurp(folder.path / "stderr");
+  const std::string err = slurp(folder.path / "stderr");
+  EXPECT_NE(err.find("checkpoint.delta"), std::string::npos) << err;
+  ASSERT_TRUE(std::filesystem::exists(out / "checkpoint.delta"));
+  EXPECT_FALSE(std::filesystem::exists(out / ".delta.lock")) << "released on the way out";
+  // Every row logged is whole, and the last one is the step the checkpoint holds.
+  const std::vector<std::string> rows = logRows(out / "log.csv");
+  const std::size_t stopped = std::stoul(rows.back());
+  ASSERT_GT(stopped, 0u);
+  const std::size_t total = stopped + 60;
+
+  const CliRun restarted = runDelta("dem --restart '" + (out / "checkpoint.delta").string() +
+                                    "' --steps " + std::to_string(total) + " --json --quiet");
+  ASSERT_EQ(restarted.exitCode, 0) << restarted.err;
+  const CliRun whole = runDelta(kSettle + " --steps " + std::to_string(total));
+  ASSERT_EQ(whole.exitCode, 0) << whole.err;
+  EXPECT_EQ(jsonString(restarted.out, "state_digest"), jsonString(whole.out, "state_digest"));
+}
+
+TEST(DemCheckpointCli, SigintFinishesTheStepWritesACheckpointAndExits130) {
+  stopAndRestart(SIGINT, 130);
+}
+
+TEST(DemCheckpointCli, SigtermFinishesTheStepWritesACheckpointAndExits143) {
+  stopAndRestart(SIGTERM, 143);
+}
+
+#ifdef DELTA_MPIEXEC
+/// mpirun with `ranks` ranks, as root and on more ranks than cores, one thread a rank.
+std::string mpirun(int ranks) {
+  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 '" +
+         std::string(DELTA_MPIEXEC) + "' -np " + std::to_string(ranks) + " --oversubscribe";
+}
+
+TEST(DemCheckpointCli, ACheckpointOfTwoRanksRestartsOnFourAndOnOneBitForBit) {
+  const TemporaryFolder folder("checkpoint_mpi");
+  const std::filesystem::path parts = folder.path / "parts";
+  const CliRun whole = runDelta(kSettle + " --steps 400");
+  ASSERT_EQ(whole.exitCode, 0) << whole.err;
+  const std::string digest = jsonString(whole.out, "state_digest");
+  const CliRun first = delta::test::runDeltaUnder(
+      mpirun(2), kSettle + " --steps 200 --checkpoint-every 100 --out '" + parts.string() + "'");
+  ASSERT_EQ(first.exitCode, 0) << first.err;
+  EXPECT_EQ(jsonNumber(first.out, "checkpoints"), 2.0) << first.out;
+  const std::string checkpoint = (parts / "checkpoint.delta").string();
+  const CliRun onOne = runDelta("dem --restart '" + checkpoint + "' --steps 400 --out '" +
+                                (folder.path / "one").string() + "' --json --quiet");
+  ASSERT_EQ(onOne.exitCode, 0) << onOne.err;
+  EXPECT_EQ(jsonString(onOne.out, "state_digest"), digest);
+  const CliRun onFour = delta::test::runDeltaUnder(
+      mpirun(4), "dem --restart '" + checkpoint + "' --steps 400 --json --quiet");
+  ASSERT_EQ(onFour.exitCode, 0) << onFour.err;
+  EXPECT_EQ(jsonString(onFour.out, "state_digest"), digest) << onFour.out;
+  EXPECT_EQ(logRows(parts / "log.csv").size(),
+            logRows(folder.path / "one" / "log.csv").size() + 200);
+}
+#endif  // DELTA_MPIEXEC
+
+}  // namespace

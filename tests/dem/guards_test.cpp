@@ -1,0 +1,132 @@
+// World's guard against bodies passing through each other in one step (world.h, "No
+// pass-through"; src/dem/guards.cpp), and the overlap the CLI's start warning reads.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "delta/core/error.h"
+#include "delta/dem/world.h"
+#include "delta/mesh/primitives.h"
+
+#include "centimetre_parameters.h"
+
+namespace delta::dem {
+namespace {
+
+constexpr double kRadius = 0.01;
+constexpr double kDensity = 2500.0;
+
+/// A sphere of radius 1 cm at `position` moving at `velocity`, over a 1 m floor at z = 0.
+World sphereOverFloor(const Vec3& position, const Vec3& velocity) {
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addObstacle(primitives::quad(1.0, 1.0));
+  world.addParticle(0, {position, {}, velocity, {}});
+  return world;
+}
+
+/// The error the next `steps` steps throw, or "" when they do not.
+std::string stepError(World& world, std::size_t steps = 1) {
+  try {
+    world.run(steps);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(DemGuards, AParticleTooFastForTheShellStopsTheRunBeforeMoving) {
+  World world = sphereOverFloor({0, 0, 0.02}, {0, 0, -1000.0});
+  const std::string message = stepError(world);
+  ASSERT_FALSE(message.empty()) << "a 1000 m/s particle passed a 1 mm shell silently";
+  EXPECT_NE(message.find("particle 0 (speed 1000"), std::string::npos) << message;
+  EXPECT_NE(message.find("largest safe time step"), std::string::npos) << message;
+  // Nothing moved: the check comes before the step changes anything.
+  EXPECT_EQ(world.particles()[0].position, (Vec3{0, 0, 0.02}));
+  EXPECT_EQ(world.particles()[0].velocity, (Vec3{0, 0, -1000.0}));
+  EXPECT_EQ(world.stepCount(), 0u);
+}
+
+TEST(DemGuards, TheSafeTimeStepItNamesCatchesTheFloor) {
+  World world = sphereOverFloor({0, 0, 0.02}, {0, 0, -1000.0});
+  const std::string message = stepError(world);
+  const std::size_t at = message.find("is about ");
+  ASSERT_NE(at, std::string::npos) << message;
+  const double safe = std::stod(message.substr(at + 9));
+  ASSERT_GT(safe, 0.0);
+  world.setTimeStep(0.99 * safe);
+  // Above the floor until the shell catches it: no step may carry the sphere through unseen.
+  bool caught = false;
+  for (int step = 0; step < 100 && world.particles()[0].position.z > 0.0; ++step) {
+    world.step();
+    caught = caught || !world.contacts().empty();
+    if (world.particles()[0].position.z < kRadius) {
+      EXPECT_TRUE(caught) << "surface below the floor with no contact at step " << step;
+    }
+  }
+  EXPECT_TRUE(caught);
+}
+
+TEST(DemGuards, TwoParticlesApproachingTooFastAreStoppedNamingTheFirst) {
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addParticle(0, {{-0.03, 0, 0}, {}, {500.0, 0, 0}, {}});
+  world.addParticle(0, {{0.03, 0, 0}, {}, {-500.0, 0, 0}, {}});
+  // Stopped in the first step that could carry them into each other, before they meet.
+  const std::string message = stepError(world, 1000);
+  EXPECT_NE(message.find("particle 0 (speed 500"), std::string::npos) << message;
+  EXPECT_NE(message.find("within reach of particle 1"), std::string::npos) << message;
+  EXPECT_LT(world.particles()[0].position.x, world.particles()[1].position.x);
+}
+
+TEST(DemGuards, FastParticlesFarFromEverythingAreNotStopped) {
+  // One particle crosses the box at 0.3 m a step beside a row it never comes near (a test of the
+  // distributed DEM does this on purpose): nothing can pass through anything.
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
+  world.addParticle(0, {{0.05, 0, 0}, {}, {}, {}});
+  world.addParticle(0, {{-1.0, 0.1, 0}, {}, {0.3 / world.parameters().timeStep, 0, 0}, {}});
+  EXPECT_EQ(stepError(world, 5), "");
+}
+
+TEST(DemGuards, SpinCountsAtTheBoundingRadius) {
+  // 2ε = 1 mm a step at r = 1 cm: a turn of 0.1 rad a step is too much.
+  World world = sphereOverFloor({0, 0, 0.012}, {});  // 2 mm above the floor
+  const double rate = 0.1 / world.parameters().timeStep;
+  world.setAngularVelocity(0, {rate, 0, 0});
+  EXPECT_NE(stepError(world).find("angular speed"), std::string::npos);
+  world.setAngularVelocity(0, {0.01 * rate, 0, 0});  // 1 mm·0.1 a step: caught
+  EXPECT_EQ(stepError(world), "");
+}
+
+TEST(DemGuards, AFastObstacleCountsToo) {
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addParticle(0, {{0, 0, 0.5}, {}, {}, {}});
+  world.addParticle(0, {{0.5, 0, 0.5}, {}, {0.001, 0, 0}, {}});
+  world.addObstacle(primitives::quad(1.0, 1.0), {{0, 0, 2000.0}, {}, {}});
+  const std::string message = stepError(world, 1000);
+  EXPECT_NE(message.find("within reach of obstacle 0"), std::string::npos) << message;
+  EXPECT_NE(message.find("largest safe time step"), std::string::npos) << message;
+  EXPECT_LT(world.obstacles()[0].pose.translation.z, 0.5);  // stopped before reaching them
+}
+
+TEST(DemGuards, SlowMotionIsNeverStopped) {
+  World world = sphereOverFloor({0, 0, 0.05}, {0, 0, -1.0});
+  EXPECT_NO_THROW(world.run(2000));  // falls, bounces (restitution 1), rises
+  EXPECT_GT(world.particles()[0].velocity.z, 0.0);
+}
+
+TEST(DemGuards, ParticlesPlacedOverlappingShowOverlapAfterTheFirstStep) {
+  // What `delta dem` warns of ("particles start overlapping").
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
+  world.addParticle(0, {{0.5 * kRadius, 0, 0}, {}, {}, {}});
+  world.step();
+  EXPECT_GT(world.statistics().overlappingContacts, 0u);
+}
+
+}  // namespace
+}  // namespace delta::dem
