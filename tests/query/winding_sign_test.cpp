@@ -22,6 +22,7 @@
 #include "delta/query/self_intersections.h"
 #include "delta/query/winding_number.h"
 
+#include "kernels/triangle_pairs.h"
 #include "query/detail/query_mesh_data.h"
 #include "query/probe_points.h"
 
@@ -104,7 +105,8 @@ TEST(WindingSign, OpenSphereWithACutHoleAgreesWithTheExactWindingNumber) {
   const Mesh sphere = primitives::icosphere(4);
   const Mesh open = cutHole(sphere, 0, 0.3);
   ASSERT_FALSE(QueryMesh(open).closed());
-  std::vector<Vec3> points = nearAndFar(open, 3000, 0.05, 1000, 1);
+  std::vector<Vec3> points =
+      nearAndFar(open, testing::scaledCount(3000), 0.05, testing::scaledCount(1000), 1);
   // along the hole's axis, through its middle, where w passes ½
   const Vec3 axis = normalized(sphere.triangle(0).centroid());
   for (int i = -20; i <= 20; ++i)
@@ -144,7 +146,8 @@ TEST(WindingSign, RealMeshesAgreeWithTheExactWindingNumber) {
     Mesh mesh = io::load(kMeshes / c.file);
     if (c.cut) mesh = cutHole(mesh, 100, 0.05 * mesh.bounds().diagonal());
     const std::vector<Vec3> points =
-        nearAndFar(mesh, 1500, 0.01 * mesh.bounds().diagonal(), 300, 3);
+        nearAndFar(mesh, testing::scaledCount(1500), 0.01 * mesh.bounds().diagonal(),
+                   testing::scaledCount(300), 3);
     expectExactSigns(mesh, points, 1.0);
   }
 }
@@ -175,7 +178,7 @@ TEST(WindingSign, ClosedMeshesAgreeWithPseudonormalsOnRandomAndAdversarialPoints
     if (fs::exists(kMeshes / file)) meshes.push_back(io::load(kMeshes / file));
   for (const Mesh& mesh : meshes) {
     // uniform, and on and ±1e-6 of the diagonal off vertices, edge midpoints and centroids
-    std::vector<Vec3> points = testing::probes(mesh, 2000, 4);
+    std::vector<Vec3> points = testing::probes(mesh, testing::scaledCount(2000), 4);
     const double size = mesh.bounds().diagonal();
     const Vec3 centre = mesh.bounds().center();
     for (const double far : {10.0, 1e6, 1e15})
@@ -205,8 +208,8 @@ TEST(WindingSign, TheHierarchyAgreesWithPseudonormalsOnClosedMeshes) {
   for (const Mesh& mesh : meshes) {
     const QueryMesh query(mesh);
     const double size = mesh.bounds().diagonal();
-    std::vector<Vec3> points = testing::probes(mesh, 3000, 9);
-    const std::vector<Vec3> near = nearAndFar(mesh, 3000, 1e-3 * size, 0, 10);
+    std::vector<Vec3> points = testing::probes(mesh, testing::scaledCount(3000), 9);
+    const std::vector<Vec3> near = nearAndFar(mesh, testing::scaledCount(3000), 1e-3 * size, 0, 10);
     points.insert(points.end(), near.begin(), near.end());
     PointQuery pseudonormal;
     pseudonormal.signedDistance = true;
