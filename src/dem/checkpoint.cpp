@@ -72,6 +72,17 @@ class Writer {
       for (const std::uint32_t index : t)
         u32(index);
   }
+  /// A particle's shape and motion state (what the checkpoint and the digest both hold).
+  void particle(const Particle& p) {
+    u32(p.shape);
+    vec(p.position);
+    quaternion(p.orientation);
+    vec(p.velocity);
+    vec(p.angularVelocity);
+    vec(p.angularMomentum);
+    vec(p.force);
+    vec(p.torque);
+  }
   void spring(const std::pair<std::uint64_t, TangentialSpring>& entry) {
     u64(entry.first);
     vec(entry.second.displacement);
@@ -230,17 +241,8 @@ class CheckpointCodec {
 
     out.tag("PART");
     out.u64(world.owned_);
-    for (std::size_t i = 0; i < world.owned_; ++i) {
-      const Particle& particle = world.particles_[i];
-      out.u32(particle.shape);
-      out.vec(particle.position);
-      out.quaternion(particle.orientation);
-      out.vec(particle.velocity);
-      out.vec(particle.angularVelocity);
-      out.vec(particle.angularMomentum);
-      out.vec(particle.force);
-      out.vec(particle.torque);
-    }
+    for (std::size_t i = 0; i < world.owned_; ++i)
+      out.particle(world.particles_[i]);
 
     out.tag("SPRG");
     for (const auto* springs : {&world.particleSprings_, &world.obstacleSprings_}) {
@@ -283,7 +285,7 @@ class CheckpointCodec {
     return std::move(out.bytes());
   }
 
-  static Checkpoint restore(Reader& in, const std::string& origin) {
+  static Checkpoint restore(Reader& in) {
     in.tag("PARM");
     Parameters p;
     for (double* value : {&p.timeStep, &p.epsilon, &p.filterDistance, &p.stiffness, &p.restitution,
@@ -400,7 +402,6 @@ class CheckpointCodec {
     checkpoint.note = in.text();
     if (!in.atEnd()) in.fail("bytes after the last section");
     world.forcesCurrent_ = forcesCurrent;  // addObstacle cleared it
-    (void)origin;
     return checkpoint;
   }
 
@@ -415,16 +416,8 @@ class CheckpointCodec {
     std::sort(order.begin(), order.end());
     out.u64(order.size());
     for (const auto& [id, i] : order) {
-      const Particle& particle = world.particles_[i];
       out.u32(id);
-      out.u32(particle.shape);
-      out.vec(particle.position);
-      out.quaternion(particle.orientation);
-      out.vec(particle.velocity);
-      out.vec(particle.angularVelocity);
-      out.vec(particle.angularMomentum);
-      out.vec(particle.force);
-      out.vec(particle.torque);
+      out.particle(world.particles_[i]);
     }
     for (const auto* springs : {&world.particleSprings_, &world.obstacleSprings_}) {
       out.u64(springs->size());
@@ -477,7 +470,7 @@ Checkpoint readCheckpoint(std::string_view bytes, const std::string& origin) {
   if (crc32Of(payload) != crc)
     throw Error(where + "corrupt DEM checkpoint: the checksum (CRC-32) does not match");
   Reader in(payload, origin);
-  return CheckpointCodec::restore(in, origin);
+  return CheckpointCodec::restore(in);
 }
 
 void saveCheckpoint(const std::filesystem::path& path, const World& world, std::string_view note) {
