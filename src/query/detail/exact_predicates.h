@@ -1,0 +1,75 @@
+#pragma once
+
+// Exact orientation predicates on double coordinates for the overlap query, with the symbolic
+// perturbation that makes every configuration generic.
+//
+// orient(p, q, r, s) = (s − p)·((q − p) × (r − p)): positive where s lies on the side of the
+// plane through p, q, r that the right-handed normal (q − p) × (r − p) points to. Its sign comes
+// from a floating-point filter (Shewchuk's error bound for the 3×3 determinant of differences,
+// "Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997)
+// and, where the filter cannot decide, from an exact evaluation in expansion arithmetic.
+//
+// The perturbation: the second mesh (B) is translated by t = (δ, δ², δ³), δ → 0⁺. A sign that
+// is zero for the meshes as given is the sign of the first non-vanishing term in δ:
+//   - a vertex s of A against a triangle (p, q, r) of B: orient(p+t, q+t, r+t, s) = D − t·N,
+//     N = (q − p) × (r − p);
+//   - a vertex s of B against a triangle of A: D + t·N;
+//   - an edge (a0, a1) of A against an edge (b0, b1) of B: orient(a0, a1, b0+t, b1+t) =
+//     D + t·((b1 − b0) × (a1 − a0)).
+// t·v has the sign of v's first non-zero component. These are zero only for a triangle of zero
+// area (N = 0) and for parallel edges, where the callers never need them (a segment parallel
+// to an edge of a triangle is parallel to its plane and cannot cross it).
+
+#include <cmath>
+#include <limits>
+
+#include "delta/core/vec3.h"
+
+namespace delta::detail {
+
+/// The exact sign of orient(p, q, r, s) (−1, 0, +1), always by expansion arithmetic.
+int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+
+/// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
+/// (0 where the cross product is the zero vector).
+int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+
+/// The sign of orient(p, q, r, s) (−1, 0, +1): filtered, exact where the filter fails.
+inline int orientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const double ux = q.x - p.x, uy = q.y - p.y, uz = q.z - p.z;
+  const double vx = r.x - p.x, vy = r.y - p.y, vz = r.z - p.z;
+  const double wx = s.x - p.x, wy = s.y - p.y, wz = s.z - p.z;
+  const double a = vy * wz, b = vz * wy, c = vz * wx, d = vx * wz, e = vx * wy, f = vy * wx;
+  const double det = ux * (a - b) + uy * (c - d) + uz * (e - f);
+  const double permanent = std::abs(ux) * (std::abs(a) + std::abs(b)) +
+                           std::abs(uy) * (std::abs(c) + std::abs(d)) +
+                           std::abs(uz) * (std::abs(e) + std::abs(f));
+  constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;  // 2⁻⁵³
+  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
+  const double bound = kBound * permanent;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return exactOrientSign(p, q, r, s);
+}
+
+/// The side of triangle (p, q, r) of A on which vertex s of B lies, B perturbed (never 0 unless
+/// the triangle has zero area).
+inline int sideOfBVertex(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const int sign = orientSign(p, q, r, s);
+  return sign != 0 ? sign : exactCrossLeadingSign(p, q, p, r);
+}
+
+/// The side of triangle (p, q, r) of B on which vertex s of A lies, B perturbed.
+inline int sideOfAVertex(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const int sign = orientSign(p, q, r, s);
+  return sign != 0 ? sign : -exactCrossLeadingSign(p, q, p, r);
+}
+
+/// The sign of orient(a0, a1, b0 + t, b1 + t): edge (a0, a1) of A against edge (b0, b1) of B,
+/// B perturbed (0 only for parallel edges on one line or plane).
+inline int edgeSign(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1) {
+  const int sign = orientSign(a0, a1, b0, b1);
+  return sign != 0 ? sign : exactCrossLeadingSign(b0, b1, a0, a1);
+}
+
+}  // namespace delta::detail

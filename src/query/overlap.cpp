@@ -1,0 +1,762 @@
+#include "delta/query/overlap.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/core/format.h"
+#include "delta/query/self_intersections.h"
+
+#include "../kernels/detail/robust_geometry.h"
+#include "detail/dual_traversal.h"
+#include "detail/exact_predicates.h"
+#include "detail/placement.h"
+#include "detail/query_mesh_data.h"
+
+namespace delta::contactdetection {
+namespace {
+
+using detail::QueryMeshData;
+
+constexpr std::int32_t kAbsent = -1;
+
+/// Where an intersection curve passes from one segment to the next: an edge of one mesh (its
+/// vertex ids, smaller first) through a triangle of the other (sorted id). `ofA`: the edge is
+/// the first mesh's.
+struct EndKey {
+  std::uint64_t edge = 0;
+  std::uint64_t triangle = 0;
+  bool operator==(const EndKey&) const noexcept = default;
+};
+
+struct EndKeyHash {
+  std::size_t operator()(const EndKey& key) const noexcept {
+    return std::hash<std::uint64_t>{}(key.edge * 0x9E3779B97F4A7C15ull ^ key.triangle);
+  }
+};
+
+EndKey endKey(bool ofA, std::uint32_t v0, std::uint32_t v1, std::uint32_t triangle) noexcept {
+  const auto [low, high] = std::minmax(v0, v1);
+  return {(std::uint64_t{low} << 32) | high, (std::uint64_t{ofA} << 32) | triangle};
+}
+
+struct Segment {
+  Vec3 start, end;
+  EndKey startKey, endKey;
+  std::uint32_t sortedA = 0, sortedB = 0;
+  std::int32_t pieceA = kAbsent, pieceB = kAbsent;
+};
+
+/// The part of one triangle inside the other mesh, as integrals over its boundary chain: each
+/// oriented piece (p → q) of that boundary adds the fan triangle (o, p, q) from the triangle's
+/// first vertex o (Green's theorem: the sums depend on the chain only, not on o). With c the
+/// query's reference point and a = ½(p − o) × (q − o):
+///   area += a;  areaMoment += (g − c) × a, g = (o + p + q)/3;
+///   volume += (o − c)·a / 3  (the tetrahedron (c, o, p, q));  volumeMoment += that·(o+p+q−3c)/4.
+struct Piece {
+  std::uint32_t sorted = 0;
+  Vec3 origin;
+  Vec3 area, areaMoment, volumeMoment;
+  double volume = 0.0;
+  double volumeScale = 0.0;        ///< Σ |volume terms|: the scale of the volume's rounding
+  std::array<int, 3> parity{};     ///< per edge (vertex i → i + 1): Σ σ of its crossings
+  std::array<int, 3> crossings{};  ///< per edge: the number of its crossings
+
+  void add(const Vec3& p, const Vec3& q, const Vec3& reference) noexcept {
+    const Vec3 u = p - origin, v = q - origin;
+    const Vec3 a = cross(u, v) * 0.5;
+    const Vec3 fromReference = origin - reference;
+    const Vec3 g = fromReference + (u + v) * (1.0 / 3.0);
+    area += a;
+    areaMoment += cross(g, a);
+    const double tetrahedron = dot(fromReference, a) * (1.0 / 3.0);
+    volume += tetrahedron;
+    volumeScale += std::abs(tetrahedron);
+    volumeMoment += (fromReference * 3.0 + u + v) * (tetrahedron * 0.25);
+  }
+};
+
+/// Per vertex of a side that the query reaches.
+struct VertexState {
+  Vec3 world;
+  std::int8_t inside = -1;  ///< −1 unknown, 0 outside the other mesh, 1 inside
+};
+
+/// A triangle where it is: its world corners and their vertex slots, its box, and its plane as
+/// the orientation filter needs it (the 2×2 minors of its edges from corner 0, and their
+/// absolute terms for the error bound), so that a side test costs a dot product.
+struct PlacedTriangle {
+  std::array<Vec3, 3> p;
+  std::array<std::int32_t, 3> slots;
+  Aabb box;
+  Vec3 minors;     ///< (p1 − p0) × (p2 − p0), rounded
+  Vec3 permanent;  ///< per component, the sum of the absolute products of its minor
+};
+
+PlacedTriangle placedTriangle(const std::array<Vec3, 3>& p,
+                              const std::array<std::int32_t, 3>& slots) noexcept {
+  PlacedTriangle t{p, slots, {}, {}, {}};
+  for (const Vec3& corner : p)
+    t.box.extend(corner);
+  const Vec3 u = p[1] - p[0], v = p[2] - p[0];
+  const double a = u.y * v.z, b = u.z * v.y, c = u.z * v.x, d = u.x * v.z, e = u.x * v.y,
+               f = u.y * v.x;
+  t.minors = {a - b, c - d, e - f};
+  t.permanent = {std::abs(a) + std::abs(b), std::abs(c) + std::abs(d), std::abs(e) + std::abs(f)};
+  return t;
+}
+
+/// The sign of orient(p0, p1, p2, s) where the filter decides it (Shewchuk's bound for the
+/// 3×3 determinant of differences, as orientSign), 0 where it cannot.
+inline int filteredSide(const PlacedTriangle& t, const Vec3& s) noexcept {
+  const Vec3 w = s - t.p[0];
+  const double det = dot(w, t.minors);
+  const double permanent =
+      std::abs(w.x) * t.permanent.x + std::abs(w.y) * t.permanent.y + std::abs(w.z) * t.permanent.z;
+  constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;
+  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
+  const double bound = kBound * permanent;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 0;
+}
+
+/// The side of triangle t of B on which vertex s of A lies (B perturbed).
+inline int sideOfAVertex(const PlacedTriangle& t, const Vec3& s) {
+  const int sign = filteredSide(t, s);
+  return sign != 0 ? sign : detail::sideOfAVertex(t.p[0], t.p[1], t.p[2], s);
+}
+
+/// The side of triangle t of A on which vertex s of B lies (B perturbed).
+inline int sideOfBVertex(const PlacedTriangle& t, const Vec3& s) {
+  const int sign = filteredSide(t, s);
+  return sign != 0 ? sign : detail::sideOfBVertex(t.p[0], t.p[1], t.p[2], s);
+}
+
+/// One mesh's part of the query: its data, where it is, and what the query has learnt of it.
+/// Sparse: only the vertices and triangles the query reaches get a slot (a DEM step compares a
+/// small particle with a large obstacle many times).
+class Side {
+ public:
+  Side(const QueryMesh& mesh, bool isA)
+      : data_(mesh.data()),
+        pose_(mesh.pose()),
+        inverse_(mesh.inversePose()),
+        motion_(detail::matrixMotion(mesh.pose())),
+        moved_(mesh.moved()),
+        isA_(isA) {
+    vertexSlot_.assign(data_.vertices.size(), kAbsent);
+    pieceSlot_.assign(data_.size(), kAbsent);
+    triangleSlot_.assign(data_.size(), kAbsent);
+    // Conservative world box: the prepared box moved, grown by the motion's rounding.
+    const Aabb moved = moved_ ? detail::movedBox(data_.bounds, pose_) : data_.bounds;
+    margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
+    box_ = moved.grown(margin_ + data_.slack);
+  }
+
+  const QueryMeshData& data() const noexcept { return data_; }
+  bool isA() const noexcept { return isA_; }
+  const Aabb& box() const noexcept { return box_; }
+  double margin() const noexcept { return margin_; }
+  const RigidTransform& inversePose() const noexcept { return inverse_; }
+
+  /// The slot of vertex `v`, made with its world position on first use (moved as
+  /// Mesh::transform moves a vertex).
+  std::int32_t vertex(std::uint32_t v) {
+    std::int32_t& slot = vertexSlot_[v];
+    if (slot == kAbsent) {
+      slot = static_cast<std::int32_t>(vertices_.size());
+      vertices_.push_back({moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v], -1});
+      vertexIds_.push_back(v);
+    }
+    return slot;
+  }
+  VertexState& state(std::int32_t slot) noexcept {
+    return vertices_[static_cast<std::size_t>(slot)];
+  }
+  std::size_t vertexCount() const noexcept { return vertices_.size(); }
+  std::uint32_t vertexId(std::size_t slot) const noexcept { return vertexIds_[slot]; }
+
+  /// Sorted triangle k where it is, made on first use. The reference holds until the next call.
+  const PlacedTriangle& triangle(std::uint32_t k) {
+    std::int32_t& slot = triangleSlot_[k];
+    if (slot == kAbsent) {
+      const TriangleIndices& c = data_.corners[k];
+      std::array<Vec3, 3> points;
+      std::array<std::int32_t, 3> slots;
+      for (std::size_t i = 0; i < 3; ++i) {
+        slots[i] = vertex(c[i]);
+        points[i] = vertices_[static_cast<std::size_t>(slots[i])].world;
+      }
+      slot = static_cast<std::int32_t>(triangles_.size());
+      triangles_.push_back(placedTriangle(points, slots));
+    }
+    return triangles_[static_cast<std::size_t>(slot)];
+  }
+
+  /// The piece of sorted triangle k, made on first use.
+  Piece& piece(std::uint32_t k) {
+    std::int32_t& slot = pieceSlot_[k];
+    if (slot == kAbsent) {
+      slot = static_cast<std::int32_t>(pieces_.size());
+      Piece made;
+      made.sorted = k;
+      made.origin = triangle(k).p[0];
+      pieces_.push_back(made);
+    }
+    return pieces_[static_cast<std::size_t>(slot)];
+  }
+  std::int32_t pieceSlot(std::uint32_t k) const noexcept { return pieceSlot_[k]; }
+  std::vector<Piece>& pieces() noexcept { return pieces_; }
+
+ private:
+  const QueryMeshData& data_;
+  RigidTransform pose_, inverse_;
+  detail::MatrixMotion motion_;
+  bool moved_;
+  bool isA_;
+  Aabb box_;
+  double margin_ = 0.0;
+  std::vector<std::int32_t> vertexSlot_, pieceSlot_, triangleSlot_;
+  std::vector<VertexState> vertices_;
+  std::vector<PlacedTriangle> triangles_;
+  std::vector<std::uint32_t> vertexIds_;
+  std::vector<Piece> pieces_;
+};
+
+/// Closed boxes that share a point.
+bool meet(const Aabb& a, const Aabb& b) noexcept {
+  for (std::size_t axis = 0; axis < 3; ++axis)
+    if (a.lower[axis] > b.upper[axis] || b.lower[axis] > a.upper[axis]) return false;
+  return true;
+}
+
+/// Every sorted triangle of `side`'s tree whose leaf box meets `worldBox` (carried into the
+/// prepared frame, conservatively).
+template <class Visit>
+void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
+  const QueryMeshData& data = side.data();
+  Aabb box = detail::movedBox(worldBox, side.inversePose());
+  box = box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + side.margin());
+  struct Entry {
+    std::size_t level, index;
+  };
+  std::vector<Entry> stack{{data.levels.size() - 1, 0}};
+  while (!stack.empty()) {
+    const Entry entry = stack.back();
+    stack.pop_back();
+    if (!meet(data.levels[entry.level][entry.index], box)) continue;
+    if (entry.level == 0) {
+      const std::size_t from = entry.index * detail::kFanout;
+      const std::size_t to = std::min(from + detail::kFanout, data.size());
+      for (std::size_t k = from; k < to; ++k)
+        visit(static_cast<std::uint32_t>(k));
+      continue;
+    }
+    const std::size_t first = entry.index * detail::kFanout;
+    const std::size_t last = std::min(first + detail::kFanout, data.levels[entry.level - 1].size());
+    for (std::size_t child = first; child < last; ++child)
+      stack.push_back({entry.level - 1, child});
+  }
+}
+
+/// Where the edge from vertex slot `from` to `to` of `side` (world points p0, p1, given in the
+/// order of their vertex ids so that both triangles of the edge compute the same point) crosses
+/// the plane of triangle t.
+Vec3 crossingPoint(const Vec3& p0, const Vec3& p1, const std::array<Vec3, 3>& t) noexcept {
+  const Vec3 normal = kernels::detail::accurateNormal(t[0], t[1], t[2]);
+  const double d0 = dot(p0 - t[0], normal), d1 = dot(p1 - t[0], normal);
+  double lambda = 0.5;
+  if (d0 != d1) lambda = std::clamp(d0 / (d0 - d1), 0.0, 1.0);
+  if (!std::isfinite(lambda)) lambda = 0.5;
+  return lambda == 1.0 ? p1 : p0 + (p1 - p0) * lambda;
+}
+
+/// The query's state: both sides, the reference point, the segments found.
+struct Query {
+  Side a, b;
+  Vec3 reference;
+  std::vector<Segment> segments;
+
+  Query(const QueryMesh& first, const QueryMesh& second) : a(first, true), b(second, false) {}
+};
+
+/// One end of the segment where two triangles cross: an edge of one through the other.
+struct End {
+  Vec3 point;
+  EndKey key;
+  bool start = false;
+};
+
+/// The crossing of triangle ta of A with triangle tb of B: at most one segment, and the crossings
+/// of each one's edges with the other, added to both triangles' pieces.
+void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTriangle& placedA,
+               const PlacedTriangle& placedB) {
+  const std::array<Vec3, 3>&a = placedA.p, &b = placedB.p;
+  // Sides of each one's vertices against the other's plane (B perturbed: never 0 unless the
+  // plane's triangle has zero area).
+  int sideA[3], sideB[3];
+  for (std::size_t i = 0; i < 3; ++i)
+    sideA[i] = sideOfAVertex(placedB, a[i]);
+  const bool flatB = sideA[0] == 0;  // then all three are 0
+  if (!flatB && sideA[0] == sideA[1] && sideA[1] == sideA[2]) return;
+  for (std::size_t j = 0; j < 3; ++j)
+    sideB[j] = sideOfBVertex(placedA, b[j]);
+  const bool flatA = sideB[0] == 0;
+  if (flatA && flatB) return;
+  if (!flatA && sideB[0] == sideB[1] && sideB[1] == sideB[2]) return;
+
+  int edge[3][3] = {};  // edgeSign(A edge i, B edge j), 0 until computed
+  const auto edgeSign = [&](std::size_t i, std::size_t j) {
+    if (edge[i][j] == 0) edge[i][j] = detail::edgeSign(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
+    return edge[i][j];
+  };
+  const QueryMeshData &dataA = query.a.data(), &dataB = query.b.data();
+  std::array<End, 2> ends;
+  std::size_t found = 0;
+  const auto addEnd = [&](const End& end) {
+    if (found == 2) throw Error("overlap: inconsistent crossing (internal error)");
+    ends[found++] = end;
+  };
+  // A's edges through B's triangle.
+  if (!flatB)
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::size_t i1 = (i + 1) % 3;
+      if (sideA[i] == sideA[i1]) continue;
+      const int s = edgeSign(i, 0);
+      if (edgeSign(i, 1) != s || edgeSign(i, 2) != s) continue;
+      const std::uint32_t v0 = dataA.corners[ta][i], v1 = dataA.corners[ta][i1];
+      const Vec3 point = v0 < v1 ? crossingPoint(a[i], a[i1], b) : crossingPoint(a[i1], a[i], b);
+      addEnd({point, endKey(true, v0, v1, tb), sideA[i] < 0});
+      Piece& piece = query.a.piece(ta);
+      const int sigma = sideA[i] > 0 ? 1 : -1;  // entering B: from above its face to below
+      piece.parity[i] += sigma;
+      ++piece.crossings[i];
+      if (sigma > 0)
+        piece.add(point, a[i1], query.reference);
+      else
+        piece.add(a[i1], point, query.reference);
+    }
+  // B's edges through A's triangle.
+  if (!flatA)
+    for (std::size_t j = 0; j < 3; ++j) {
+      const std::size_t j1 = (j + 1) % 3;
+      if (sideB[j] == sideB[j1]) continue;
+      const int s = edgeSign(0, j);
+      if (edgeSign(1, j) != s || edgeSign(2, j) != s) continue;
+      const std::uint32_t v0 = dataB.corners[tb][j], v1 = dataB.corners[tb][j1];
+      const Vec3 point = v0 < v1 ? crossingPoint(b[j], b[j1], a) : crossingPoint(b[j1], b[j], a);
+      addEnd({point, endKey(false, v0, v1, ta), sideB[j] > 0});
+      Piece& piece = query.b.piece(tb);
+      const int sigma = sideB[j] > 0 ? 1 : -1;  // entering A
+      piece.parity[j] += sigma;
+      ++piece.crossings[j];
+      if (sigma > 0)
+        piece.add(point, b[j1], query.reference);
+      else
+        piece.add(b[j1], point, query.reference);
+    }
+  if (found == 0) return;
+  if (found != 2 || ends[0].start == ends[1].start)
+    throw Error("overlap: inconsistent crossing (internal error)");
+  const End& start = ends[0].start ? ends[0] : ends[1];
+  const End& end = ends[0].start ? ends[1] : ends[0];
+  // On A's triangle the part inside B lies left of start → end; on B's, right of it.
+  Piece& pieceA = query.a.piece(ta);
+  pieceA.add(start.point, end.point, query.reference);
+  Piece& pieceB = query.b.piece(tb);
+  pieceB.add(end.point, start.point, query.reference);
+  query.segments.push_back({start.point, end.point, start.key, end.key, ta, tb,
+                            query.a.pieceSlot(ta), query.b.pieceSlot(tb)});
+}
+
+/// Whether the segment from vertex `from` of `side` to a point beyond the other mesh's box
+/// crosses `other` an odd number of times: `from` lies inside it.
+bool insideByRay(Side& side, Side& other, const Vec3& from) {
+  const Aabb& box = other.box();
+  const double beyond =
+      box.upper.x + std::max({1.0, std::abs(box.upper.x), box.upper.x - box.lower.x});
+  const Vec3 to{beyond, from.y, from.z};
+  Aabb ray;
+  ray.extend(from);
+  ray.extend(to);
+  const bool segmentOfA = side.isA();
+  bool inside = false;
+  trianglesNear(other, ray, [&](std::uint32_t k) {
+    const PlacedTriangle& placed = other.triangle(k);
+    if (!meet(placed.box, ray)) return;
+    const std::array<Vec3, 3>& t = placed.p;
+    int s0, s1;
+    if (segmentOfA) {
+      s0 = sideOfAVertex(placed, from);
+      s1 = sideOfAVertex(placed, to);
+    } else {
+      s0 = sideOfBVertex(placed, from);
+      s1 = sideOfBVertex(placed, to);
+    }
+    if (s0 == 0 || s0 == s1) return;
+    int first = 0;
+    for (std::size_t e = 0; e < 3; ++e) {
+      const Vec3 &p = t[e], &q = t[(e + 1) % 3];
+      const int s =
+          segmentOfA ? detail::edgeSign(from, to, p, q) : detail::edgeSign(p, q, from, to);
+      if (e == 0)
+        first = s;
+      else if (s != first)
+        return;
+    }
+    inside = !inside;
+  });
+  return inside;
+}
+
+/// Which of `side`'s vertices near the other mesh lie inside it, and each triangle's full edge
+/// parts inside it added to its piece. Vertices outside the other's box are outside; the others
+/// follow along the edges (each crossing flips), from those or from one ray test per connected
+/// piece that has none.
+void classify(Side& side, Side& other, const Vec3& reference) {
+  const QueryMeshData& data = side.data();
+  std::vector<std::uint32_t> near;
+  trianglesNear(side, other.box(), [&](std::uint32_t k) {
+    if (meet(side.triangle(k).box, other.box())) near.push_back(k);
+  });
+  if (near.empty()) return;
+  // Edges among the near triangles' vertices, both ways, with the parity along them.
+  struct Link {
+    std::int32_t to;
+    int parity;
+  };
+  const std::size_t count = side.vertexCount();
+  std::vector<std::uint32_t> offsets(count + 1, 0);
+  for (const std::uint32_t k : near)
+    for (std::size_t i = 0; i < 3; ++i) {
+      ++offsets[static_cast<std::size_t>(side.vertex(data.corners[k][i])) + 1];
+      ++offsets[static_cast<std::size_t>(side.vertex(data.corners[k][(i + 1) % 3])) + 1];
+    }
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  std::vector<Link> links(offsets.back());
+  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (const std::uint32_t k : near) {
+    const std::int32_t pieceSlot = side.pieceSlot(k);
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::int32_t from = side.vertex(data.corners[k][i]);
+      const std::int32_t to = side.vertex(data.corners[k][(i + 1) % 3]);
+      const int parity =
+          pieceSlot == kAbsent ? 0 : side.pieces()[static_cast<std::size_t>(pieceSlot)].parity[i];
+      links[fill[static_cast<std::size_t>(from)]++] = {to, parity};
+      links[fill[static_cast<std::size_t>(to)]++] = {from, -parity};
+    }
+  }
+  std::vector<std::int32_t> queue;
+  const auto inconsistent = [&] {
+    throw Error(std::string("overlap: the ") + (side.isA() ? "first" : "second") +
+                " mesh's vertices are inside and outside the other along one edge: a mesh is "
+                "not closed or crosses itself");
+  };
+  const auto spread = [&] {
+    while (!queue.empty()) {
+      const std::int32_t v = queue.back();
+      queue.pop_back();
+      const int inside = side.state(v).inside;
+      const auto slot = static_cast<std::size_t>(v);
+      for (std::uint32_t l = offsets[slot]; l < offsets[slot + 1]; ++l) {
+        const int expected = inside + links[l].parity;
+        if (expected != 0 && expected != 1) inconsistent();
+        std::int8_t& neighbour = side.state(links[l].to).inside;
+        if (neighbour == -1) {
+          neighbour = static_cast<std::int8_t>(expected);
+          queue.push_back(links[l].to);
+        } else if (neighbour != expected) {
+          inconsistent();
+        }
+      }
+    }
+  };
+  const Aabb& otherBox = other.box();
+  for (std::size_t v = 0; v < count; ++v) {
+    VertexState& state = side.state(static_cast<std::int32_t>(v));
+    if (offsets[v] == offsets[v + 1] || state.inside != -1) continue;
+    if (!otherBox.contains(state.world)) {
+      state.inside = 0;
+      queue.push_back(static_cast<std::int32_t>(v));
+    }
+  }
+  spread();
+  for (std::size_t v = 0; v < count; ++v) {
+    VertexState& state = side.state(static_cast<std::int32_t>(v));
+    if (offsets[v] == offsets[v + 1] || state.inside != -1) continue;
+    state.inside = insideByRay(side, other, state.world) ? 1 : 0;
+    queue.push_back(static_cast<std::int32_t>(v));
+    spread();
+  }
+  // The edges' parts from an inside vertex to the next one or to the crossings between.
+  for (const std::uint32_t k : near) {
+    const PlacedTriangle placed = side.triangle(k);
+    for (std::size_t i = 0; i < 3; ++i)
+      if (side.state(placed.slots[i]).inside == 1)
+        side.piece(k).add(placed.p[i], placed.p[(i + 1) % 3], reference);
+  }
+}
+
+/// Union–find over the pieces of both sides (B's after A's).
+class Regions {
+ public:
+  explicit Regions(std::size_t count) : parent_(count) {
+    std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+  }
+  std::size_t find(std::size_t i) noexcept {
+    while (parent_[i] != i)
+      i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  void join(std::size_t i, std::size_t j) noexcept { parent_[find(i)] = find(j); }
+
+ private:
+  std::vector<std::size_t> parent_;
+};
+
+/// Joins the pieces of `side` whose triangles share an edge with a part inside the other mesh.
+void joinAcrossEdges(Side& side, Regions& regions, std::size_t offset) {
+  const detail::Pseudonormals& topology = side.data().pseudonormals();
+  std::vector<Piece>& pieces = side.pieces();
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const Piece& piece = pieces[p];
+    const TriangleIndices& c = side.data().corners[piece.sorted];
+    for (std::size_t i = 0; i < 3; ++i) {
+      const bool insidePart = piece.crossings[i] > 0 || side.state(side.vertex(c[i])).inside == 1 ||
+                              side.state(side.vertex(c[(i + 1) % 3])).inside == 1;
+      if (!insidePart) continue;
+      const std::uint32_t across = topology.across[piece.sorted][i];
+      if (across == detail::Pseudonormals::kNone) continue;
+      const std::int32_t neighbour = side.pieceSlot(across);
+      if (neighbour != kAbsent)
+        regions.join(offset + p, offset + static_cast<std::size_t>(neighbour));
+    }
+  }
+}
+
+void checkMesh(const QueryMesh& mesh, const char* which) {
+  if (!mesh.closed())
+    throw Error(std::string("overlap: the ") + which +
+                " mesh is not closed and consistently oriented (" +
+                describeDefects(mesh.topology()) + "): it bounds no volume");
+  if (mesh.data().orientation < 0.0)
+    throw Error(std::string("overlap: the ") + which +
+                " mesh is inside out (negative volume): reverse its triangles' orientation");
+  const SelfIntersections& crossings = selfIntersections(mesh);
+  if (crossings.any())
+    throw Error(std::string("overlap: the ") + which + " mesh crosses itself (" +
+                std::to_string(crossings.count) + " pairs of triangles, the first " +
+                std::to_string(crossings.pairs.front().first) + " and " +
+                std::to_string(crossings.pairs.front().second) + "): it bounds no volume");
+}
+
+/// The curves through the segments: each segment's end is the next one's start.
+std::vector<IntersectionCurve> chainCurves(const Query& query,
+                                           const std::vector<std::size_t>& regionOfSegment) {
+  std::vector<IntersectionCurve> curves;
+  const std::vector<Segment>& segments = query.segments;
+  std::unordered_map<EndKey, std::size_t, EndKeyHash> startingAt;
+  startingAt.reserve(segments.size());
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    startingAt.emplace(segments[s].startKey, s);
+  std::vector<bool> used(segments.size(), false);
+  const auto& orderA = query.a.data().order;
+  const auto& orderB = query.b.data().order;
+  // Open chains first start where no segment ends; then the closed loops.
+  std::unordered_map<EndKey, std::size_t, EndKeyHash> endingAt;
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    endingAt.emplace(segments[s].endKey, s);
+  std::vector<std::size_t> heads;
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    if (!endingAt.contains(segments[s].startKey)) heads.push_back(s);
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    heads.push_back(s);
+  for (const std::size_t head : heads) {
+    if (used[head] || regionOfSegment[head] == std::numeric_limits<std::size_t>::max()) continue;
+    IntersectionCurve curve;
+    curve.region = regionOfSegment[head];
+    curve.points.push_back(segments[head].start);
+    std::size_t s = head;
+    while (true) {
+      used[s] = true;
+      const Segment& segment = segments[s];
+      curve.points.push_back(segment.end);
+      curve.trianglesA.push_back(orderA[segment.sortedA]);
+      curve.trianglesB.push_back(orderB[segment.sortedB]);
+      curve.length += length(segment.end - segment.start);
+      const auto next = startingAt.find(segment.endKey);
+      if (next == startingAt.end()) {
+        curve.closed = false;
+        break;
+      }
+      if (next->second == head) {
+        curve.points.back() = curve.points.front();
+        break;
+      }
+      if (used[next->second]) {
+        curve.closed = false;
+        break;
+      }
+      s = next->second;
+    }
+    curves.push_back(std::move(curve));
+  }
+  return curves;
+}
+
+}  // namespace
+
+Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
+  checkMesh(first, "first");
+  checkMesh(second, "second");
+  detail::checkPlacedPair(first, second, "overlap");
+  Overlap result;
+  Query query(first, second);
+  Side &a = query.a, &b = query.b;
+  if (!meet(a.box(), b.box())) return result;
+  // The reference point: the middle of the boxes' common part (the integrals' origin, near the
+  // overlap so that they keep their accuracy far from the world's origin).
+  Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
+  query.reference = common.center();
+
+  // Every pair of triangles whose boxes meet: both trees descended together in A's frame.
+  const detail::QueryMeshData &dataA = a.data(), &dataB = b.data();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const bool moved = first.moved() || second.moved();
+  const detail::MovedTree secondTree(dataB.levels, moved ? &motion : nullptr);
+  const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
+  const std::vector<detail::LeafPair> leafPairs =
+      detail::leafPairsWithin(dataA, dataB, secondTree, reach);
+  for (const detail::LeafPair& pair : leafPairs) {
+    const std::size_t fromA = std::size_t{pair.first} * detail::kFanout;
+    const std::size_t toA = std::min(fromA + detail::kFanout, dataA.size());
+    const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
+    const std::size_t toB = std::min(fromB + detail::kFanout, dataB.size());
+    for (std::size_t i = fromA; i < toA; ++i) {
+      const PlacedTriangle& ta = a.triangle(static_cast<std::uint32_t>(i));
+      if (!meet(ta.box, b.box())) continue;
+      for (std::size_t j = fromB; j < toB; ++j) {
+        const PlacedTriangle& tb = b.triangle(static_cast<std::uint32_t>(j));
+        if (!meet(ta.box, tb.box)) continue;
+        crossPair(query, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), ta, tb);
+      }
+    }
+  }
+  classify(a, b, query.reference);
+  classify(b, a, query.reference);
+
+  // Connected regions: pieces joined across the edges with a part inside and by the segments.
+  std::vector<Piece>& piecesA = a.pieces();
+  std::vector<Piece>& piecesB = b.pieces();
+  const std::size_t offsetB = piecesA.size();
+  Regions regions(piecesA.size() + piecesB.size());
+  joinAcrossEdges(a, regions, 0);
+  joinAcrossEdges(b, regions, offsetB);
+  for (const Segment& segment : query.segments)
+    regions.join(static_cast<std::size_t>(segment.pieceA),
+                 offsetB + static_cast<std::size_t>(segment.pieceB));
+
+  struct Sums {
+    double volume = 0.0, volumeScale = 0.0, curveLength = 0.0;
+    Vec3 volumeMoment, area, areaB, areaMoment;
+    std::size_t triangles = 0;
+  };
+  std::unordered_map<std::size_t, Sums> byRoot;
+  for (std::size_t p = 0; p < piecesA.size() + piecesB.size(); ++p) {
+    const bool ofA = p < offsetB;
+    const Piece& piece = ofA ? piecesA[p] : piecesB[p - offsetB];
+    Sums& sums = byRoot[regions.find(p)];
+    sums.volume += piece.volume;
+    sums.volumeScale += piece.volumeScale;
+    sums.volumeMoment += piece.volumeMoment;
+    if (ofA) {
+      sums.area += piece.area;
+      sums.areaMoment += piece.areaMoment;
+    } else {
+      sums.areaB += piece.area;
+    }
+    ++sums.triangles;
+  }
+  for (const Segment& segment : query.segments)
+    byRoot[regions.find(static_cast<std::size_t>(segment.pieceA))].curveLength +=
+        length(segment.end - segment.start);
+
+  // A region whose volume is within the rounding of its terms encloses nothing: surfaces that
+  // touch, or faces that lie on one another (the perturbation puts them a zero distance apart).
+  constexpr double kRoundingFactor = 1024.0 * std::numeric_limits<double>::epsilon();
+  std::vector<std::pair<std::size_t, Sums>> kept;
+  std::vector<Sums> cavities;
+  for (const auto& [root, sums] : byRoot) {
+    if (std::abs(sums.volume) <= kRoundingFactor * sums.volumeScale)
+      ++result.touching;
+    else if (sums.volume < 0.0)
+      cavities.push_back(sums);
+    else
+      kept.emplace_back(root, sums);
+  }
+  std::sort(kept.begin(), kept.end(), [](const auto& x, const auto& y) {
+    return x.second.volume > y.second.volume ||
+           (x.second.volume == y.second.volume && x.first < y.first);
+  });
+  const auto finish = [&](const Sums& sums) {
+    OverlapRegion region;
+    region.volume = sums.volume;
+    const Vec3 offset = sums.volumeMoment * (1.0 / sums.volume);
+    region.centroid = query.reference + offset;
+    region.areaVector = sums.area;
+    region.areaVectorB = sums.areaB;
+    region.moment = sums.areaMoment - cross(offset, sums.area);
+    region.curveLength = sums.curveLength;
+    region.triangles = sums.triangles;
+    return region;
+  };
+  Sums total;
+  std::unordered_map<std::size_t, std::size_t> regionOfRoot;
+  for (const auto& [root, sums] : kept) {
+    regionOfRoot.emplace(root, result.regions.size());
+    result.regions.push_back(finish(sums));
+    total.volume += sums.volume;
+    total.volumeScale += sums.volumeScale;
+    total.volumeMoment += sums.volumeMoment;
+    total.area += sums.area;
+    total.areaB += sums.areaB;
+    total.areaMoment += sums.areaMoment;
+    total.curveLength += sums.curveLength;
+    total.triangles += sums.triangles;
+  }
+  for (const Sums& cavity : cavities) {
+    total.volume += cavity.volume;
+    total.volumeMoment += cavity.volumeMoment;
+    total.area += cavity.area;
+    total.areaB += cavity.areaB;
+    total.areaMoment += cavity.areaMoment;
+    total.curveLength += cavity.curveLength;
+    total.triangles += cavity.triangles;
+  }
+  if (!kept.empty() && total.volume > 0.0) result.total = finish(total);
+
+  result.segments = query.segments.size();
+  if (options.curves && !query.segments.empty()) {
+    std::vector<std::size_t> regionOfSegment(query.segments.size(),
+                                             std::numeric_limits<std::size_t>::max());
+    for (std::size_t s = 0; s < query.segments.size(); ++s) {
+      const auto found =
+          regionOfRoot.find(regions.find(static_cast<std::size_t>(query.segments[s].pieceA)));
+      if (found != regionOfRoot.end()) regionOfSegment[s] = found->second;
+    }
+    result.curves = chainCurves(query, regionOfSegment);
+  }
+  return result;
+}
+
+}  // namespace delta::contactdetection

@@ -1,0 +1,150 @@
+#include "delta/query/overlap.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "delta/core/error.h"
+#include "delta/mesh/mass_properties.h"
+#include "delta/mesh/primitives.h"
+
+namespace delta::contactdetection {
+namespace {
+
+QueryMesh placed(const Mesh& mesh, const RigidTransform& pose = {}) {
+  QueryMesh prepared(mesh);
+  prepared.setPose(pose);
+  return prepared;
+}
+
+Vec3 randomAxis(std::mt19937_64& random) {
+  std::normal_distribution<double> normal;
+  return normalized(Vec3{normal(random), normal(random), normal(random)});
+}
+
+TEST(Overlap, OffsetCubesShareTheBoxOfTheirCommonPart) {
+  const QueryMesh a(primitives::box({1, 1, 1}));
+  const QueryMesh b(primitives::box({1, 1, 1}, {0.5, 0.25, 0.125}));
+  const Overlap o = overlap(a, b);
+  ASSERT_EQ(o.regions.size(), 1u);
+  EXPECT_NEAR(o.total.volume, 0.5 * 0.75 * 0.875, 1e-15);
+  EXPECT_NEAR(length(o.total.centroid - Vec3{0.25, 0.125, 0.0625}), 0.0, 1e-15);
+  EXPECT_EQ(o.curves.size(), 1u);
+  EXPECT_TRUE(o.curves[0].closed);
+  // ∂A inside B pushes B along +x, +y, +z in proportion to the faces of A inside B.
+  EXPECT_NEAR(o.total.areaVector.x, 0.75 * 0.875, 1e-14);
+  EXPECT_NEAR(o.total.areaVector.y, 0.5 * 0.875, 1e-14);
+  EXPECT_NEAR(o.total.areaVector.z, 0.5 * 0.75, 1e-14);
+  EXPECT_NEAR(length(o.total.areaVector + o.total.areaVectorB), 0.0, 1e-14);
+}
+
+TEST(Overlap, ACubeTurnedByFortyFiveDegreesCutsAnOctagonalPrism) {
+  // Coplanar top and bottom faces, edges crossing edges: the symbolic perturbation decides.
+  const QueryMesh a(primitives::box({1, 1, 1}));
+  const QueryMesh b = placed(primitives::box({1, 1, 1}),
+                             {Quaternion::fromAxisAngle({0, 0, 1}, std::numbers::pi / 4), {}});
+  const Overlap o = overlap(a, b);
+  ASSERT_EQ(o.regions.size(), 1u);
+  EXPECT_NEAR(o.total.volume, 2.0 * (std::numbers::sqrt2 - 1.0), 1e-14);
+  EXPECT_NEAR(length(o.total.centroid), 0.0, 1e-14);
+  for (const IntersectionCurve& curve : o.curves)
+    EXPECT_TRUE(curve.closed);
+}
+
+TEST(Overlap, NestedMeshesShareTheSmallerOne) {
+  const Mesh small = primitives::icosphere(2, 0.3, {0.1, 0.05, -0.02});
+  const QueryMesh inner(small), outer(primitives::box({1, 1, 1}));
+  const double expected = signedVolume(small);
+  for (const bool innerFirst : {true, false}) {
+    const Overlap o = innerFirst ? overlap(inner, outer) : overlap(outer, inner);
+    ASSERT_EQ(o.regions.size(), 1u);
+    EXPECT_NEAR(o.total.volume, expected, 1e-15);
+    EXPECT_EQ(o.segments, 0u);
+    EXPECT_TRUE(o.curves.empty());
+    // Wholly inside: the inner surface is closed, its area vector zero.
+    EXPECT_NEAR(length(o.total.areaVector), 0.0, 1e-15);
+  }
+}
+
+TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {
+  const QueryMesh a(primitives::box({1, 1, 1}));
+  for (const Vec3& offset : {Vec3{3, 0, 0}, Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0},
+                             Vec3{0, 0, -1}, Vec3{1, 1, 0}, Vec3{-1, -1, -1}}) {
+    const QueryMesh b(primitives::box({1, 1, 1}, offset));
+    for (const bool swap : {false, true}) {
+      const Overlap o = swap ? overlap(b, a) : overlap(a, b);
+      EXPECT_FALSE(o.any()) << offset.x << " " << offset.y << " " << offset.z;
+      EXPECT_EQ(o.total.volume, 0.0);
+    }
+  }
+}
+
+TEST(Overlap, CoplanarFacesAndTheSameMeshTwice) {
+  const QueryMesh a(primitives::box({1, 1, 1}));
+  const QueryMesh b(primitives::box({1, 1, 1}, {0.5, 0, 0}));
+  EXPECT_NEAR(overlap(a, b).total.volume, 0.5, 1e-15);
+  EXPECT_NEAR(overlap(b, a).total.volume, 0.5, 1e-15);
+  const Overlap same = overlap(a, a);
+  ASSERT_EQ(same.regions.size(), 1u);
+  EXPECT_NEAR(same.total.volume, 1.0, 1e-15);
+  const QueryMesh sphere(primitives::icosphere(3));
+  EXPECT_NEAR(overlap(sphere, sphere).total.volume, signedVolume(sphere.mesh()), 1e-13);
+}
+
+TEST(Overlap, SpheresShareTheirLens) {
+  const double radius = 1.0, distance = 1.2;
+  const Mesh sphere = primitives::icosphere(5, radius);
+  const QueryMesh a(sphere), b = placed(sphere, {Quaternion{}, {distance, 0, 0}});
+  const Overlap o = overlap(a, b);
+  ASSERT_EQ(o.regions.size(), 1u);
+  const double lens = std::numbers::pi * (4 * radius + distance) * (2 * radius - distance) *
+                      (2 * radius - distance) / 12.0;
+  // The inscribed polyhedra lose about as much of the lens as of the sphere.
+  const double shortfall = 1.0 - signedVolume(sphere) / (4.0 / 3.0 * std::numbers::pi);
+  EXPECT_NEAR(o.total.volume / lens, 1.0, 3.0 * shortfall);
+  EXPECT_NEAR(o.total.centroid.x, distance / 2, 1e-12);
+  const double disc = std::numbers::pi * (radius * radius - distance * distance / 4);
+  EXPECT_NEAR(o.total.areaVector.x / disc, 1.0, 3.0 * shortfall);
+  EXPECT_NEAR(std::abs(o.total.areaVector.y) + std::abs(o.total.areaVector.z), 0.0, 1e-12);
+  ASSERT_EQ(o.curves.size(), 1u);
+  EXPECT_NEAR(o.curves[0].length / (2 * std::numbers::pi * std::sqrt(1 - 0.36)), 1.0,
+              3.0 * shortfall);
+}
+
+TEST(Overlap, AnswersDoNotDependOnTheOrderOrTheOffset) {
+  std::mt19937_64 random(7);
+  const Mesh granulate = primitives::granulate(3);
+  const Mesh other = primitives::granulate(11, {1.0, 0.7, 0.5});
+  std::uniform_real_distribution<double> angle(0.0, 6.0), shift(-0.8, 0.8);
+  for (int trial = 0; trial < 40; ++trial) {
+    const RigidTransform poseA{Quaternion::fromAxisAngle(randomAxis(random), angle(random)), {}};
+    const RigidTransform poseB{Quaternion::fromAxisAngle(randomAxis(random), angle(random)),
+                               {shift(random), shift(random), shift(random)}};
+    const Overlap ab = overlap(placed(granulate, poseA), placed(other, poseB));
+    const Overlap ba = overlap(placed(other, poseB), placed(granulate, poseA));
+    EXPECT_NEAR(ab.total.volume, ba.total.volume, 1e-14);
+    EXPECT_EQ(ab.regions.size(), ba.regions.size());
+    EXPECT_NEAR(length(ab.total.areaVector + ab.total.areaVectorB), 0.0, 1e-13);
+    EXPECT_NEAR(length(ab.total.areaVector - ba.total.areaVectorB), 0.0, 1e-13);
+    for (const IntersectionCurve& curve : ab.curves)
+      EXPECT_TRUE(curve.closed);
+    // A million away, the same numbers to the rounding of the far coordinates.
+    const Vec3 far{1e6, -2e6, 3e6};
+    const Overlap moved = overlap(placed(granulate, {poseA.rotation, poseA.translation + far}),
+                                  placed(other, {poseB.rotation, poseB.translation + far}));
+    EXPECT_NEAR(moved.total.volume, ab.total.volume, 1e-9);
+    EXPECT_EQ(moved.regions.size(), ab.regions.size());
+  }
+}
+
+TEST(Overlap, RefusesMeshesThatBoundNoVolume) {
+  const QueryMesh open(primitives::quad());
+  const QueryMesh box(primitives::box());
+  EXPECT_THROW(overlap(open, box), Error);
+  EXPECT_THROW(overlap(box, open), Error);
+}
+
+}  // namespace
+}  // namespace delta::contactdetection
