@@ -141,6 +141,35 @@ inline int sideOfBVertex(const PlacedTriangle& t, const Vec3& s) {
   return sign != 0 ? sign : detail::sideOfBVertex(t.p[0], t.p[1], t.p[2], s);
 }
 
+/// A map from the ids of a mesh's vertices or triangles to the query's slots for them, dense for
+/// O(1) look-ups but kept from one query to the next by the thread (the slots used are reset
+/// when the query ends): a DEM step compares small particles with a large obstacle many times,
+/// and should not pay for the obstacle's size each time.
+class SlotMap {
+ public:
+  /// The map of this thread for side `which` (0 or 1) and kind `kind` (0–2), sized for `count`
+  /// ids. At most one query per thread at a time uses it (queries never nest).
+  static SlotMap& of(std::size_t which, std::size_t kind, std::size_t count) {
+    thread_local SlotMap maps[2][3];
+    SlotMap& map = maps[which][kind];
+    if (map.slots_.size() < count) map.slots_.resize(count, kAbsent);
+    return map;
+  }
+  std::int32_t& operator[](std::size_t id) noexcept { return slots_[id]; }
+  std::int32_t operator[](std::size_t id) const noexcept { return slots_[id]; }
+  /// Marks `id` as given a slot (so that reset() clears it).
+  void used(std::size_t id) { used_.push_back(id); }
+  void reset() noexcept {
+    for (const std::size_t id : used_)
+      slots_[id] = kAbsent;
+    used_.clear();
+  }
+
+ private:
+  std::vector<std::int32_t> slots_;
+  std::vector<std::size_t> used_;
+};
+
 /// One mesh's part of the query: its data, where it is, and what the query has learnt of it.
 /// Sparse: only the vertices and triangles the query reaches get a slot (a DEM step compares a
 /// small particle with a large obstacle many times).
@@ -152,15 +181,22 @@ class Side {
         inverse_(mesh.inversePose()),
         motion_(detail::matrixMotion(mesh.pose())),
         moved_(mesh.moved()),
-        isA_(isA) {
-    vertexSlot_.assign(data_.vertices.size(), kAbsent);
-    pieceSlot_.assign(data_.size(), kAbsent);
-    triangleSlot_.assign(data_.size(), kAbsent);
+        isA_(isA),
+        vertexSlot_(SlotMap::of(isA ? 0 : 1, 0, data_.vertices.size())),
+        pieceSlot_(SlotMap::of(isA ? 0 : 1, 1, data_.size())),
+        triangleSlot_(SlotMap::of(isA ? 0 : 1, 2, data_.size())) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
     const Aabb moved = moved_ ? detail::movedBox(data_.bounds, pose_) : data_.bounds;
     margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
     box_ = moved.grown(margin_ + data_.slack);
   }
+  ~Side() {
+    vertexSlot_.reset();
+    pieceSlot_.reset();
+    triangleSlot_.reset();
+  }
+  Side(const Side&) = delete;
+  Side& operator=(const Side&) = delete;
 
   const QueryMeshData& data() const noexcept { return data_; }
   bool isA() const noexcept { return isA_; }
@@ -168,11 +204,30 @@ class Side {
   double margin() const noexcept { return margin_; }
   const RigidTransform& inversePose() const noexcept { return inverse_; }
 
+  /// A world box carried into this mesh's prepared frame, conservatively.
+  Aabb toPrepared(const Aabb& world) const noexcept {
+    const Aabb box = moved_ ? detail::movedBox(world, inverse_) : world;
+    return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
+  }
+  /// Whether sorted triangle k, where it was prepared, meets `box` (in that frame): a test
+  /// before placing it.
+  bool meets(std::uint32_t k, const Aabb& box) const noexcept {
+    const TriangleIndices& c = data_.corners[k];
+    const Vec3 &p = data_.vertices[c[0]], &q = data_.vertices[c[1]], &r = data_.vertices[c[2]];
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      if (std::max({p[axis], q[axis], r[axis]}) < box.lower[axis] ||
+          std::min({p[axis], q[axis], r[axis]}) > box.upper[axis])
+        return false;
+    }
+    return true;
+  }
+
   /// The slot of vertex `v`, made with its world position on first use (moved as
   /// Mesh::transform moves a vertex).
   std::int32_t vertex(std::uint32_t v) {
     std::int32_t& slot = vertexSlot_[v];
     if (slot == kAbsent) {
+      vertexSlot_.used(v);
       slot = static_cast<std::int32_t>(vertices_.size());
       vertices_.push_back({moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v], -1});
       vertexIds_.push_back(v);
@@ -189,6 +244,7 @@ class Side {
   const PlacedTriangle& triangle(std::uint32_t k) {
     std::int32_t& slot = triangleSlot_[k];
     if (slot == kAbsent) {
+      triangleSlot_.used(k);
       const TriangleIndices& c = data_.corners[k];
       std::array<Vec3, 3> points;
       std::array<std::int32_t, 3> slots;
@@ -206,6 +262,7 @@ class Side {
   Piece& piece(std::uint32_t k) {
     std::int32_t& slot = pieceSlot_[k];
     if (slot == kAbsent) {
+      pieceSlot_.used(k);
       slot = static_cast<std::int32_t>(pieces_.size());
       Piece made;
       made.sorted = k;
@@ -225,7 +282,7 @@ class Side {
   bool isA_;
   Aabb box_;
   double margin_ = 0.0;
-  std::vector<std::int32_t> vertexSlot_, pieceSlot_, triangleSlot_;
+  SlotMap &vertexSlot_, &pieceSlot_, &triangleSlot_;
   std::vector<VertexState> vertices_;
   std::vector<PlacedTriangle> triangles_;
   std::vector<std::uint32_t> vertexIds_;
@@ -244,8 +301,7 @@ bool meet(const Aabb& a, const Aabb& b) noexcept {
 template <class Visit>
 void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
   const QueryMeshData& data = side.data();
-  Aabb box = detail::movedBox(worldBox, side.inversePose());
-  box = box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + side.margin());
+  const Aabb box = side.toPrepared(worldBox);
   struct Entry {
     std::size_t level, index;
   };
@@ -425,8 +481,9 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
 void classify(Side& side, Side& other, const Vec3& reference) {
   const QueryMeshData& data = side.data();
   std::vector<std::uint32_t> near;
+  const Aabb otherInSide = side.toPrepared(other.box());
   trianglesNear(side, other.box(), [&](std::uint32_t k) {
-    if (meet(side.triangle(k).box, other.box())) near.push_back(k);
+    if (side.meets(k, otherInSide) && meet(side.triangle(k).box, other.box())) near.push_back(k);
   });
   if (near.empty()) return;
   // Edges among the near triangles' vertices, both ways, with the parity along them.
@@ -637,15 +694,20 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
   const std::vector<detail::LeafPair> leafPairs =
       detail::leafPairsWithin(dataA, dataB, secondTree, reach);
+  // Each one's box in the other's prepared frame: most triangles of the leaves are rejected
+  // there, before they are placed.
+  const Aabb bInA = a.toPrepared(b.box()), aInB = b.toPrepared(a.box());
   for (const detail::LeafPair& pair : leafPairs) {
     const std::size_t fromA = std::size_t{pair.first} * detail::kFanout;
     const std::size_t toA = std::min(fromA + detail::kFanout, dataA.size());
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
     const std::size_t toB = std::min(fromB + detail::kFanout, dataB.size());
     for (std::size_t i = fromA; i < toA; ++i) {
+      if (!a.meets(static_cast<std::uint32_t>(i), bInA)) continue;
       const PlacedTriangle& ta = a.triangle(static_cast<std::uint32_t>(i));
       if (!meet(ta.box, b.box())) continue;
       for (std::size_t j = fromB; j < toB; ++j) {
+        if (!b.meets(static_cast<std::uint32_t>(j), aInB)) continue;
         const PlacedTriangle& tb = b.triangle(static_cast<std::uint32_t>(j));
         if (!meet(ta.box, tb.box)) continue;
         crossPair(query, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), ta, tb);
