@@ -182,6 +182,7 @@ class Side {
         motion_(detail::matrixMotion(mesh.pose())),
         moved_(mesh.moved()),
         isA_(isA),
+        flip_(mesh.data().orientation < 0.0),
         vertexSlot_(SlotMap::of(isA ? 0 : 1, 0, data_.vertices.size())),
         pieceSlot_(SlotMap::of(isA ? 0 : 1, 1, data_.size())),
         triangleSlot_(SlotMap::of(isA ? 0 : 1, 2, data_.size())) {
@@ -203,6 +204,16 @@ class Side {
   const Aabb& box() const noexcept { return box_; }
   double margin() const noexcept { return margin_; }
   const RigidTransform& inversePose() const noexcept { return inverse_; }
+
+  /// Corner i of sorted triangle k, in the order that makes its normal point out of the solid
+  /// (an inside-out mesh's triangles are read reversed: 0, 2, 1).
+  std::uint32_t corner(std::uint32_t k, std::size_t i) const noexcept {
+    return data_.corners[k][flip_ ? kReversed[i] : i];
+  }
+  /// The sorted triangle across edge i (corner i to corner i + 1) of sorted triangle k.
+  std::uint32_t across(std::uint32_t k, std::size_t i) const {
+    return data_.pseudonormals().across[k][flip_ ? 2 - i : i];
+  }
 
   /// A world box carried into this mesh's prepared frame, conservatively.
   Aabb toPrepared(const Aabb& world) const noexcept {
@@ -245,11 +256,10 @@ class Side {
     std::int32_t& slot = triangleSlot_[k];
     if (slot == kAbsent) {
       triangleSlot_.used(k);
-      const TriangleIndices& c = data_.corners[k];
       std::array<Vec3, 3> points;
       std::array<std::int32_t, 3> slots;
       for (std::size_t i = 0; i < 3; ++i) {
-        slots[i] = vertex(c[i]);
+        slots[i] = vertex(corner(k, i));
         points[i] = vertices_[static_cast<std::size_t>(slots[i])].world;
       }
       slot = static_cast<std::int32_t>(triangles_.size());
@@ -280,6 +290,8 @@ class Side {
   detail::MatrixMotion motion_;
   bool moved_;
   bool isA_;
+  bool flip_;
+  static constexpr std::size_t kReversed[3] = {0, 2, 1};
   Aabb box_;
   double margin_ = 0.0;
   SlotMap &vertexSlot_, &pieceSlot_, &triangleSlot_;
@@ -375,7 +387,6 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
     if (edge[i][j] == 0) edge[i][j] = detail::edgeSign(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
     return edge[i][j];
   };
-  const QueryMeshData &dataA = query.a.data(), &dataB = query.b.data();
   std::array<End, 2> ends;
   std::size_t found = 0;
   const auto addEnd = [&](const End& end) {
@@ -389,7 +400,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       if (sideA[i] == sideA[i1]) continue;
       const int s = edgeSign(i, 0);
       if (edgeSign(i, 1) != s || edgeSign(i, 2) != s) continue;
-      const std::uint32_t v0 = dataA.corners[ta][i], v1 = dataA.corners[ta][i1];
+      const std::uint32_t v0 = query.a.corner(ta, i), v1 = query.a.corner(ta, i1);
       const Vec3 point = v0 < v1 ? crossingPoint(a[i], a[i1], b) : crossingPoint(a[i1], a[i], b);
       addEnd({point, endKey(true, v0, v1, tb), sideA[i] < 0});
       Piece& piece = query.a.piece(ta);
@@ -408,7 +419,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       if (sideB[j] == sideB[j1]) continue;
       const int s = edgeSign(0, j);
       if (edgeSign(1, j) != s || edgeSign(2, j) != s) continue;
-      const std::uint32_t v0 = dataB.corners[tb][j], v1 = dataB.corners[tb][j1];
+      const std::uint32_t v0 = query.b.corner(tb, j), v1 = query.b.corner(tb, j1);
       const Vec3 point = v0 < v1 ? crossingPoint(b[j], b[j1], a) : crossingPoint(b[j1], b[j], a);
       addEnd({point, endKey(false, v0, v1, ta), sideB[j] > 0});
       Piece& piece = query.b.piece(tb);
@@ -479,7 +490,6 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
 /// follow along the edges (each crossing flips), from those or from one ray test per connected
 /// piece that has none.
 void classify(Side& side, Side& other, const Vec3& reference) {
-  const QueryMeshData& data = side.data();
   std::vector<std::uint32_t> near;
   const Aabb otherInSide = side.toPrepared(other.box());
   trianglesNear(side, other.box(), [&](std::uint32_t k) {
@@ -495,8 +505,8 @@ void classify(Side& side, Side& other, const Vec3& reference) {
   std::vector<std::uint32_t> offsets(count + 1, 0);
   for (const std::uint32_t k : near)
     for (std::size_t i = 0; i < 3; ++i) {
-      ++offsets[static_cast<std::size_t>(side.vertex(data.corners[k][i])) + 1];
-      ++offsets[static_cast<std::size_t>(side.vertex(data.corners[k][(i + 1) % 3])) + 1];
+      ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, i))) + 1];
+      ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, (i + 1) % 3))) + 1];
     }
   std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
   std::vector<Link> links(offsets.back());
@@ -504,8 +514,8 @@ void classify(Side& side, Side& other, const Vec3& reference) {
   for (const std::uint32_t k : near) {
     const std::int32_t pieceSlot = side.pieceSlot(k);
     for (std::size_t i = 0; i < 3; ++i) {
-      const std::int32_t from = side.vertex(data.corners[k][i]);
-      const std::int32_t to = side.vertex(data.corners[k][(i + 1) % 3]);
+      const std::int32_t from = side.vertex(side.corner(k, i));
+      const std::int32_t to = side.vertex(side.corner(k, (i + 1) % 3));
       const int parity =
           pieceSlot == kAbsent ? 0 : side.pieces()[static_cast<std::size_t>(pieceSlot)].parity[i];
       links[fill[static_cast<std::size_t>(from)]++] = {to, parity};
@@ -582,16 +592,16 @@ class Regions {
 
 /// Joins the pieces of `side` whose triangles share an edge with a part inside the other mesh.
 void joinAcrossEdges(Side& side, Regions& regions, std::size_t offset) {
-  const detail::Pseudonormals& topology = side.data().pseudonormals();
   std::vector<Piece>& pieces = side.pieces();
   for (std::size_t p = 0; p < pieces.size(); ++p) {
     const Piece& piece = pieces[p];
-    const TriangleIndices& c = side.data().corners[piece.sorted];
     for (std::size_t i = 0; i < 3; ++i) {
-      const bool insidePart = piece.crossings[i] > 0 || side.state(side.vertex(c[i])).inside == 1 ||
-                              side.state(side.vertex(c[(i + 1) % 3])).inside == 1;
+      const bool insidePart =
+          piece.crossings[i] > 0 ||
+          side.state(side.vertex(side.corner(piece.sorted, i))).inside == 1 ||
+          side.state(side.vertex(side.corner(piece.sorted, (i + 1) % 3))).inside == 1;
       if (!insidePart) continue;
-      const std::uint32_t across = topology.across[piece.sorted][i];
+      const std::uint32_t across = side.across(piece.sorted, i);
       if (across == detail::Pseudonormals::kNone) continue;
       const std::int32_t neighbour = side.pieceSlot(across);
       if (neighbour != kAbsent)
@@ -605,9 +615,6 @@ void checkMesh(const QueryMesh& mesh, const char* which) {
     throw Error(std::string("overlap: the ") + which +
                 " mesh is not closed and consistently oriented (" +
                 describeDefects(mesh.topology()) + "): it bounds no volume");
-  if (mesh.data().orientation < 0.0)
-    throw Error(std::string("overlap: the ") + which +
-                " mesh is inside out (negative volume): reverse its triangles' orientation");
   const SelfIntersections& crossings = selfIntersections(mesh);
   if (crossings.any())
     throw Error(std::string("overlap: the ") + which + " mesh crosses itself (" +

@@ -139,6 +139,25 @@ TEST(Overlap, AnswersDoNotDependOnTheOrderOrTheOffset) {
   }
 }
 
+TEST(Overlap, AnInsideOutMeshBoundsTheSameSolid) {
+  Mesh reversed = primitives::icosphere(2);
+  std::vector<TriangleIndices> flipped(reversed.triangles().begin(), reversed.triangles().end());
+  for (TriangleIndices& t : flipped)
+    std::swap(t[1], t[2]);
+  const Mesh inverted(std::vector<Vec3>(reversed.vertices().begin(), reversed.vertices().end()),
+                      flipped);
+  const QueryMesh normal(reversed), insideOut(inverted);
+  const QueryMesh box = placed(primitives::box({1, 1, 1}), {Quaternion{}, {0.6, 0.2, 0.1}});
+  const Overlap expected = overlap(normal, box);
+  for (const bool first : {true, false}) {
+    const Overlap o = first ? overlap(insideOut, box) : overlap(box, insideOut);
+    EXPECT_NEAR(o.total.volume, expected.total.volume, 1e-14);
+    EXPECT_EQ(o.regions.size(), expected.regions.size());
+  }
+  EXPECT_NEAR(length(overlap(insideOut, box).total.areaVector - expected.total.areaVector), 0.0,
+              1e-14);
+}
+
 TEST(Overlap, RefusesMeshesThatBoundNoVolume) {
   const QueryMesh open(primitives::quad());
   const QueryMesh box(primitives::box());

@@ -98,10 +98,15 @@ struct OverlapOptions {
 /// propagated along the edges from those outside the other mesh's box (each crossing flips it);
 /// a connected piece with none (a mesh wholly inside the other's box) takes one exact ray test.
 ///
-/// Throws delta::Error where a mesh is not closed and consistently oriented (naming its
-/// defects), crosses itself (selfIntersections), or lies outside the coordinate range.
+/// An inside-out mesh (negative signed volume) bounds the same solid as its reversal: its
+/// triangles are read reversed. Throws delta::Error where a mesh is not closed and consistently
+/// oriented (naming its defects), crosses itself (selfIntersections), or lies outside the
+/// coordinate range.
 ///
-/// Threading: reads both meshes only; any number of threads may call it at once. Serial.
+/// Threading: reads both meshes only; any number of threads may call it at once. Serial. Each
+/// thread keeps slot maps as large as the largest meshes it has compared (three 4-byte entries
+/// per vertex or triangle, per side), so that a query costs in proportion to the triangles near
+/// the overlap, not to the meshes' sizes.
 Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options = {});
 
 }  // namespace delta::contactdetection
