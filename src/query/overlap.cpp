@@ -48,45 +48,69 @@ EndKey endKey(bool ofA, std::uint32_t v0, std::uint32_t v1, std::uint32_t triang
   return {(std::uint64_t{low} << 32) | high, (std::uint64_t{ofA} << 32) | triangle};
 }
 
+/// Where a triangle of A crosses one of B, oriented along n_A × n_B (relative to the reference
+/// point), and the faces (Face) it bounds on each.
 struct Segment {
   Vec3 start, end;
   EndKey startKey, endKey;
   std::uint32_t sortedA = 0, sortedB = 0;
   std::int32_t pieceA = kAbsent, pieceB = kAbsent;
+  std::size_t faceA = 0, faceB = 0;
 };
 
-/// The part of one triangle inside the other mesh, as integrals over its boundary chain: each
-/// oriented piece (p → q) of that boundary adds the fan triangle (o, p, q) from the triangle's
-/// first vertex o (Green's theorem: the sums depend on the chain only, not on o). With c the
-/// query's reference point and a = ½(p − o) × (q − o):
-///   area += a;  areaMoment += (g − c) × a, g = (o + p + q)/3;
-///   volume += (o − c)·a / 3  (the tetrahedron (c, o, p, q));  volumeMoment += that·(o+p+q−3c)/4.
-struct Piece {
-  std::uint32_t sorted = 0;
-  Vec3 origin;
+/// Integrals over a part of the boundary of A ∩ B, from its boundary chain: each oriented piece
+/// (p → q) of the chain of a planar face adds the fan triangle (o, p, q) from a point o of the
+/// face's plane (Green's theorem: the sums depend on the chain only, not on o). In coordinates
+/// relative to the query's reference point c (so that they keep their accuracy far from the
+/// world's origin), with a = ½(p − o) × (q − o):
+///   area += a;  areaMoment += g × a, g = (o + p + q)/3;
+///   volume += o·a / 3  (the tetrahedron (c, o, p, q));  volumeMoment += that·(o + p + q)/4.
+struct Integrals {
   Vec3 area, areaMoment, volumeMoment;
   double volume = 0.0;
-  double volumeScale = 0.0;        ///< Σ |volume terms|: the scale of the volume's rounding
-  std::array<int, 3> parity{};     ///< per edge (vertex i → i + 1): Σ σ of its crossings
-  std::array<int, 3> crossings{};  ///< per edge: the number of its crossings
+  double volumeScale = 0.0;  ///< Σ |volume terms|: the scale of the volume's rounding
 
-  void add(const Vec3& p, const Vec3& q, const Vec3& reference) noexcept {
+  void add(const Vec3& origin, const Vec3& p, const Vec3& q) noexcept {
     const Vec3 u = p - origin, v = q - origin;
     const Vec3 a = cross(u, v) * 0.5;
-    const Vec3 fromReference = origin - reference;
-    const Vec3 g = fromReference + (u + v) * (1.0 / 3.0);
+    const Vec3 g = origin + (u + v) * (1.0 / 3.0);
     area += a;
     areaMoment += cross(g, a);
-    const double tetrahedron = dot(fromReference, a) * (1.0 / 3.0);
+    const double tetrahedron = dot(origin, a) * (1.0 / 3.0);
     volume += tetrahedron;
     volumeScale += std::abs(tetrahedron);
-    volumeMoment += (fromReference * 3.0 + u + v) * (tetrahedron * 0.25);
+    volumeMoment += (origin * 3.0 + u + v) * (tetrahedron * 0.25);
   }
+  void add(const Integrals& other) noexcept {
+    area += other.area;
+    areaMoment += other.areaMoment;
+    volumeMoment += other.volumeMoment;
+    volume += other.volume;
+    volumeScale += other.volumeScale;
+  }
+};
+
+/// What the query learns of one triangle that crosses the other mesh or has a vertex inside it.
+struct Piece {
+  std::uint32_t sorted = 0;
+  std::array<int, 3> parity{};  ///< per edge (corner i → i + 1): Σ σ of its crossings
+};
+
+/// Where an edge of a triangle crosses the other mesh: at `lambda` along it (from corner i to
+/// i + 1), entering the other mesh (σ = +1) or leaving it (−1).
+struct EdgeCrossing {
+  std::int32_t piece = kAbsent;
+  std::uint8_t edge = 0;
+  std::int8_t sigma = 0;
+  double lambda = 0.0;
+  EndKey key;
+  Vec3 point;  ///< relative to the reference point
 };
 
 /// Per vertex of a side that the query reaches.
 struct VertexState {
   Vec3 world;
+  Vec3 local;               ///< world − the query's reference point
   std::int8_t inside = -1;  ///< −1 unknown, 0 outside the other mesh, 1 inside
 };
 
@@ -96,6 +120,7 @@ struct VertexState {
 struct PlacedTriangle {
   std::array<Vec3, 3> p;
   std::array<std::int32_t, 3> slots;
+  std::array<Vec3, 3> local;  ///< p less the query's reference point
   Aabb box;
   Vec3 minors;     ///< (p1 − p0) × (p2 − p0), rounded
   Vec3 permanent;  ///< per component, the sum of the absolute products of its minor
@@ -103,7 +128,7 @@ struct PlacedTriangle {
 
 PlacedTriangle placedTriangle(const std::array<Vec3, 3>& p,
                               const std::array<std::int32_t, 3>& slots) noexcept {
-  PlacedTriangle t{p, slots, {}, {}, {}};
+  PlacedTriangle t{p, slots, {}, {}, {}, {}};
   for (const Vec3& corner : p)
     t.box.extend(corner);
   const Vec3 u = p[1] - p[0], v = p[2] - p[0];
@@ -204,6 +229,8 @@ class Side {
   const Aabb& box() const noexcept { return box_; }
   double margin() const noexcept { return margin_; }
   const RigidTransform& inversePose() const noexcept { return inverse_; }
+  /// The point that the numbers are relative to; set before any vertex is placed.
+  void setReference(const Vec3& reference) noexcept { reference_ = reference; }
 
   /// Corner i of sorted triangle k, in the order that makes its normal point out of the solid
   /// (an inside-out mesh's triangles are read reversed: 0, 2, 1).
@@ -240,7 +267,8 @@ class Side {
     if (slot == kAbsent) {
       vertexSlot_.used(v);
       slot = static_cast<std::int32_t>(vertices_.size());
-      vertices_.push_back({moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v], -1});
+      const Vec3 world = moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v];
+      vertices_.push_back({world, world - reference_, -1});
       vertexIds_.push_back(v);
     }
     return slot;
@@ -264,6 +292,8 @@ class Side {
       }
       slot = static_cast<std::int32_t>(triangles_.size());
       triangles_.push_back(placedTriangle(points, slots));
+      for (std::size_t i = 0; i < 3; ++i)
+        triangles_.back().local[i] = vertices_[static_cast<std::size_t>(slots[i])].local;
     }
     return triangles_[static_cast<std::size_t>(slot)];
   }
@@ -276,13 +306,13 @@ class Side {
       slot = static_cast<std::int32_t>(pieces_.size());
       Piece made;
       made.sorted = k;
-      made.origin = triangle(k).p[0];
       pieces_.push_back(made);
     }
     return pieces_[static_cast<std::size_t>(slot)];
   }
   std::int32_t pieceSlot(std::uint32_t k) const noexcept { return pieceSlot_[k]; }
   std::vector<Piece>& pieces() noexcept { return pieces_; }
+  std::vector<EdgeCrossing>& crossings() noexcept { return crossings_; }
 
  private:
   const QueryMeshData& data_;
@@ -294,11 +324,13 @@ class Side {
   static constexpr std::size_t kReversed[3] = {0, 2, 1};
   Aabb box_;
   double margin_ = 0.0;
+  Vec3 reference_;
   SlotMap &vertexSlot_, &pieceSlot_, &triangleSlot_;
   std::vector<VertexState> vertices_;
   std::vector<PlacedTriangle> triangles_;
   std::vector<std::uint32_t> vertexIds_;
   std::vector<Piece> pieces_;
+  std::vector<EdgeCrossing> crossings_;
 };
 
 /// Closed boxes that share a point.
@@ -336,16 +368,17 @@ void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
   }
 }
 
-/// Where the edge from vertex slot `from` to `to` of `side` (world points p0, p1, given in the
-/// order of their vertex ids so that both triangles of the edge compute the same point) crosses
-/// the plane of triangle t.
-Vec3 crossingPoint(const Vec3& p0, const Vec3& p1, const std::array<Vec3, 3>& t) noexcept {
+/// Where the segment p0 → p1 (an edge, given in the order of its vertex ids so that both
+/// triangles of the edge compute the same point) crosses the plane of triangle t, and at which
+/// fraction of the way. Local coordinates: the rounding is that of the numbers near the overlap.
+std::pair<Vec3, double> crossingPoint(const Vec3& p0, const Vec3& p1,
+                                      const std::array<Vec3, 3>& t) noexcept {
   const Vec3 normal = kernels::detail::accurateNormal(t[0], t[1], t[2]);
   const double d0 = dot(p0 - t[0], normal), d1 = dot(p1 - t[0], normal);
   double lambda = 0.5;
   if (d0 != d1) lambda = std::clamp(d0 / (d0 - d1), 0.0, 1.0);
   if (!std::isfinite(lambda)) lambda = 0.5;
-  return lambda == 1.0 ? p1 : p0 + (p1 - p0) * lambda;
+  return {lambda == 1.0 ? p1 : p0 + (p1 - p0) * lambda, lambda};
 }
 
 /// The query's state: both sides, the reference point, the segments found.
@@ -369,6 +402,7 @@ struct End {
 void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTriangle& placedA,
                const PlacedTriangle& placedB) {
   const std::array<Vec3, 3>&a = placedA.p, &b = placedB.p;
+  const std::array<Vec3, 3>&la = placedA.local, &lb = placedB.local;
   // Sides of each one's vertices against the other's plane (B perturbed: never 0 unless the
   // plane's triangle has zero area).
   int sideA[3], sideB[3];
@@ -401,16 +435,16 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       const int s = edgeSign(i, 0);
       if (edgeSign(i, 1) != s || edgeSign(i, 2) != s) continue;
       const std::uint32_t v0 = query.a.corner(ta, i), v1 = query.a.corner(ta, i1);
-      const Vec3 point = v0 < v1 ? crossingPoint(a[i], a[i1], b) : crossingPoint(a[i1], a[i], b);
-      addEnd({point, endKey(true, v0, v1, tb), sideA[i] < 0});
+      const auto [point, lambda] =
+          v0 < v1 ? crossingPoint(la[i], la[i1], lb) : crossingPoint(la[i1], la[i], lb);
+      const EndKey key = endKey(true, v0, v1, tb);
+      addEnd({point, key, sideA[i] < 0});
       Piece& piece = query.a.piece(ta);
       const int sigma = sideA[i] > 0 ? 1 : -1;  // entering B: from above its face to below
       piece.parity[i] += sigma;
-      ++piece.crossings[i];
-      if (sigma > 0)
-        piece.add(point, a[i1], query.reference);
-      else
-        piece.add(a[i1], point, query.reference);
+      query.a.crossings().push_back({query.a.pieceSlot(ta), static_cast<std::uint8_t>(i),
+                                     static_cast<std::int8_t>(sigma),
+                                     v0 < v1 ? lambda : 1.0 - lambda, key, point});
     }
   // B's edges through A's triangle.
   if (!flatA)
@@ -420,16 +454,16 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       const int s = edgeSign(0, j);
       if (edgeSign(1, j) != s || edgeSign(2, j) != s) continue;
       const std::uint32_t v0 = query.b.corner(tb, j), v1 = query.b.corner(tb, j1);
-      const Vec3 point = v0 < v1 ? crossingPoint(b[j], b[j1], a) : crossingPoint(b[j1], b[j], a);
-      addEnd({point, endKey(false, v0, v1, ta), sideB[j] > 0});
+      const auto [point, lambda] =
+          v0 < v1 ? crossingPoint(lb[j], lb[j1], la) : crossingPoint(lb[j1], lb[j], la);
+      const EndKey key = endKey(false, v0, v1, ta);
+      addEnd({point, key, sideB[j] > 0});
       Piece& piece = query.b.piece(tb);
       const int sigma = sideB[j] > 0 ? 1 : -1;  // entering A
       piece.parity[j] += sigma;
-      ++piece.crossings[j];
-      if (sigma > 0)
-        piece.add(point, b[j1], query.reference);
-      else
-        piece.add(b[j1], point, query.reference);
+      query.b.crossings().push_back({query.b.pieceSlot(tb), static_cast<std::uint8_t>(j),
+                                     static_cast<std::int8_t>(sigma),
+                                     v0 < v1 ? lambda : 1.0 - lambda, key, point});
     }
   if (found == 0) return;
   if (found != 2 || ends[0].start == ends[1].start)
@@ -437,12 +471,10 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
   const End& start = ends[0].start ? ends[0] : ends[1];
   const End& end = ends[0].start ? ends[1] : ends[0];
   // On A's triangle the part inside B lies left of start → end; on B's, right of it.
-  Piece& pieceA = query.a.piece(ta);
-  pieceA.add(start.point, end.point, query.reference);
-  Piece& pieceB = query.b.piece(tb);
-  pieceB.add(end.point, start.point, query.reference);
+  query.a.piece(ta);
+  query.b.piece(tb);
   query.segments.push_back({start.point, end.point, start.key, end.key, ta, tb,
-                            query.a.pieceSlot(ta), query.b.pieceSlot(tb)});
+                            query.a.pieceSlot(ta), query.b.pieceSlot(tb), 0, 0});
 }
 
 /// Whether the segment from vertex `from` of `side` to a point beyond the other mesh's box
@@ -489,7 +521,7 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
 /// parts inside it added to its piece. Vertices outside the other's box are outside; the others
 /// follow along the edges (each crossing flips), from those or from one ray test per connected
 /// piece that has none.
-void classify(Side& side, Side& other, const Vec3& reference) {
+void classify(Side& side, Side& other) {
   std::vector<std::uint32_t> near;
   const Aabb otherInSide = side.toPrepared(other.box());
   trianglesNear(side, other.box(), [&](std::uint32_t k) {
@@ -564,19 +596,60 @@ void classify(Side& side, Side& other, const Vec3& reference) {
     queue.push_back(static_cast<std::int32_t>(v));
     spread();
   }
-  // The edges' parts from an inside vertex to the next one or to the crossings between.
+  // Every triangle with a corner inside has a part inside.
   for (const std::uint32_t k : near) {
-    const PlacedTriangle placed = side.triangle(k);
-    for (std::size_t i = 0; i < 3; ++i)
-      if (side.state(placed.slots[i]).inside == 1)
-        side.piece(k).add(placed.p[i], placed.p[(i + 1) % 3], reference);
+    const std::array<std::int32_t, 3> slots = side.triangle(k).slots;
+    if (side.state(slots[0]).inside == 1 || side.state(slots[1]).inside == 1 ||
+        side.state(slots[2]).inside == 1)
+      side.piece(k);
   }
 }
 
-/// Union–find over the pieces of both sides (B's after A's).
-class Regions {
+/// A connected part of one triangle's part inside the other mesh (a triangle crossed by two
+/// separate regions has two), with the integrals over it.
+struct Face {
+  Integrals integrals;
+  bool ofA = true;
+};
+
+/// A corner of a triangle as a node of its boundary chain (crossings are nodes by their EndKey).
+EndKey vertexKey(std::uint32_t vertex) noexcept {
+  return {vertex, std::uint64_t{2} << 32};
+}
+
+/// An interval of an edge inside the other mesh, by its end nodes (smaller key first): the two
+/// triangles of the edge both see it, which joins their faces.
+struct IntervalKey {
+  EndKey first, second;
+  bool operator==(const IntervalKey&) const noexcept = default;
+};
+
+struct IntervalKeyHash {
+  std::size_t operator()(const IntervalKey& key) const noexcept {
+    const EndKeyHash hash;
+    return hash(key.first) * 31 + hash(key.second);
+  }
+};
+
+IntervalKey intervalKey(const EndKey& a, const EndKey& b) noexcept {
+  const bool less = a.edge < b.edge || (a.edge == b.edge && a.triangle < b.triangle);
+  return less ? IntervalKey{a, b} : IntervalKey{b, a};
+}
+
+constexpr std::size_t kNoSegment = std::numeric_limits<std::size_t>::max();
+
+/// One oriented piece of a triangle's boundary chain, between two of its nodes.
+struct Element {
+  std::size_t from = 0, to = 0;  ///< nodes
+  Vec3 p, q;
+  std::size_t segment = kNoSegment;  ///< the Segment, or kNoSegment for a part of an edge
+};
+
+/// Union–find over small index sets.
+class UnionFind {
  public:
-  explicit Regions(std::size_t count) : parent_(count) {
+  void reset(std::size_t count) {
+    parent_.resize(count);
     std::iota(parent_.begin(), parent_.end(), std::size_t{0});
   }
   std::size_t find(std::size_t i) noexcept {
@@ -590,22 +663,202 @@ class Regions {
   std::vector<std::size_t> parent_;
 };
 
-/// Joins the pieces of `side` whose triangles share an edge with a part inside the other mesh.
-void joinAcrossEdges(Side& side, Regions& regions, std::size_t offset) {
-  std::vector<Piece>& pieces = side.pieces();
-  for (std::size_t p = 0; p < pieces.size(); ++p) {
-    const Piece& piece = pieces[p];
+/// Whether the point `point` lies inside the closed chain of `elements` (those of face `face`
+/// under `faceOf`), in the plane whose normal's largest component is `axis`: the parity of the
+/// chain's crossings with a ray along the first other axis.
+bool chainContains(const std::vector<Element>& elements, const std::vector<std::size_t>& faceOf,
+                   std::size_t face, const Vec3& point, std::size_t axis) {
+  const std::size_t u = (axis + 1) % 3, v = (axis + 2) % 3;
+  bool inside = false;
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (faceOf[e] != face) continue;
+    const Vec3 &p = elements[e].p, &q = elements[e].q;
+    if ((p[v] > point[v]) == (q[v] > point[v])) continue;
+    const double at = p[u] + (q[u] - p[u]) * ((point[v] - p[v]) / (q[v] - p[v]));
+    if (at > point[u]) inside = !inside;
+  }
+  return inside;
+}
+
+/// The faces of `side`'s triangles: each triangle's boundary chain inside the other mesh (its
+/// segments, and its edges' parts between the corners inside and the crossings, in order along
+/// each edge), split into connected cycles; a cycle that runs clockwise inside the triangle (a
+/// hole) joins the face around it. Appends them to `faces`, sets the segments' faces, and adds to
+/// `joins` the pairs of faces that share a part of an edge.
+void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
+                std::vector<std::pair<std::size_t, std::size_t>>& joins) {
+  const bool ofA = side.isA();
+  const std::vector<Piece>& pieces = side.pieces();
+  const std::vector<EdgeCrossing>& crossings = side.crossings();
+  const std::size_t count = pieces.size();
+  // Crossings and segments grouped by piece.
+  std::vector<std::uint32_t> crossingStart(count + 1, 0), segmentStart(count + 1, 0);
+  for (const EdgeCrossing& c : crossings)
+    ++crossingStart[static_cast<std::size_t>(c.piece) + 1];
+  const auto pieceOf = [&](const Segment& segment) {
+    return static_cast<std::size_t>(ofA ? segment.pieceA : segment.pieceB);
+  };
+  for (const Segment& segment : query.segments)
+    ++segmentStart[pieceOf(segment) + 1];
+  std::partial_sum(crossingStart.begin(), crossingStart.end(), crossingStart.begin());
+  std::partial_sum(segmentStart.begin(), segmentStart.end(), segmentStart.begin());
+  std::vector<std::uint32_t> crossingOrder(crossings.size()), segmentOrder(query.segments.size());
+  {
+    std::vector<std::uint32_t> fill(crossingStart.begin(), crossingStart.end() - 1);
+    for (std::size_t c = 0; c < crossings.size(); ++c)
+      crossingOrder[fill[static_cast<std::size_t>(crossings[c].piece)]++] =
+          static_cast<std::uint32_t>(c);
+    fill.assign(segmentStart.begin(), segmentStart.end() - 1);
+    for (std::size_t s = 0; s < query.segments.size(); ++s)
+      segmentOrder[fill[pieceOf(query.segments[s])]++] = static_cast<std::uint32_t>(s);
+  }
+
+  std::unordered_map<IntervalKey, std::size_t, IntervalKeyHash> intervalFace;
+  std::vector<EndKey> nodes;
+  std::vector<Element> elements;
+  std::vector<const EdgeCrossing*> along;
+  std::vector<std::size_t> faceOfRoot, faceOf;
+  std::vector<Face> local;
+  std::vector<bool> touchesEdge;
+  UnionFind cycles;
+  const auto inconsistent = [] {
+    throw Error("overlap: a triangle's crossings along an edge do not alternate (internal error)");
+  };
+  for (std::size_t p = 0; p < count; ++p) {
+    const std::uint32_t sorted = pieces[p].sorted;
+    const PlacedTriangle t = side.triangle(sorted);
+    nodes.clear();
+    elements.clear();
+    const auto node = [&](const EndKey& key) {
+      for (std::size_t n = 0; n < nodes.size(); ++n)
+        if (nodes[n] == key) return n;
+      nodes.push_back(key);
+      return nodes.size() - 1;
+    };
+    for (std::uint32_t k = segmentStart[p]; k < segmentStart[p + 1]; ++k) {
+      const Segment& segment = query.segments[segmentOrder[k]];
+      if (ofA)
+        elements.push_back({node(segment.startKey), node(segment.endKey), segment.start,
+                            segment.end, segmentOrder[k]});
+      else
+        elements.push_back({node(segment.endKey), node(segment.startKey), segment.end,
+                            segment.start, segmentOrder[k]});
+    }
     for (std::size_t i = 0; i < 3; ++i) {
-      const bool insidePart =
-          piece.crossings[i] > 0 ||
-          side.state(side.vertex(side.corner(piece.sorted, i))).inside == 1 ||
-          side.state(side.vertex(side.corner(piece.sorted, (i + 1) % 3))).inside == 1;
-      if (!insidePart) continue;
-      const std::uint32_t across = side.across(piece.sorted, i);
-      if (across == detail::Pseudonormals::kNone) continue;
-      const std::int32_t neighbour = side.pieceSlot(across);
-      if (neighbour != kAbsent)
-        regions.join(offset + p, offset + static_cast<std::size_t>(neighbour));
+      const std::size_t i1 = (i + 1) % 3;
+      along.clear();
+      for (std::uint32_t k = crossingStart[p]; k < crossingStart[p + 1]; ++k)
+        if (crossings[crossingOrder[k]].edge == i) along.push_back(&crossings[crossingOrder[k]]);
+      std::sort(along.begin(), along.end(),
+                [](const EdgeCrossing* x, const EdgeCrossing* y) { return x->lambda < y->lambda; });
+      int inside = side.state(t.slots[i]).inside;
+      // Crossings closer than their rounding may come out of order: within such a cluster, take
+      // the one that keeps inside/outside alternating.
+      for (std::size_t k = 0; k < along.size(); ++k) {
+        if (inside + along[k]->sigma == 0 || inside + along[k]->sigma == 1) {
+          inside += along[k]->sigma;
+          continue;
+        }
+        std::size_t swap = k + 1;
+        while (swap < along.size() && along[swap]->lambda - along[k]->lambda < 0x1p-30 &&
+               along[swap]->sigma == along[k]->sigma)
+          ++swap;
+        if (swap == along.size() || along[swap]->lambda - along[k]->lambda >= 0x1p-30)
+          inconsistent();
+        std::rotate(along.begin() + static_cast<std::ptrdiff_t>(k),
+                    along.begin() + static_cast<std::ptrdiff_t>(swap),
+                    along.begin() + static_cast<std::ptrdiff_t>(swap) + 1);
+        inside += along[k]->sigma;
+      }
+      inside = side.state(t.slots[i]).inside;
+      EndKey previous = vertexKey(side.corner(sorted, i));
+      Vec3 previousPoint = t.local[i];
+      for (const EdgeCrossing* c : along) {
+        if (inside == 1)
+          elements.push_back({node(previous), node(c->key), previousPoint, c->point, kNoSegment});
+        inside += c->sigma;
+        previous = c->key;
+        previousPoint = c->point;
+      }
+      if (inside != side.state(t.slots[i1]).inside) inconsistent();
+      if (inside == 1)
+        elements.push_back({node(previous), node(vertexKey(side.corner(sorted, i1))), previousPoint,
+                            t.local[i1], kNoSegment});
+    }
+    // The cycles, and a face per cycle.
+    cycles.reset(nodes.size());
+    for (const Element& e : elements)
+      cycles.join(e.from, e.to);
+    faceOfRoot.assign(nodes.size(), kNoSegment);
+    faceOf.resize(elements.size());
+    local.clear();
+    touchesEdge.clear();
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      const std::size_t root = cycles.find(elements[e].from);
+      if (faceOfRoot[root] == kNoSegment) {
+        faceOfRoot[root] = local.size();
+        local.push_back({{}, ofA});
+        touchesEdge.push_back(false);
+      }
+      faceOf[e] = faceOfRoot[root];
+      local[faceOf[e]].integrals.add(t.local[0], elements[e].p, elements[e].q);
+      if (elements[e].segment == kNoSegment) touchesEdge[faceOf[e]] = true;
+    }
+    // Holes (cycles inside the triangle that run clockwise) join the face around them.
+    if (local.size() > 1) {
+      const Vec3 normal = cross(t.local[1] - t.local[0], t.local[2] - t.local[0]);
+      std::size_t axis = 0;
+      for (std::size_t k = 1; k < 3; ++k)
+        if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
+      std::vector<std::size_t> target(local.size());
+      std::iota(target.begin(), target.end(), std::size_t{0});
+      for (std::size_t h = 0; h < local.size(); ++h) {
+        if (touchesEdge[h] || !(dot(local[h].integrals.area, normal) < 0.0)) continue;
+        Vec3 point;
+        for (std::size_t e = 0; e < elements.size(); ++e)
+          if (faceOf[e] == h) {
+            point = elements[e].p;
+            break;
+          }
+        std::size_t best = kNoSegment;
+        double bestArea = std::numeric_limits<double>::infinity();
+        for (std::size_t f = 0; f < local.size(); ++f) {
+          const double area = dot(local[f].integrals.area, normal);
+          if (f == h || !(area > 0.0) || !(area < bestArea)) continue;
+          if (!chainContains(elements, faceOf, f, point, axis)) continue;
+          best = f;
+          bestArea = area;
+        }
+        if (best != kNoSegment) target[h] = best;
+      }
+      for (std::size_t h = 0; h < local.size(); ++h)
+        if (target[h] != h) local[target[h]].integrals.add(local[h].integrals);
+      for (std::size_t& f : faceOf)
+        f = target[f];
+    }
+    // Into the query's faces; the segments learn theirs, the edge parts join their twins.
+    const std::size_t base = faces.size();
+    std::vector<std::size_t> global(local.size(), kNoSegment);
+    for (std::size_t f = 0; f < local.size(); ++f) {
+      bool used = false;
+      for (const std::size_t g : faceOf)
+        used |= g == f;
+      if (!used) continue;
+      global[f] = faces.size();
+      faces.push_back(local[f]);
+    }
+    (void)base;
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      const std::size_t face = global[faceOf[e]];
+      const Element& element = elements[e];
+      if (element.segment != kNoSegment) {
+        Segment& segment = query.segments[element.segment];
+        (ofA ? segment.faceA : segment.faceB) = face;
+        continue;
+      }
+      const auto [slot, made] =
+          intervalFace.emplace(intervalKey(nodes[element.from], nodes[element.to]), face);
+      if (!made) joins.emplace_back(slot->second, face);
     }
   }
 }
@@ -648,12 +901,12 @@ std::vector<IntersectionCurve> chainCurves(const Query& query,
     if (used[head] || regionOfSegment[head] == std::numeric_limits<std::size_t>::max()) continue;
     IntersectionCurve curve;
     curve.region = regionOfSegment[head];
-    curve.points.push_back(segments[head].start);
+    curve.points.push_back(query.reference + segments[head].start);
     std::size_t s = head;
     while (true) {
       used[s] = true;
       const Segment& segment = segments[s];
-      curve.points.push_back(segment.end);
+      curve.points.push_back(query.reference + segment.end);
       curve.trianglesA.push_back(orderA[segment.sortedA]);
       curve.trianglesB.push_back(orderB[segment.sortedB]);
       curve.length += length(segment.end - segment.start);
@@ -691,6 +944,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   // overlap so that they keep their accuracy far from the world's origin).
   Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
   query.reference = common.center();
+  a.setReference(query.reference);
+  b.setReference(query.reference);
 
   // Every pair of triangles whose boxes meet: both trees descended together in A's frame.
   const detail::QueryMeshData &dataA = a.data(), &dataB = b.data();
@@ -721,44 +976,44 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
       }
     }
   }
-  classify(a, b, query.reference);
-  classify(b, a, query.reference);
+  classify(a, b);
+  classify(b, a);
 
-  // Connected regions: pieces joined across the edges with a part inside and by the segments.
-  std::vector<Piece>& piecesA = a.pieces();
-  std::vector<Piece>& piecesB = b.pieces();
-  const std::size_t offsetB = piecesA.size();
-  Regions regions(piecesA.size() + piecesB.size());
-  joinAcrossEdges(a, regions, 0);
-  joinAcrossEdges(b, regions, offsetB);
+  // The faces of both, and the regions: faces joined across edges and along segments.
+  std::vector<Face> faces;
+  std::vector<std::pair<std::size_t, std::size_t>> joins;
+  buildFaces(a, query, faces, joins);
+  buildFaces(b, query, faces, joins);
+  UnionFind regions;
+  regions.reset(faces.size());
+  for (const auto& [x, y] : joins)
+    regions.join(x, y);
   for (const Segment& segment : query.segments)
-    regions.join(static_cast<std::size_t>(segment.pieceA),
-                 offsetB + static_cast<std::size_t>(segment.pieceB));
+    regions.join(segment.faceA, segment.faceB);
 
   struct Sums {
-    double volume = 0.0, volumeScale = 0.0, curveLength = 0.0;
-    Vec3 volumeMoment, area, areaB, areaMoment;
-    std::size_t triangles = 0;
+    Integrals integrals;
+    Vec3 areaB, areaMomentB;
+    double curveLength = 0.0;
+    std::size_t faces = 0;
   };
   std::unordered_map<std::size_t, Sums> byRoot;
-  for (std::size_t p = 0; p < piecesA.size() + piecesB.size(); ++p) {
-    const bool ofA = p < offsetB;
-    const Piece& piece = ofA ? piecesA[p] : piecesB[p - offsetB];
-    Sums& sums = byRoot[regions.find(p)];
-    sums.volume += piece.volume;
-    sums.volumeScale += piece.volumeScale;
-    sums.volumeMoment += piece.volumeMoment;
-    if (ofA) {
-      sums.area += piece.area;
-      sums.areaMoment += piece.areaMoment;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    Sums& sums = byRoot[regions.find(f)];
+    const Integrals& integrals = faces[f].integrals;
+    if (faces[f].ofA) {
+      sums.integrals.add(integrals);
     } else {
-      sums.areaB += piece.area;
+      // B's faces add to the volume; their area vector is reported apart.
+      sums.integrals.volume += integrals.volume;
+      sums.integrals.volumeScale += integrals.volumeScale;
+      sums.integrals.volumeMoment += integrals.volumeMoment;
+      sums.areaB += integrals.area;
     }
-    ++sums.triangles;
+    ++sums.faces;
   }
   for (const Segment& segment : query.segments)
-    byRoot[regions.find(static_cast<std::size_t>(segment.pieceA))].curveLength +=
-        length(segment.end - segment.start);
+    byRoot[regions.find(segment.faceA)].curveLength += length(segment.end - segment.start);
 
   // A region whose volume is within the rounding of its terms encloses nothing: surfaces that
   // touch, or faces that lie on one another (the perturbation puts them a zero distance apart).
@@ -766,61 +1021,53 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   std::vector<std::pair<std::size_t, Sums>> kept;
   std::vector<Sums> cavities;
   for (const auto& [root, sums] : byRoot) {
-    if (std::abs(sums.volume) <= kRoundingFactor * sums.volumeScale)
+    if (std::abs(sums.integrals.volume) <= kRoundingFactor * sums.integrals.volumeScale)
       ++result.touching;
-    else if (sums.volume < 0.0)
+    else if (sums.integrals.volume < 0.0)
       cavities.push_back(sums);
     else
       kept.emplace_back(root, sums);
   }
   std::sort(kept.begin(), kept.end(), [](const auto& x, const auto& y) {
-    return x.second.volume > y.second.volume ||
-           (x.second.volume == y.second.volume && x.first < y.first);
+    return x.second.integrals.volume > y.second.integrals.volume ||
+           (x.second.integrals.volume == y.second.integrals.volume && x.first < y.first);
   });
   const auto finish = [&](const Sums& sums) {
     OverlapRegion region;
-    region.volume = sums.volume;
-    const Vec3 offset = sums.volumeMoment * (1.0 / sums.volume);
+    const Integrals& integrals = sums.integrals;
+    region.volume = integrals.volume;
+    const Vec3 offset = integrals.volumeMoment * (1.0 / integrals.volume);
     region.centroid = query.reference + offset;
-    region.areaVector = sums.area;
+    region.areaVector = integrals.area;
     region.areaVectorB = sums.areaB;
-    region.moment = sums.areaMoment - cross(offset, sums.area);
+    region.moment = integrals.areaMoment - cross(offset, integrals.area);
     region.curveLength = sums.curveLength;
-    region.triangles = sums.triangles;
+    region.triangles = sums.faces;
     return region;
   };
   Sums total;
   std::unordered_map<std::size_t, std::size_t> regionOfRoot;
+  const auto addTo = [](Sums& into, const Sums& sums) {
+    into.integrals.add(sums.integrals);
+    into.areaB += sums.areaB;
+    into.curveLength += sums.curveLength;
+    into.faces += sums.faces;
+  };
   for (const auto& [root, sums] : kept) {
     regionOfRoot.emplace(root, result.regions.size());
     result.regions.push_back(finish(sums));
-    total.volume += sums.volume;
-    total.volumeScale += sums.volumeScale;
-    total.volumeMoment += sums.volumeMoment;
-    total.area += sums.area;
-    total.areaB += sums.areaB;
-    total.areaMoment += sums.areaMoment;
-    total.curveLength += sums.curveLength;
-    total.triangles += sums.triangles;
+    addTo(total, sums);
   }
-  for (const Sums& cavity : cavities) {
-    total.volume += cavity.volume;
-    total.volumeMoment += cavity.volumeMoment;
-    total.area += cavity.area;
-    total.areaB += cavity.areaB;
-    total.areaMoment += cavity.areaMoment;
-    total.curveLength += cavity.curveLength;
-    total.triangles += cavity.triangles;
-  }
-  if (!kept.empty() && total.volume > 0.0) result.total = finish(total);
+  for (const Sums& cavity : cavities)
+    addTo(total, cavity);
+  if (!kept.empty() && total.integrals.volume > 0.0) result.total = finish(total);
 
   result.segments = query.segments.size();
   if (options.curves && !query.segments.empty()) {
     std::vector<std::size_t> regionOfSegment(query.segments.size(),
                                              std::numeric_limits<std::size_t>::max());
     for (std::size_t s = 0; s < query.segments.size(); ++s) {
-      const auto found =
-          regionOfRoot.find(regions.find(static_cast<std::size_t>(query.segments[s].pieceA)));
+      const auto found = regionOfRoot.find(regions.find(query.segments[s].faceA));
       if (found != regionOfRoot.end()) regionOfSegment[s] = found->second;
     }
     result.curves = chainCurves(query, regionOfSegment);
