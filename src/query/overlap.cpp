@@ -28,6 +28,17 @@ using detail::QueryMeshData;
 
 constexpr std::int32_t kAbsent = -1;
 
+/// A vector of this thread's, emptied, keeping its capacity from one query to the next (a DEM
+/// step makes thousands of small queries; allocating their buffers each time took a third of
+/// one). `Tag` tells apart the uses; `which` the two sides. Queries never nest in a thread.
+template <class T, int Tag>
+std::vector<T>& recycled(std::size_t which = 0) {
+  thread_local std::vector<T> buffers[2];
+  std::vector<T>& buffer = buffers[which];
+  buffer.clear();
+  return buffer;
+}
+
 /// Where an intersection curve passes from one segment to the next: an edge of one mesh (its
 /// vertex ids, smaller first) through a triangle of the other (sorted id). `ofA`: the edge is
 /// the first mesh's.
@@ -210,7 +221,12 @@ class Side {
         flip_(mesh.data().orientation < 0.0),
         vertexSlot_(SlotMap::of(isA ? 0 : 1, 0, data_.vertices.size())),
         pieceSlot_(SlotMap::of(isA ? 0 : 1, 1, data_.size())),
-        triangleSlot_(SlotMap::of(isA ? 0 : 1, 2, data_.size())) {
+        triangleSlot_(SlotMap::of(isA ? 0 : 1, 2, data_.size())),
+        vertices_(recycled<VertexState, 0>(isA ? 0 : 1)),
+        triangles_(recycled<PlacedTriangle, 0>(isA ? 0 : 1)),
+        vertexIds_(recycled<std::uint32_t, 0>(isA ? 0 : 1)),
+        pieces_(recycled<Piece, 0>(isA ? 0 : 1)),
+        crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
     const Aabb moved = moved_ ? detail::movedBox(data_.bounds, pose_) : data_.bounds;
     margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
@@ -326,11 +342,11 @@ class Side {
   double margin_ = 0.0;
   Vec3 reference_;
   SlotMap &vertexSlot_, &pieceSlot_, &triangleSlot_;
-  std::vector<VertexState> vertices_;
-  std::vector<PlacedTriangle> triangles_;
-  std::vector<std::uint32_t> vertexIds_;
-  std::vector<Piece> pieces_;
-  std::vector<EdgeCrossing> crossings_;
+  std::vector<VertexState>& vertices_;
+  std::vector<PlacedTriangle>& triangles_;
+  std::vector<std::uint32_t>& vertexIds_;
+  std::vector<Piece>& pieces_;
+  std::vector<EdgeCrossing>& crossings_;
 };
 
 /// Closed boxes that share a point.
@@ -385,9 +401,10 @@ std::pair<Vec3, double> crossingPoint(const Vec3& p0, const Vec3& p1,
 struct Query {
   Side a, b;
   Vec3 reference;
-  std::vector<Segment> segments;
+  std::vector<Segment>& segments;
 
-  Query(const QueryMesh& first, const QueryMesh& second) : a(first, true), b(second, false) {}
+  Query(const QueryMesh& first, const QueryMesh& second)
+      : a(first, true), b(second, false), segments(recycled<Segment, 0>()) {}
 };
 
 /// One end of the segment where two triangles cross: an edge of one through the other.
@@ -517,32 +534,37 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
   return inside;
 }
 
+/// An edge from a vertex (slot) to `to`, with the parity of its crossings along it.
+struct Link {
+  std::int32_t to;
+  int parity;
+};
+
 /// Which of `side`'s vertices near the other mesh lie inside it, and each triangle's full edge
 /// parts inside it added to its piece. Vertices outside the other's box are outside; the others
 /// follow along the edges (each crossing flips), from those or from one ray test per connected
 /// piece that has none.
 void classify(Side& side, Side& other) {
-  std::vector<std::uint32_t> near;
+  std::vector<std::uint32_t>& near = recycled<std::uint32_t, 1>();
   const Aabb otherInSide = side.toPrepared(other.box());
   trianglesNear(side, other.box(), [&](std::uint32_t k) {
     if (side.meets(k, otherInSide) && meet(side.triangle(k).box, other.box())) near.push_back(k);
   });
   if (near.empty()) return;
   // Edges among the near triangles' vertices, both ways, with the parity along them.
-  struct Link {
-    std::int32_t to;
-    int parity;
-  };
   const std::size_t count = side.vertexCount();
-  std::vector<std::uint32_t> offsets(count + 1, 0);
+  std::vector<std::uint32_t>& offsets = recycled<std::uint32_t, 2>();
+  offsets.assign(count + 1, 0);
   for (const std::uint32_t k : near)
     for (std::size_t i = 0; i < 3; ++i) {
       ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, i))) + 1];
       ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, (i + 1) % 3))) + 1];
     }
   std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  std::vector<Link> links(offsets.back());
-  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  std::vector<Link>& links = recycled<Link, 0>();
+  links.resize(offsets.back());
+  std::vector<std::uint32_t>& fill = recycled<std::uint32_t, 3>();
+  fill.assign(offsets.begin(), offsets.end() - 1);
   for (const std::uint32_t k : near) {
     const std::int32_t pieceSlot = side.pieceSlot(k);
     for (std::size_t i = 0; i < 3; ++i) {
@@ -554,7 +576,7 @@ void classify(Side& side, Side& other) {
       links[fill[static_cast<std::size_t>(to)]++] = {from, -parity};
     }
   }
-  std::vector<std::int32_t> queue;
+  std::vector<std::int32_t>& queue = recycled<std::int32_t, 0>();
   const auto inconsistent = [&] {
     throw Error(std::string("overlap: the ") + (side.isA() ? "first" : "second") +
                 " mesh's vertices are inside and outside the other along one edge: a mesh is "
@@ -692,7 +714,10 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
   const std::vector<EdgeCrossing>& crossings = side.crossings();
   const std::size_t count = pieces.size();
   // Crossings and segments grouped by piece.
-  std::vector<std::uint32_t> crossingStart(count + 1, 0), segmentStart(count + 1, 0);
+  std::vector<std::uint32_t>& crossingStart = recycled<std::uint32_t, 1>();
+  std::vector<std::uint32_t>& segmentStart = recycled<std::uint32_t, 2>();
+  crossingStart.assign(count + 1, 0);
+  segmentStart.assign(count + 1, 0);
   for (const EdgeCrossing& c : crossings)
     ++crossingStart[static_cast<std::size_t>(c.piece) + 1];
   const auto pieceOf = [&](const Segment& segment) {
@@ -702,9 +727,13 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
     ++segmentStart[pieceOf(segment) + 1];
   std::partial_sum(crossingStart.begin(), crossingStart.end(), crossingStart.begin());
   std::partial_sum(segmentStart.begin(), segmentStart.end(), segmentStart.begin());
-  std::vector<std::uint32_t> crossingOrder(crossings.size()), segmentOrder(query.segments.size());
+  std::vector<std::uint32_t>& crossingOrder = recycled<std::uint32_t, 3>();
+  std::vector<std::uint32_t>& segmentOrder = recycled<std::uint32_t, 4>();
+  crossingOrder.resize(crossings.size());
+  segmentOrder.resize(query.segments.size());
   {
-    std::vector<std::uint32_t> fill(crossingStart.begin(), crossingStart.end() - 1);
+    std::vector<std::uint32_t>& fill = recycled<std::uint32_t, 5>();
+    fill.assign(crossingStart.begin(), crossingStart.end() - 1);
     for (std::size_t c = 0; c < crossings.size(); ++c)
       crossingOrder[fill[static_cast<std::size_t>(crossings[c].piece)]++] =
           static_cast<std::uint32_t>(c);
@@ -713,13 +742,15 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       segmentOrder[fill[pieceOf(query.segments[s])]++] = static_cast<std::uint32_t>(s);
   }
 
-  std::unordered_map<IntervalKey, std::size_t, IntervalKeyHash> intervalFace;
-  std::vector<EndKey> nodes;
-  std::vector<Element> elements;
-  std::vector<const EdgeCrossing*> along;
-  std::vector<std::size_t> faceOfRoot, faceOf;
-  std::vector<Face> local;
-  std::vector<bool> touchesEdge;
+  thread_local std::unordered_map<IntervalKey, std::size_t, IntervalKeyHash> intervalFace;
+  intervalFace.clear();
+  std::vector<EndKey>& nodes = recycled<EndKey, 0>();
+  std::vector<Element>& elements = recycled<Element, 0>();
+  std::vector<const EdgeCrossing*>& along = recycled<const EdgeCrossing*, 0>();
+  std::vector<std::size_t>& faceOfRoot = recycled<std::size_t, 1>();
+  std::vector<std::size_t>& faceOf = recycled<std::size_t, 2>();
+  std::vector<Face>& local = recycled<Face, 1>();
+  std::vector<char>& touchesEdge = recycled<char, 0>();
   UnionFind cycles;
   const auto inconsistent = [] {
     throw Error("overlap: a triangle's crossings along an edge do not alternate (internal error)");
@@ -810,7 +841,8 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       std::size_t axis = 0;
       for (std::size_t k = 1; k < 3; ++k)
         if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
-      std::vector<std::size_t> target(local.size());
+      std::vector<std::size_t>& target = recycled<std::size_t, 3>();
+      target.resize(local.size());
       std::iota(target.begin(), target.end(), std::size_t{0});
       for (std::size_t h = 0; h < local.size(); ++h) {
         if (touchesEdge[h] || !(dot(local[h].integrals.area, normal) < 0.0)) continue;
@@ -837,8 +869,8 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
         f = target[f];
     }
     // Into the query's faces; the segments learn theirs, the edge parts join their twins.
-    const std::size_t base = faces.size();
-    std::vector<std::size_t> global(local.size(), kNoSegment);
+    std::vector<std::size_t>& global = recycled<std::size_t, 4>();
+    global.assign(local.size(), kNoSegment);
     for (std::size_t f = 0; f < local.size(); ++f) {
       bool used = false;
       for (const std::size_t g : faceOf)
@@ -847,7 +879,6 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       global[f] = faces.size();
       faces.push_back(local[f]);
     }
-    (void)base;
     for (std::size_t e = 0; e < elements.size(); ++e) {
       const std::size_t face = global[faceOf[e]];
       const Element& element = elements[e];
@@ -964,15 +995,22 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     const std::size_t toA = std::min(fromA + detail::kFanout, dataA.size());
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
     const std::size_t toB = std::min(fromB + detail::kFanout, dataB.size());
+    // The second leaf's triangles that can meet the first mesh, once for the leaf pair.
+    std::array<std::uint32_t, detail::kFanout> near;
+    std::size_t nearCount = 0;
+    for (std::size_t j = fromB; j < toB; ++j) {
+      const auto k = static_cast<std::uint32_t>(j);
+      if (b.meets(k, aInB) && meet(b.triangle(k).box, a.box())) near[nearCount++] = k;
+    }
+    if (nearCount == 0) continue;
     for (std::size_t i = fromA; i < toA; ++i) {
       if (!a.meets(static_cast<std::uint32_t>(i), bInA)) continue;
       const PlacedTriangle& ta = a.triangle(static_cast<std::uint32_t>(i));
       if (!meet(ta.box, b.box())) continue;
-      for (std::size_t j = fromB; j < toB; ++j) {
-        if (!b.meets(static_cast<std::uint32_t>(j), aInB)) continue;
-        const PlacedTriangle& tb = b.triangle(static_cast<std::uint32_t>(j));
+      for (std::size_t n = 0; n < nearCount; ++n) {
+        const PlacedTriangle& tb = b.triangle(near[n]);
         if (!meet(ta.box, tb.box)) continue;
-        crossPair(query, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), ta, tb);
+        crossPair(query, static_cast<std::uint32_t>(i), near[n], ta, tb);
       }
     }
   }
@@ -980,8 +1018,9 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   classify(b, a);
 
   // The faces of both, and the regions: faces joined across edges and along segments.
-  std::vector<Face> faces;
-  std::vector<std::pair<std::size_t, std::size_t>> joins;
+  std::vector<Face>& faces = recycled<Face, 0>();
+  std::vector<std::pair<std::size_t, std::size_t>>& joins =
+      recycled<std::pair<std::size_t, std::size_t>, 0>();
   buildFaces(a, query, faces, joins);
   buildFaces(b, query, faces, joins);
   UnionFind regions;
