@@ -104,7 +104,8 @@ struct Integrals {
 /// What the query learns of one triangle that crosses the other mesh or has a vertex inside it.
 struct Piece {
   std::uint32_t sorted = 0;
-  std::array<int, 3> parity{};  ///< per edge (corner i → i + 1): Σ σ of its crossings
+  std::array<int, 3> parity{};     ///< per edge (corner i → i + 1): Σ σ of its crossings
+  std::array<int, 3> crossings{};  ///< per edge: how many
 };
 
 /// Where an edge of a triangle crosses the other mesh: at `lambda` along it (from corner i to
@@ -131,6 +132,7 @@ struct VertexState {
 struct PlacedTriangle {
   std::array<Vec3, 3> p;
   std::array<std::int32_t, 3> slots;
+  bool visited = false;       ///< reached by the inside/outside propagation (classify)
   std::array<Vec3, 3> local;  ///< p less the query's reference point
   Aabb box;
   Vec3 minors;     ///< (p1 − p0) × (p2 − p0), rounded
@@ -139,7 +141,7 @@ struct PlacedTriangle {
 
 PlacedTriangle placedTriangle(const std::array<Vec3, 3>& p,
                               const std::array<std::int32_t, 3>& slots) noexcept {
-  PlacedTriangle t{p, slots, {}, {}, {}, {}};
+  PlacedTriangle t{p, slots, false, {}, {}, {}, {}};
   for (const Vec3& corner : p)
     t.box.extend(corner);
   const Vec3 u = p[1] - p[0], v = p[2] - p[0];
@@ -314,6 +316,17 @@ class Side {
     return triangles_[static_cast<std::size_t>(slot)];
   }
 
+  /// Sorted triangle k's placed copy, by slot (stable while triangles are placed).
+  PlacedTriangle& placed(std::uint32_t k) {
+    triangle(k);
+    return triangles_[static_cast<std::size_t>(triangleSlot_[k])];
+  }
+  /// The world box of `prepared`, a box in this mesh's prepared frame, conservatively.
+  Aabb toWorld(const Aabb& prepared) const noexcept {
+    const Aabb box = moved_ ? detail::movedBox(prepared, pose_) : prepared;
+    return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
+  }
+
   /// The piece of sorted triangle k, made on first use.
   Piece& piece(std::uint32_t k) {
     std::int32_t& slot = pieceSlot_[k];
@@ -459,6 +472,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       Piece& piece = query.a.piece(ta);
       const int sigma = sideA[i] > 0 ? 1 : -1;  // entering B: from above its face to below
       piece.parity[i] += sigma;
+      ++piece.crossings[i];
       query.a.crossings().push_back({query.a.pieceSlot(ta), static_cast<std::uint8_t>(i),
                                      static_cast<std::int8_t>(sigma),
                                      v0 < v1 ? lambda : 1.0 - lambda, key, point});
@@ -478,6 +492,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       Piece& piece = query.b.piece(tb);
       const int sigma = sideB[j] > 0 ? 1 : -1;  // entering A
       piece.parity[j] += sigma;
+      ++piece.crossings[j];
       query.b.crossings().push_back({query.b.pieceSlot(tb), static_cast<std::uint8_t>(j),
                                      static_cast<std::int8_t>(sigma),
                                      v0 < v1 ? lambda : 1.0 - lambda, key, point});
@@ -534,96 +549,121 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
   return inside;
 }
 
-/// An edge from a vertex (slot) to `to`, with the parity of its crossings along it.
-struct Link {
-  std::int32_t to;
-  int parity;
-};
-
-/// Which of `side`'s vertices near the other mesh lie inside it, and each triangle's full edge
-/// parts inside it added to its piece. Vertices outside the other's box are outside; the others
-/// follow along the edges (each crossing flips), from those or from one ray test per connected
-/// piece that has none.
+/// Which of `side`'s vertices lie inside the other mesh, for every triangle with a part inside
+/// it, and a piece for each such triangle. Work in proportion to those triangles: a region of
+/// the surface inside the other mesh is bounded by crossings, so a walk from the crossed
+/// triangles across the edges with a part inside reaches all of it. Along an edge the status
+/// flips at each crossing (the parity Σσ, exact); a triangle whose corners nothing decides yet
+/// takes a corner outside the other's box as outside, or one exact ray test. A connected piece
+/// of the mesh that nothing crosses is wholly inside or outside: one ray test from its
+/// representative vertex, where its box meets the other's.
 void classify(Side& side, Side& other) {
-  std::vector<std::uint32_t>& near = recycled<std::uint32_t, 1>();
-  const Aabb otherInSide = side.toPrepared(other.box());
-  trianglesNear(side, other.box(), [&](std::uint32_t k) {
-    if (side.meets(k, otherInSide) && meet(side.triangle(k).box, other.box())) near.push_back(k);
-  });
-  if (near.empty()) return;
-  // Edges among the near triangles' vertices, both ways, with the parity along them.
-  const std::size_t count = side.vertexCount();
-  std::vector<std::uint32_t>& offsets = recycled<std::uint32_t, 2>();
-  offsets.assign(count + 1, 0);
-  for (const std::uint32_t k : near)
-    for (std::size_t i = 0; i < 3; ++i) {
-      ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, i))) + 1];
-      ++offsets[static_cast<std::size_t>(side.vertex(side.corner(k, (i + 1) % 3))) + 1];
-    }
-  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  std::vector<Link>& links = recycled<Link, 0>();
-  links.resize(offsets.back());
-  std::vector<std::uint32_t>& fill = recycled<std::uint32_t, 3>();
-  fill.assign(offsets.begin(), offsets.end() - 1);
-  for (const std::uint32_t k : near) {
-    const std::int32_t pieceSlot = side.pieceSlot(k);
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::int32_t from = side.vertex(side.corner(k, i));
-      const std::int32_t to = side.vertex(side.corner(k, (i + 1) % 3));
-      const int parity =
-          pieceSlot == kAbsent ? 0 : side.pieces()[static_cast<std::size_t>(pieceSlot)].parity[i];
-      links[fill[static_cast<std::size_t>(from)]++] = {to, parity};
-      links[fill[static_cast<std::size_t>(to)]++] = {from, -parity};
-    }
-  }
-  std::vector<std::int32_t>& queue = recycled<std::int32_t, 0>();
   const auto inconsistent = [&] {
     throw Error(std::string("overlap: the ") + (side.isA() ? "first" : "second") +
                 " mesh's vertices are inside and outside the other along one edge: a mesh is "
                 "not closed or crosses itself");
   };
-  const auto spread = [&] {
-    while (!queue.empty()) {
-      const std::int32_t v = queue.back();
-      queue.pop_back();
-      const int inside = side.state(v).inside;
-      const auto slot = static_cast<std::size_t>(v);
-      for (std::uint32_t l = offsets[slot]; l < offsets[slot + 1]; ++l) {
-        const int expected = inside + links[l].parity;
-        if (expected != 0 && expected != 1) inconsistent();
-        std::int8_t& neighbour = side.state(links[l].to).inside;
-        if (neighbour == -1) {
-          neighbour = static_cast<std::int8_t>(expected);
-          queue.push_back(links[l].to);
-        } else if (neighbour != expected) {
-          inconsistent();
+  const Aabb& otherBox = other.box();
+  // Decides the corners of triangle k from one another along its edges; false while none is known.
+  const auto resolve = [&](std::uint32_t k) {
+    const std::array<std::int32_t, 3> slots = side.placed(k).slots;
+    const std::int32_t pieceSlot = side.pieceSlot(k);
+    const std::array<int, 3> parity =
+        pieceSlot == kAbsent ? std::array<int, 3>{}
+                             : side.pieces()[static_cast<std::size_t>(pieceSlot)].parity;
+    bool known = false;
+    for (const std::int32_t slot : slots)
+      known |= side.state(slot).inside != -1;
+    if (!known)
+      for (const std::int32_t slot : slots)
+        if (!otherBox.contains(side.state(slot).world)) {
+          side.state(slot).inside = 0;
+          known = true;
+        }
+    if (!known) return false;
+    for (int round = 0; round < 2; ++round)
+      for (std::size_t i = 0; i < 3; ++i) {
+        std::int8_t& from = side.state(slots[i]).inside;
+        std::int8_t& to = side.state(slots[(i + 1) % 3]).inside;
+        if (from != -1) {
+          const int expected = from + parity[i];
+          if (expected != 0 && expected != 1) inconsistent();
+          if (to == -1)
+            to = static_cast<std::int8_t>(expected);
+          else if (to != expected)
+            inconsistent();
+        } else if (to != -1) {
+          const int expected = to - parity[i];
+          if (expected != 0 && expected != 1) inconsistent();
+          from = static_cast<std::int8_t>(expected);
         }
       }
-    }
+    return true;
   };
-  const Aabb& otherBox = other.box();
-  for (std::size_t v = 0; v < count; ++v) {
-    VertexState& state = side.state(static_cast<std::int32_t>(v));
-    if (offsets[v] == offsets[v + 1] || state.inside != -1) continue;
-    if (!otherBox.contains(state.world)) {
-      state.inside = 0;
-      queue.push_back(static_cast<std::int32_t>(v));
+  std::vector<std::uint32_t>& queue = recycled<std::uint32_t, 1>();
+  std::vector<std::uint32_t>& pending = recycled<std::uint32_t, 2>();
+  const std::size_t crossed = side.pieces().size();
+  for (std::size_t p = 0; p < crossed; ++p) {
+    const std::uint32_t k = side.pieces()[p].sorted;
+    side.placed(k).visited = true;
+    queue.push_back(k);
+  }
+  const auto expand = [&](std::uint32_t k) {
+    const std::array<std::int32_t, 3> slots = side.placed(k).slots;
+    const std::int32_t pieceSlot = side.pieceSlot(k);
+    const std::array<int, 3> crossings =
+        pieceSlot == kAbsent ? std::array<int, 3>{}
+                             : side.pieces()[static_cast<std::size_t>(pieceSlot)].crossings;
+    bool inside = false;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const bool part = crossings[i] > 0 || side.state(slots[i]).inside == 1 ||
+                        side.state(slots[(i + 1) % 3]).inside == 1;
+      inside |= part;
+      if (!part) continue;
+      const std::uint32_t across = side.across(k, i);
+      if (across == detail::Pseudonormals::kNone) continue;
+      PlacedTriangle& neighbour = side.placed(across);
+      if (neighbour.visited) continue;
+      neighbour.visited = true;
+      queue.push_back(across);
     }
+    if (inside) side.piece(k);
+  };
+  while (true) {
+    while (!queue.empty()) {
+      const std::uint32_t k = queue.back();
+      queue.pop_back();
+      if (resolve(k))
+        expand(k);
+      else
+        pending.push_back(k);
+    }
+    if (pending.empty()) break;
+    // Nothing decides these: one ray test, then the walk goes on from there.
+    const std::uint32_t k = pending.back();
+    const std::int32_t slot = side.placed(k).slots[0];
+    if (side.state(slot).inside == -1)
+      side.state(slot).inside = insideByRay(side, other, side.state(slot).world) ? 1 : 0;
+    queue.insert(queue.end(), pending.begin(), pending.end());
+    pending.clear();
   }
-  spread();
-  for (std::size_t v = 0; v < count; ++v) {
-    VertexState& state = side.state(static_cast<std::int32_t>(v));
-    if (offsets[v] == offsets[v + 1] || state.inside != -1) continue;
-    state.inside = insideByRay(side, other, state.world) ? 1 : 0;
-    queue.push_back(static_cast<std::int32_t>(v));
-    spread();
-  }
-  // Every triangle with a corner inside has a part inside.
-  for (const std::uint32_t k : near) {
-    const std::array<std::int32_t, 3> slots = side.triangle(k).slots;
-    if (side.state(slots[0]).inside == 1 || side.state(slots[1]).inside == 1 ||
-        side.state(slots[2]).inside == 1)
+  // Connected pieces of the mesh that nothing crosses.
+  const detail::MeshComponents& components = side.data().components();
+  if (components.count() == 1 && crossed > 0) return;
+  std::vector<std::uint32_t>& reached = recycled<std::uint32_t, 3>();
+  reached.assign(components.count(), 0);
+  for (std::size_t p = 0; p < crossed; ++p)
+    reached[components.ofVertex[side.corner(side.pieces()[p].sorted, 0)]] = 1;
+  for (std::size_t c = 0; c < components.count(); ++c) {
+    if (reached[c] || !meet(side.toWorld(components.boxes[c]), otherBox)) continue;
+    const std::int32_t slot = side.vertex(components.representative[c]);
+    if (!insideByRay(side, other, side.state(slot).world)) continue;
+    for (std::uint32_t t = components.offsets[c]; t < components.offsets[c + 1]; ++t) {
+      const std::uint32_t k = components.triangles[t];
+      for (const std::int32_t corner : side.placed(k).slots)
+        side.state(corner).inside = 1;
       side.piece(k);
+    }
   }
 }
 
@@ -962,6 +1002,54 @@ std::vector<IntersectionCurve> chainCurves(const Query& query,
 }
 
 }  // namespace
+
+}  // namespace delta::contactdetection
+
+namespace delta::detail {
+
+const MeshComponents& QueryMeshData::components() const {
+  std::call_once(componentsOnce_, [this] {
+    MeshComponents& made = components_;
+    // Union–find over the vertices along the triangles' edges.
+    std::vector<std::uint32_t> parent(vertices.size());
+    std::iota(parent.begin(), parent.end(), std::uint32_t{0});
+    const auto find = [&](std::uint32_t v) {
+      while (parent[v] != v)
+        v = parent[v] = parent[parent[v]];
+      return v;
+    };
+    for (const TriangleIndices& c : corners)
+      for (std::size_t i = 1; i < 3; ++i)
+        parent[find(c[i])] = find(c[0]);
+    std::vector<std::uint32_t> index(vertices.size(), std::numeric_limits<std::uint32_t>::max());
+    made.ofVertex.assign(vertices.size(), 0);
+    for (const TriangleIndices& c : corners)
+      for (const std::uint32_t v : c) {
+        const std::uint32_t root = find(v);
+        if (index[root] == std::numeric_limits<std::uint32_t>::max()) {
+          index[root] = static_cast<std::uint32_t>(made.representative.size());
+          made.representative.push_back(v);
+          made.boxes.emplace_back();
+        }
+        made.ofVertex[v] = index[root];
+        made.boxes[index[root]].extend(vertices[v]);
+      }
+    made.offsets.assign(made.representative.size() + 1, 0);
+    for (const TriangleIndices& c : corners)
+      ++made.offsets[made.ofVertex[c[0]] + 1];
+    std::partial_sum(made.offsets.begin(), made.offsets.end(), made.offsets.begin());
+    made.triangles.resize(corners.size());
+    std::vector<std::uint32_t> fill(made.offsets.begin(), made.offsets.end() - 1);
+    for (std::size_t k = 0; k < corners.size(); ++k)
+      made.triangles[fill[made.ofVertex[corners[k][0]]]++] = static_cast<std::uint32_t>(k);
+    componentsMade_.store(true, std::memory_order_release);
+  });
+  return components_;
+}
+
+}  // namespace delta::detail
+
+namespace delta::contactdetection {
 
 Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
   checkMesh(first, "first");

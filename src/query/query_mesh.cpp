@@ -549,6 +549,7 @@ std::size_t QueryMesh::memoryBytes() const noexcept {
   const detail::QueryMeshData& data = *data_;
   std::size_t bytes = (data.meshOrderMade() ? data.meshOrder().memoryBytes() : 0) +
                       (data.pseudonormalsMade() ? data.pseudonormals().memoryBytes() : 0) +
+                      (data.componentsMade() ? data.components().memoryBytes() : 0) +
                       (data.windingTreeMade() ? data.windingTree().memoryBytes() : 0) +
                       data.vertices.capacity() * sizeof(Vec3) +
                       data.corners.capacity() * sizeof(TriangleIndices) +

@@ -98,7 +98,8 @@ class QueryMesh {
   const Aabb& bounds() const noexcept;
   /// Bytes held on the heap (the triangles in tree order, and in mesh order once triangles() has
   /// made them; tree boxes; the distance-bound grid; the pseudonormals once a signed query has
-  /// made them; the winding-number moments once a Sign::winding query has made them).
+  /// made them; the winding-number moments once a Sign::winding query has made them; the connected
+  /// pieces once an overlap query has made them).
   std::size_t memoryBytes() const noexcept;
 
   /// The prepared data, for the query implementations.

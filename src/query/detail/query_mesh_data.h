@@ -176,6 +176,24 @@ struct Pseudonormals {
   }
 };
 
+/// The connected pieces of a mesh (vertices joined by the triangles' edges), for the overlap
+/// query's test of a piece that the other mesh's surface does not cross: a representative vertex
+/// and the box of each (prepared frame), and its triangles (sorted ids), grouped.
+struct MeshComponents {
+  std::vector<std::uint32_t> ofVertex;  ///< per vertex of QueryMeshData::vertices (unused: 0)
+  std::vector<std::uint32_t> representative;
+  std::vector<Aabb> boxes;
+  std::vector<std::uint32_t> offsets;    ///< component c has triangles[offsets[c], offsets[c + 1])
+  std::vector<std::uint32_t> triangles;  ///< sorted ids
+  std::size_t count() const noexcept { return representative.size(); }
+  std::size_t memoryBytes() const noexcept {
+    return (ofVertex.capacity() + representative.capacity() + offsets.capacity() +
+            triangles.capacity()) *
+               sizeof(std::uint32_t) +
+           boxes.capacity() * sizeof(Aabb);
+  }
+};
+
 /// What a QueryMesh holds (see query_mesh.h).
 struct QueryMeshData {
   /// The triangles in tree order: sorted triangle k (the mesh's triangle order[k]) has the
@@ -237,6 +255,10 @@ struct QueryMeshData {
   /// The tree's winding-number moments (winding_tree.h), made on the first call (only winding
   /// signs need them, about 20 bytes a triangle). Thread-safe.
   const WindingTree& windingTree() const;
+  /// The mesh's connected pieces (MeshComponents), made on the first call (only the overlap
+  /// query needs them, about 12 bytes a triangle). Thread-safe.
+  const MeshComponents& components() const;
+  bool componentsMade() const noexcept { return componentsMade_.load(std::memory_order_acquire); }
   /// Whether windingTree() has been made (then its bytes count in memoryBytes()).
   bool windingTreeMade() const noexcept { return windingTreeMade_.load(std::memory_order_acquire); }
 
@@ -252,6 +274,9 @@ struct QueryMeshData {
   mutable std::once_flag windingTreeOnce_;
   mutable WindingTree windingTree_;
   mutable std::atomic<bool> windingTreeMade_{false};
+  mutable std::once_flag componentsOnce_;
+  mutable MeshComponents components_;
+  mutable std::atomic<bool> componentsMade_{false};
 };
 
 /// The closest triangle to a point.
