@@ -1075,10 +1075,14 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
   const std::vector<detail::LeafPair> leafPairs =
       detail::leafPairsWithin(dataA, dataB, secondTree, reach);
-  // Each one's box in the other's prepared frame: most triangles of the leaves are rejected
-  // there, before they are placed.
-  const Aabb bInA = a.toPrepared(b.box()), aInB = b.toPrepared(a.box());
+  // Each leaf's box in the other's prepared frame (the moved box of a box, as the traversal
+  // moves them, widened by the rounding between the frames): most triangles of a leaf are
+  // rejected there, against the other leaf, before they are placed.
+  const detail::MatrixMotion inverseMotion = detail::matrixMotion(secondToFirst.inverse());
+  const detail::MovedTree firstTree(dataA.levels, moved ? &inverseMotion : nullptr);
   for (const detail::LeafPair& pair : leafPairs) {
+    const Aabb bInA = secondTree.box(0, pair.second).grown(reach);
+    const Aabb aInB = firstTree.box(0, pair.first).grown(reach);
     const std::size_t fromA = std::size_t{pair.first} * detail::kFanout;
     const std::size_t toA = std::min(fromA + detail::kFanout, dataA.size());
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
