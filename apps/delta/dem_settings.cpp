@@ -16,9 +16,9 @@ namespace delta::cli {
 namespace {
 
 /// The keys a config file may set, in the order `readDemConfig` lists them in messages.
-constexpr const char* kKeys[] = {"scenario",      "particles",      "seed",  "restitution",
-                                 "friction",      "offset",         "steps", "output_every",
-                                 "particle_mesh", "particle_radius"};
+constexpr const char* kKeys[] = {"scenario",      "particles",       "seed",         "restitution",
+                                 "friction",      "offset",          "steps",        "output_every",
+                                 "particle_mesh", "particle_radius", "contact_model"};
 
 std::string_view trimmed(std::string_view text) {
   const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
@@ -93,6 +93,10 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
   } else if (key == "particle_mesh") {
     if (text.empty()) throw Error(origin + " must name a mesh file or builtin:");
     settings.particleMesh = text;
+  } else if (key == "contact_model") {
+    if (text != "point" && text != "volume")
+      throw Error(origin + " '" + text + "' is neither point nor volume");
+    settings.contactModel = text;
   } else if (key == "particle_radius") {
     const double radius = realNumber(text, origin);
     if (!(radius > 0.0)) throw Error(origin + " '" + text + "' must be positive");
@@ -157,6 +161,7 @@ DemSettings mergedDemSettings(DemSettings base, const DemSettings& overrides) {
   if (overrides.outputEvery) base.outputEvery = overrides.outputEvery;
   if (!overrides.particleMesh.empty()) base.particleMesh = overrides.particleMesh;
   if (overrides.particleRadius) base.particleRadius = overrides.particleRadius;
+  if (!overrides.contactModel.empty()) base.contactModel = overrides.contactModel;
   for (const auto& [key, origin] : overrides.origins)
     base.origins[key] = origin;
   return base;

@@ -23,6 +23,7 @@
 ///     particle_mesh = rock.off     # a closed mesh (or builtin:…) as every particle's shape;
 ///                                  # a relative path is relative to the config file
 ///     particle_radius = 0.008      # its bounding radius (m) after scaling
+///     contact_model = volume       # point (default) or volume (dem/contact_model.h)
 ///
 /// Every key is also an option (`output_every` is `--output-every`); an option given on the
 /// command line overrides the file. Each value is checked as it is read: an error names the
@@ -43,6 +44,7 @@ struct DemSettings {
   std::optional<std::size_t> outputEvery;
   std::string particleMesh;
   std::optional<double> particleRadius;
+  std::string contactModel;  ///< "point" or "volume"; empty: point
   /// Where each setting that was given came from, by key: "run.cfg:3: restitution" or
   /// "--restitution", for messages about combinations.
   std::map<std::string, std::string> origins;

@@ -13,16 +13,19 @@ class Parameters:
     What a World simulates with.
 
     Parameters(time_step, epsilon, filter_distance, stiffness, restitution=0.5, friction=0.0,
-    tangential_stiffness_ratio=2/7, gravity=(0, 0, -9.81)), any consistent units (the scenarios use
-    SI): dt > 0; surfaces closer than 2*epsilon are in contact; contact points of a pair closer than
-    filter_distance (h) are merged; stiffness k > 0 of the normal spring; e in [0, 1]; Coulomb
-    friction mu >= 0. Checked when a World is made (delta.Error naming the field).
+    tangential_stiffness_ratio=2/7, gravity=(0, 0, -9.81), contact_model='point'), any consistent
+    units (the scenarios use SI): dt > 0; surfaces closer than 2*epsilon are in contact; contact
+    points of a pair closer than filter_distance (h) are merged; stiffness k > 0 of the normal
+    spring; e in [0, 1]; Coulomb friction mu >= 0; contact_model 'point' (the spring-dashpot on the
+    epsilon-shell) or 'volume' (energy-conserving, on the overlap volume of closed meshes). Checked
+    when a World is made (delta.Error naming the field).
     """
-    def __init__(self, time_step: float, epsilon: float, filter_distance: float, stiffness: float, restitution: float = ..., friction: float = ..., tangential_stiffness_ratio: float = ..., gravity: numpy.ndarray = ...) -> None:
+    def __init__(self, time_step: float, epsilon: float, filter_distance: float, stiffness: float, restitution: float = ..., friction: float = ..., tangential_stiffness_ratio: float = ..., gravity: numpy.ndarray = ..., contact_model: str = ...) -> None:
         """
         The parameters of a World; see the class.
         """
         ...
+    contact_model: str
     epsilon: float
     filter_distance: float
     friction: float
@@ -377,9 +380,15 @@ def funnel(outlet_radius: float, top_radius: float, outlet_height: float, top_he
     """
     ...
 
-def hopper(count: int = ..., seed: int = ..., kind: str = ...) -> Scenario:
+def funnel_walls(outlet_radius: float, top_radius: float, outlet_height: float, top_height: float, segments: int, thickness: float) -> List[delta.Mesh]:
     """
-    `count` granulates (or spheres) flowing through a conical funnel onto a floor.
+    funnel made solid for contact_model='volume': `segments` closed convex pieces `thickness` thick behind its faces, each an obstacle of its own.
+    """
+    ...
+
+def hopper(count: int = ..., seed: int = ..., kind: str = ..., contact_model: str = ...) -> Scenario:
+    """
+    `count` granulates (or spheres) flowing through a conical funnel onto a floor (contact_model='volume': a funnel and a floor with solid walls).
     """
     ...
 
@@ -389,14 +398,20 @@ def open_box(width: float, depth: float, height: float, floor: float = ...) -> d
     """
     ...
 
-particle_dtype: numpy.dtype
-def settle(count: int = ..., seed: int = ..., kind: str = ...) -> Scenario:
+def open_box_walls(width: float, depth: float, height: float, floor: float, thickness: float) -> List[delta.Mesh]:
     """
-    `count` granulates (or spheres, kind='sphere') falling into an open box and settling.
+    open_box made solid for contact_model='volume': five closed convex boxes `thickness` thick behind its faces, each an obstacle of its own.
     """
     ...
 
-def two_particles(restitution: float = ..., offset: float = ..., friction: float = ...) -> Scenario:
+particle_dtype: numpy.dtype
+def settle(count: int = ..., seed: int = ..., kind: str = ..., contact_model: str = ...) -> Scenario:
+    """
+    `count` granulates (or spheres, kind='sphere') falling into an open box and settling (contact_model='volume': the box with solid walls).
+    """
+    ...
+
+def two_particles(restitution: float = ..., offset: float = ..., friction: float = ..., contact_model: str = ...) -> Scenario:
     """
     Two icospheres (1280 triangles, radius 1 cm) approaching head-on at 1 m/s (or offset sideways by `offset` times the sum of radii), no gravity; `delta dem two-particles`.
     """

@@ -156,6 +156,8 @@ py::dtype worldContactDtype() {
   add("with_obstacle", "?", offsetof(Contact, withObstacle));
   add("depth", "f8", offsetof(Contact, depth));
   add("force", "(3,)f8", offsetof(Contact, force));
+  add("couple", "(3,)f8", offsetof(Contact, couple));
+  add("volume", "f8", offsetof(Contact, volume));
   return py::dtype(names, formats, offsets, static_cast<py::ssize_t>(sizeof(Contact)));
 }
 
@@ -180,21 +182,30 @@ void bindParameters(py::module_& dem) {
   py::class_<dem::Parameters>(dem, "Parameters", R"(What a World simulates with.
 
 Parameters(time_step, epsilon, filter_distance, stiffness, restitution=0.5, friction=0.0,
-tangential_stiffness_ratio=2/7, gravity=(0, 0, -9.81)), any consistent units (the scenarios use
-SI): dt > 0; surfaces closer than 2*epsilon are in contact; contact points of a pair closer than
-filter_distance (h) are merged; stiffness k > 0 of the normal spring; e in [0, 1]; Coulomb
-friction mu >= 0. Checked when a World is made (delta.Error naming the field).)")
+tangential_stiffness_ratio=2/7, gravity=(0, 0, -9.81), contact_model='point'), any consistent
+units (the scenarios use SI): dt > 0; surfaces closer than 2*epsilon are in contact; contact
+points of a pair closer than filter_distance (h) are merged; stiffness k > 0 of the normal
+spring; e in [0, 1]; Coulomb friction mu >= 0; contact_model 'point' (the spring-dashpot on the
+epsilon-shell) or 'volume' (energy-conserving, on the overlap volume of closed meshes). Checked
+when a World is made (delta.Error naming the field).)")
       .def(py::init([](double timeStep, double epsilon, double filterDistance, double stiffness,
                        double restitution, double friction, double tangentialStiffnessRatio,
-                       const Vec3& gravity) {
-             return dem::Parameters{timeStep,    epsilon,  filterDistance,           stiffness,
-                                    restitution, friction, tangentialStiffnessRatio, gravity};
+                       const Vec3& gravity, const std::string& contactModel) {
+             return dem::Parameters{timeStep,
+                                    epsilon,
+                                    filterDistance,
+                                    stiffness,
+                                    restitution,
+                                    friction,
+                                    tangentialStiffnessRatio,
+                                    gravity,
+                                    dem::contactModelNamed(contactModel)};
            }),
            "time_step"_a, "epsilon"_a, "filter_distance"_a, "stiffness"_a,
            "restitution"_a = dem::Parameters{}.restitution, "friction"_a = 0.0,
            "tangential_stiffness_ratio"_a = dem::Parameters{}.tangentialStiffnessRatio,
            py::arg_v("gravity", dem::Parameters{}.gravity, "(0, 0, -9.81)"),
-           "The parameters of a World; see the class.")
+           "contact_model"_a = "point", "The parameters of a World; see the class.")
       .def_readwrite("time_step", &dem::Parameters::timeStep, "dt > 0.")
       .def_readwrite("epsilon", &dem::Parameters::epsilon,
                      "Surfaces closer than 2*epsilon are in contact.")
@@ -212,11 +223,22 @@ friction mu >= 0. Checked when a World is made (delta.Error naming the field).)"
           "gravity", [](const dem::Parameters& p) { return p.gravity; },
           [](dem::Parameters& p, const Vec3& gravity) { p.gravity = gravity; },
           "The acceleration of gravity, (3,).")
+      .def_property(
+          "contact_model",
+          [](const dem::Parameters& p) {
+            return std::string(dem::contactModelName(p.contactModel));
+          },
+          [](dem::Parameters& p, const std::string& name) {
+            p.contactModel = dem::contactModelNamed(name);
+          },
+          "'point' (the spring-dashpot on the epsilon-shell) or 'volume' (energy-conserving, on "
+          "the overlap volume; closed meshes only, no sphere particles).")
       .def("__repr__", [](const dem::Parameters& p) {
         return py::str(
                    "Parameters(time_step={!r}, epsilon={!r}, filter_distance={!r}, "
-                   "stiffness={!r}, restitution={!r}, friction={!r})")
-            .format(p.timeStep, p.epsilon, p.filterDistance, p.stiffness, p.restitution, p.friction)
+                   "stiffness={!r}, restitution={!r}, friction={!r}, contact_model={!r})")
+            .format(p.timeStep, p.epsilon, p.filterDistance, p.stiffness, p.restitution, p.friction,
+                    dem::contactModelName(p.contactModel))
             .cast<std::string>();
       });
 }
@@ -520,28 +542,35 @@ void bindScenarios(py::module_& dem) {
 
   dem.def(
       "two_particles",
-      [](double restitution, double offset, double friction) {
-        return scenario([&] { return dem::twoParticles(restitution, offset, friction); });
+      [](double restitution, double offset, double friction, const std::string& contactModel) {
+        const dem::ContactModel model = dem::contactModelNamed(contactModel);
+        return scenario([&] { return dem::twoParticles(restitution, offset, friction, model); });
       },
-      "restitution"_a = 0.9, "offset"_a = 0.0, "friction"_a = 0.0,
+      "restitution"_a = 0.9, "offset"_a = 0.0, "friction"_a = 0.0, "contact_model"_a = "point",
       "Two icospheres (1280 triangles, radius 1 cm) approaching head-on at 1 m/s (or offset "
       "sideways by `offset` times the sum of radii), no gravity; `delta dem two-particles`.");
   dem.def(
       "settle",
-      [](std::size_t count, std::uint64_t seed, const std::string& kind) {
+      [](std::size_t count, std::uint64_t seed, const std::string& kind,
+         const std::string& contactModel) {
         const dem::ParticleKind particles = kindNamed(kind);
-        return scenario([&] { return dem::settle(count, seed, particles); });
+        const dem::ContactModel model = dem::contactModelNamed(contactModel);
+        return scenario([&] { return dem::settle(count, seed, particles, model); });
       },
-      "count"_a = 100, "seed"_a = 1, "kind"_a = "mesh",
-      "`count` granulates (or spheres, kind='sphere') falling into an open box and settling.");
+      "count"_a = 100, "seed"_a = 1, "kind"_a = "mesh", "contact_model"_a = "point",
+      "`count` granulates (or spheres, kind='sphere') falling into an open box and settling "
+      "(contact_model='volume': the box with solid walls).");
   dem.def(
       "hopper",
-      [](std::size_t count, std::uint64_t seed, const std::string& kind) {
+      [](std::size_t count, std::uint64_t seed, const std::string& kind,
+         const std::string& contactModel) {
         const dem::ParticleKind particles = kindNamed(kind);
-        return scenario([&] { return dem::hopper(count, seed, particles); });
+        const dem::ContactModel model = dem::contactModelNamed(contactModel);
+        return scenario([&] { return dem::hopper(count, seed, particles, model); });
       },
-      "count"_a = 1000, "seed"_a = 1, "kind"_a = "mesh",
-      "`count` granulates (or spheres) flowing through a conical funnel onto a floor.");
+      "count"_a = 1000, "seed"_a = 1, "kind"_a = "mesh", "contact_model"_a = "point",
+      "`count` granulates (or spheres) flowing through a conical funnel onto a floor "
+      "(contact_model='volume': a funnel and a floor with solid walls).");
   dem.def(
       "open_box",
       [](double width, double depth, double height, double floor) {
@@ -558,6 +587,31 @@ void bindScenarios(py::module_& dem) {
       },
       "outlet_radius"_a, "top_radius"_a, "outlet_height"_a, "top_height"_a, "segments"_a = 48,
       "rows"_a = 12, "A funnel about the z axis (a truncated cone, open), an obstacle.");
+  const auto meshes = [](const std::vector<Mesh>& pieces) {
+    std::vector<PyMesh> list;
+    for (const Mesh& piece : pieces)
+      list.emplace_back(piece);
+    return list;
+  };
+  dem.def(
+      "open_box_walls",
+      [meshes](double width, double depth, double height, double floor, double thickness) {
+        return meshes(dem::openBoxWalls(width, depth, height, floor, thickness));
+      },
+      "width"_a, "depth"_a, "height"_a, "floor"_a, "thickness"_a,
+      "open_box made solid for contact_model='volume': five closed convex boxes `thickness` "
+      "thick behind its faces, each an obstacle of its own.");
+  dem.def(
+      "funnel_walls",
+      [meshes](double outletRadius, double topRadius, double outletHeight, double topHeight,
+               int segments, double thickness) {
+        return meshes(dem::funnelWalls(outletRadius, topRadius, outletHeight, topHeight, segments,
+                                       thickness));
+      },
+      "outlet_radius"_a, "top_radius"_a, "outlet_height"_a, "top_height"_a, "segments"_a,
+      "thickness"_a,
+      "funnel made solid for contact_model='volume': `segments` closed convex pieces `thickness` "
+      "thick behind its faces, each an obstacle of its own.");
 }
 
 }  // namespace

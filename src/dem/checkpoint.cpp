@@ -221,6 +221,7 @@ class CheckpointCodec {
                                p.friction, p.tangentialStiffnessRatio})
       out.f64(value);
     out.vec(p.gravity);
+    out.u8(static_cast<std::uint8_t>(p.contactModel));
     out.f64(world.time_);
     out.u64(world.stepCount_);
     out.u8(world.forcesCurrent_ ? 1 : 0);
@@ -278,6 +279,8 @@ class CheckpointCodec {
       out.u8(contact.withObstacle ? 1 : 0);
       out.f64(contact.depth);
       out.vec(contact.force);
+      out.vec(contact.couple);
+      out.f64(contact.volume);
     }
 
     out.tag("NOTE");
@@ -285,13 +288,20 @@ class CheckpointCodec {
     return std::move(out.bytes());
   }
 
-  static Checkpoint restore(Reader& in) {
+  /// `version`: 1 (before the volume law: no contact model, no couples) or 2.
+  static Checkpoint restore(Reader& in, std::uint32_t version) {
     in.tag("PARM");
     Parameters p;
     for (double* value : {&p.timeStep, &p.epsilon, &p.filterDistance, &p.stiffness, &p.restitution,
                           &p.friction, &p.tangentialStiffnessRatio})
       *value = in.f64();
     p.gravity = in.vec();
+    if (version >= 2) {
+      const std::uint8_t model = in.u8();
+      if (model > static_cast<std::uint8_t>(ContactModel::volume))
+        in.fail("contact model " + std::to_string(model) + " is neither point (0) nor volume (1)");
+      p.contactModel = static_cast<ContactModel>(model);
+    }
     Checkpoint checkpoint{World(p), {}};  // checks the parameters
     World& world = checkpoint.world;
     world.time_ = in.f64();
@@ -381,7 +391,7 @@ class CheckpointCodec {
     }
 
     in.tag("CONT");
-    world.contacts_.resize(in.count(8 * 14 + 2 + 16 + 1, "contact"));
+    world.contacts_.resize(in.count(8 * 14 + 2 + 16 + 1 + (version >= 2 ? 8 * 4 : 0), "contact"));
     for (Contact& contact : world.contacts_) {
       contact.point.x = in.vec();
       contact.point.normal = in.vec();
@@ -396,6 +406,10 @@ class CheckpointCodec {
       contact.withObstacle = in.flag();
       contact.depth = in.f64();
       contact.force = in.vec();
+      if (version >= 2) {
+        contact.couple = in.vec();
+        contact.volume = in.f64();
+      }
     }
 
     in.tag("NOTE");
@@ -456,9 +470,10 @@ Checkpoint readCheckpoint(std::string_view bytes, const std::string& origin) {
   const std::uint32_t version = header.u32();
   const std::uint64_t size = header.u64();
   const std::uint32_t crc = header.u32();
-  if (version != kCheckpointVersion)
+  if (version < kOldestCheckpointVersion || version > kCheckpointVersion)
     throw Error(where + "DEM checkpoint format version " + std::to_string(version) +
-                "; this build of Δ reads version " + std::to_string(kCheckpointVersion));
+                "; this build of Δ reads versions " + std::to_string(kOldestCheckpointVersion) +
+                " to " + std::to_string(kCheckpointVersion));
   const std::string_view payload = bytes.substr(kHeaderBytes);
   if (payload.size() < size)
     throw Error(where + "truncated DEM checkpoint: " + std::to_string(bytes.size()) +
@@ -470,7 +485,7 @@ Checkpoint readCheckpoint(std::string_view bytes, const std::string& origin) {
   if (crc32Of(payload) != crc)
     throw Error(where + "corrupt DEM checkpoint: the checksum (CRC-32) does not match");
   Reader in(payload, origin);
-  return CheckpointCodec::restore(in);
+  return CheckpointCodec::restore(in, version);
 }
 
 void saveCheckpoint(const std::filesystem::path& path, const World& world, std::string_view note) {

@@ -38,6 +38,65 @@ double onsetFactor(const std::vector<PointForce>& points, std::size_t deepestInd
   return 0.5 + deepest.depth / approach;
 }
 
+/// What friction puts at a contact's centre: a tangential force and a torque about the normal.
+struct Friction {
+  Vec3 force;
+  double torque = 0.0;
+  TangentialSpring spring;
+  bool sliding = false;
+};
+
+/// The tangential and torsion springs at `centre` with unit `normal` (the header's "Friction"),
+/// limited by μ·normalForce and μ·normalForce·meanArm; `polarMoment` is Σwᵢ|rᵢ|², the torsion
+/// spring's stiffness per k_t (0: no twist).
+Friction frictionAt(const Vec3& centre, const Vec3& normal, double normalForce, double polarMoment,
+                    double meanArm, const BodyMotion& first, const BodyMotion& second,
+                    double effectiveMass, const TangentialSpring& previous, double timeStep,
+                    const ContactLaw& law) noexcept {
+  Friction result;
+  const double tangentialDamping =
+      2.0 * law.dampingRatio * std::sqrt(law.tangentialStiffness * effectiveMass);
+
+  // Sliding: the spring at the contact centre, turned into the current tangent plane at its
+  // length, stretched by the tangential relative velocity there.
+  const Vec3 relative = first.velocityAt(centre) - second.velocityAt(centre);
+  const Vec3 slidingVelocity = relative - normal * dot(relative, normal);
+  const double previousLength = length(previous.displacement);
+  Vec3 displacement = previous.displacement - normal * dot(previous.displacement, normal);
+  const double projectedLength = length(displacement);
+  displacement = projectedLength > 0.0 ? displacement * (previousLength / projectedLength) : Vec3{};
+  displacement += slidingVelocity * timeStep;
+  Vec3 tangential = displacement * -law.tangentialStiffness - slidingVelocity * tangentialDamping;
+  const double limit = law.friction * normalForce;
+  const double magnitude = length(tangential);
+  if (magnitude > limit) {
+    tangential = magnitude > 0.0 ? tangential * (limit / magnitude) : Vec3{};
+    displacement = tangential * (-1.0 / law.tangentialStiffness);
+    result.sliding = true;
+  }
+  result.force = tangential;
+  result.spring.displacement = displacement;
+
+  // Twisting: a torsion spring of stiffness k_t·polarMoment, cut at the Coulomb limit
+  // μ·F·meanArm. One point, or points on a line through the centre along which the body turns,
+  // have no arm and no twist.
+  if (polarMoment > 0.0) {
+    const double spin = dot(first.angularVelocity - second.angularVelocity, normal);
+    double twist = previous.twist + spin * timeStep;
+    const double torsionStiffness = law.tangentialStiffness * polarMoment;
+    double torque = -torsionStiffness * twist - tangentialDamping * polarMoment * spin;
+    const double torqueLimit = law.friction * normalForce * meanArm;
+    if (std::fabs(torque) > torqueLimit) {
+      torque = std::copysign(torqueLimit, torque);
+      twist = -torque / torsionStiffness;
+      result.sliding = true;
+    }
+    result.torque = torque;
+    result.spring.twist = twist;
+  }
+  return result;
+}
+
 }  // namespace
 
 PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
@@ -90,33 +149,7 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
   if (!(law.friction > 0.0) || !(law.tangentialStiffness > 0.0) ||
       !(lengthSquared(meanDirection) > 0.5))
     return result;
-  const double tangentialDamping =
-      2.0 * law.dampingRatio * std::sqrt(law.tangentialStiffness * effectiveMass);
-
-  // Sliding: the spring at the contact centre, turned into the current tangent plane at its
-  // length, stretched by the tangential relative velocity there.
-  const Vec3 relative = first.velocityAt(centre) - second.velocityAt(centre);
-  const Vec3 slidingVelocity = relative - meanDirection * dot(relative, meanDirection);
-  const double previousLength = length(previous.displacement);
-  Vec3 displacement =
-      previous.displacement - meanDirection * dot(previous.displacement, meanDirection);
-  const double projectedLength = length(displacement);
-  displacement = projectedLength > 0.0 ? displacement * (previousLength / projectedLength) : Vec3{};
-  displacement += slidingVelocity * timeStep;
-  Vec3 tangential = displacement * -law.tangentialStiffness - slidingVelocity * tangentialDamping;
-  const double limit = law.friction * result.normalForce;
-  const double magnitude = length(tangential);
-  if (magnitude > limit) {
-    tangential = magnitude > 0.0 ? tangential * (limit / magnitude) : Vec3{};
-    displacement = tangential * (-1.0 / law.tangentialStiffness);
-    result.sliding = true;
-  }
-  result.spring.displacement = displacement;
-
-  // Twisting: the points' tangential springs turned about the normal through the centre, a
-  // torsion spring of stiffness k_t·Σwᵢ|rᵢ|² (rᵢ the points' offsets in the tangent plane),
-  // cut at the Coulomb limit μ·F·Σwᵢ|rᵢ|. One point, or points on a line through the centre
-  // along which the body turns, have no arm and no twist.
+  // The torsion spring's stiffness per k_t and arm: rᵢ the points' offsets in the tangent plane.
   double polarMoment = 0.0, meanArm = 0.0;
   for (PointForce& out : result.points) {
     if (!(out.depth > 0.0)) continue;
@@ -126,20 +159,13 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
     polarMoment += weight * lengthSquared(planar);
     meanArm += weight * length(planar);
   }
-  double torque = 0.0;
-  if (polarMoment > 0.0) {
-    const double spin = dot(first.angularVelocity - second.angularVelocity, meanDirection);
-    double twist = previous.twist + spin * timeStep;
-    const double torsionStiffness = law.tangentialStiffness * polarMoment;
-    torque = -torsionStiffness * twist - tangentialDamping * polarMoment * spin;
-    const double torqueLimit = law.friction * result.normalForce * meanArm;
-    if (std::fabs(torque) > torqueLimit) {
-      torque = std::copysign(torqueLimit, torque);
-      twist = -torque / torsionStiffness;
-      result.sliding = true;
-    }
-    result.spring.twist = twist;
-  }
+  const Friction friction =
+      frictionAt(centre, meanDirection, result.normalForce, polarMoment, meanArm, first, second,
+                 effectiveMass, previous, timeStep, law);
+  const Vec3 tangential = friction.force;
+  const double torque = friction.torque;
+  result.spring = friction.spring;
+  result.sliding = friction.sliding;
 
   // Shared by the points: the sliding force by depth, the twisting torque as forces along
   // n × rᵢ whose sum is zero (Σwᵢrᵢ = 0 about the weighted centre) and whose moment is the torque.
@@ -151,6 +177,83 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
       out.force += cross(meanDirection, out.point.x - centre) * (weight * torque / polarMoment);
   }
   return result;
+}
+
+PairForces volumePairForces(std::span<const contactdetection::OverlapRegion> regions,
+                            const BodyMotion& first, const BodyMotion& second, double effectiveMass,
+                            double volumeStiffness, const TangentialSpring& previous,
+                            double timeStep, const ContactLaw& law) {
+  PairForces result;
+  const double kappa = volumeStiffness;
+  const double dampingPerArea = 2.0 * law.dampingRatio * std::sqrt(effectiveMass * kappa);
+  std::size_t largest = 0;
+  for (const contactdetection::OverlapRegion& region : regions) {
+    const double area = length(region.areaVector);
+    if (!(area > 0.0) || !(region.volume > 0.0)) continue;
+    const Vec3 n = region.areaVector / area;      // from the first body into the second
+    const double spring = kappa * region.volume;  // w′(V)
+    // The relative velocity of the second body with respect to the first, along n: negative
+    // while they approach. The dashpot acts at the centroid, never pulling (it may cancel the
+    // spring's force, not reverse it).
+    const double normalVelocity =
+        dot(second.velocityAt(region.centroid) - first.velocityAt(region.centroid), n);
+    const double springForce = spring * area;
+    const double damping = std::max(-springForce, -dampingPerArea * area * normalVelocity);
+    PointForce out;
+    out.point.x = region.centroid;
+    out.point.direction = -n;
+    out.point.normal = Vec3{};
+    out.point.distance = region.volume / area;
+    out.point.overlap = true;
+    out.point.converged = true;
+    out.depth = region.volume / area;
+    out.volume = region.volume;
+    // On the first body: the opposites of the second's κV·S + damping·n (= (κV|S| + damping)·n,
+    // never negative) at the centroid and of its couple κV·M.
+    out.force = n * -(springForce + damping);
+    out.couple = region.moment * -spring;
+    result.normalForce += springForce + damping;
+    result.springEnergy += 0.5 * kappa * region.volume * region.volume;
+    if (out.depth > result.deepest) result.deepest = out.depth;
+    if (result.points.empty() || region.volume > result.points[largest].volume)
+      largest = result.points.size();
+    result.points.push_back(out);
+  }
+  if (result.points.empty() || !(law.friction > 0.0) || !(law.tangentialStiffness > 0.0))
+    return result;
+  // Friction at the largest region, its contact patch taken as a disc of area |S|.
+  PointForce& main = result.points[largest];
+  const Vec3 normal = -main.point.direction;
+  const double area = main.volume / main.depth;
+  const double polarMoment = area / (2.0 * std::numbers::pi);
+  const double meanArm = (2.0 / 3.0) * std::sqrt(area / std::numbers::pi);
+  const Friction friction =
+      frictionAt(main.point.x, normal, result.normalForce, polarMoment, meanArm, first, second,
+                 effectiveMass, previous, timeStep, law);
+  main.force += friction.force;
+  main.couple += normal * friction.torque;
+  result.spring = friction.spring;
+  result.sliding = friction.sliding;
+  return result;
+}
+
+double volumeStiffness(double stiffness, double smallestRadius) noexcept {
+  const double crossSection = std::numbers::pi * smallestRadius * smallestRadius;
+  return stiffness / (crossSection * crossSection);
+}
+
+double equivalentRadius(double volume) noexcept {
+  return std::cbrt(0.75 * volume / std::numbers::pi);
+}
+
+const char* contactModelName(ContactModel model) noexcept {
+  return model == ContactModel::volume ? "volume" : "point";
+}
+
+ContactModel contactModelNamed(const std::string& name) {
+  if (name == "point") return ContactModel::point;
+  if (name == "volume") return ContactModel::volume;
+  throw Error("dem: contact model '" + name + "' is neither point nor volume");
 }
 
 double restitutionOf(double dampingRatio) noexcept {

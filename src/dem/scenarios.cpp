@@ -1,6 +1,7 @@
 #include "delta/dem/scenarios.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -46,8 +47,9 @@ class Random {
 };
 
 /// The parameters every granular scenario shares; granularWorld sets the stiffness and time step.
-Parameters granularParameters(double restitution, double friction) {
+Parameters granularParameters(double restitution, double friction, ContactModel model) {
   Parameters parameters;
+  parameters.contactModel = model;
   parameters.epsilon = kGrainRadius / 20.0;
   parameters.filterDistance = kGrainRadius / 4.0;
   parameters.restitution = restitution;
@@ -118,14 +120,14 @@ ParticleShape meanSphere(const std::vector<ParticleShape>& shapes) {
 
 GranularSetup granularWorld(std::size_t count, std::uint64_t seed, double restitution,
                             double friction, std::size_t columns, double bottomGap, double bottom,
-                            bool impactFromTop, ParticleKind kind) {
+                            bool impactFromTop, ParticleKind kind, ContactModel model) {
   Random random(seed);
   std::vector<ParticleShape> shapes = granulateShapes(count, random);
   // The lattice is the granulates' whatever the kind, so both kinds start in the same places.
   const double radius = largestRadiusAndMass(shapes).first;
   if (kind == ParticleKind::Sphere) shapes = {meanSphere(shapes)};
   const double heaviest = largestRadiusAndMass(shapes).second;
-  Parameters parameters = granularParameters(restitution, friction);
+  Parameters parameters = granularParameters(restitution, friction, model);
   const double spacing = 2.0 * radius + 2.0 * parameters.epsilon + 0.3 * kGrainRadius;
   const double firstLayer = bottom + radius + bottomGap;
   const double top = firstLayer + static_cast<double>((count - 1) / (columns * columns)) * spacing;
@@ -205,7 +207,61 @@ Mesh funnel(double outletRadius, double topRadius, double outletHeight, double t
   return Mesh(std::move(vertices), std::move(triangles));
 }
 
-Scenario twoParticles(double restitution, double offsetFraction, double friction) {
+namespace {
+
+/// A convex hexahedron from its corners, indexed like a box's: bit 0 the first direction, bit 1
+/// the second, bit 2 the third (a right-handed triple), each face two triangles, normals out.
+Mesh hexahedron(const std::array<Vec3, 8>& corners) {
+  std::vector<Vec3> vertices(corners.begin(), corners.end());
+  std::vector<TriangleIndices> triangles = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5},
+                                            {0, 1, 5}, {0, 5, 4}, {2, 6, 7}, {2, 7, 3},
+                                            {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+  return Mesh(std::move(vertices), std::move(triangles));
+}
+
+void requireThickness(double thickness, const char* function) {
+  if (!std::isfinite(thickness) || !(thickness > 0.0))
+    throw Error(std::string(function) + ": thickness = " + toString(thickness) +
+                " must be finite and positive");
+}
+
+}  // namespace
+
+std::vector<Mesh> openBoxWalls(double width, double depth, double height, double floor,
+                               double thickness) {
+  requireThickness(thickness, "openBoxWalls");
+  openBox(width, depth, height, floor);  // throws as openBox does for the other arguments
+  const double x = 0.5 * width, y = 0.5 * depth, t = thickness, middle = floor + 0.5 * height;
+  return {primitives::box({width + 2.0 * t, depth + 2.0 * t, t}, {0.0, 0.0, floor - 0.5 * t}),
+          primitives::box({t, depth + 2.0 * t, height}, {-x - 0.5 * t, 0.0, middle}),
+          primitives::box({t, depth + 2.0 * t, height}, {x + 0.5 * t, 0.0, middle}),
+          primitives::box({width, t, height}, {0.0, -y - 0.5 * t, middle}),
+          primitives::box({width, t, height}, {0.0, y + 0.5 * t, middle})};
+}
+
+std::vector<Mesh> funnelWalls(double outletRadius, double topRadius, double outletHeight,
+                              double topHeight, int segments, double thickness) {
+  requireThickness(thickness, "funnelWalls");
+  funnel(outletRadius, topRadius, outletHeight, topHeight, segments, 1);  // throws as funnel does
+  std::vector<Mesh> pieces;
+  for (int s = 0; s < segments; ++s) {
+    std::array<Vec3, 8> corners;
+    for (int corner = 0; corner < 8; ++corner) {
+      // Bit 0: inner or outer face (radially out), bit 1: the segment's first or second side
+      // (around the axis), bit 2: outlet or top (up): a right-handed triple.
+      const bool outer = corner & 1, second = corner & 2, top = corner & 4;
+      const double angle = 2.0 * std::numbers::pi * (s + (second ? 1 : 0)) / segments;
+      const double radius = (top ? topRadius : outletRadius) + (outer ? thickness : 0.0);
+      corners[static_cast<std::size_t>(corner)] = {
+          radius * std::cos(angle), radius * std::sin(angle), top ? topHeight : outletHeight};
+    }
+    pieces.push_back(hexahedron(corners));
+  }
+  return pieces;
+}
+
+Scenario twoParticles(double restitution, double offsetFraction, double friction,
+                      ContactModel model) {
   if (!std::isfinite(offsetFraction) || offsetFraction < 0.0 || offsetFraction >= 1.0)
     throw Error("twoParticles: offsetFraction = " + toString(offsetFraction) +
                 " must lie in [0, 1)");
@@ -217,6 +273,7 @@ Scenario twoParticles(double restitution, double offsetFraction, double friction
   parameters.restitution = restitution;
   parameters.friction = friction;
   parameters.gravity = {};
+  parameters.contactModel = model;
   // Head-on, the pair (effective mass m/2) stops at depth ε undamped.
   parameters.stiffness = stiffnessForImpact(0.5 * sphere.mass(), approachSpeed, parameters.epsilon);
   parameters.timeStep = dem::suggestedTimeStep(parameters.stiffness, sphere.mass());
@@ -231,26 +288,37 @@ Scenario twoParticles(double restitution, double offsetFraction, double friction
   right.velocity = {-0.5 * approachSpeed, 0.0, 0.0};
   world.addParticle(0, left);
   world.addParticle(0, right);
-  const double duration = 0.1 * radius / approachSpeed +
-                          3.0 * contactDuration(parameters.stiffness, 0.5 * sphere.mass());
+  // The volume law is softer: head-on, two spheres a depth δ into each other hold w = k·δ⁴/(8r²)
+  // (the lens, V ≈ πrδ²/2 and |S| ≈ πrδ, with κ = k/(πr²)²), a quartic well that stops them at
+  // δ = √(2rε) after 1.31·δ/v, and sends them back as long again.
+  const double contact =
+      model == ContactModel::volume
+          ? 2.0 * 1.3110287771461 * std::sqrt(2.0 * radius * parameters.epsilon) / approachSpeed
+          : contactDuration(parameters.stiffness, 0.5 * sphere.mass());
+  const double duration = 0.1 * radius / approachSpeed + 3.0 * contact;
   const auto steps = static_cast<std::size_t>(std::ceil(duration / parameters.timeStep));
   return {"two-particles", std::move(world), steps, framesInterval(steps)};
 }
 
-Scenario settle(std::size_t count, std::uint64_t seed, ParticleKind kind) {
+Scenario settle(std::size_t count, std::uint64_t seed, ParticleKind kind, ContactModel model) {
   requireCount(count, "settle");
   const auto columns = static_cast<std::size_t>(std::ceil(std::cbrt(static_cast<double>(count))));
   GranularSetup setup =
-      granularWorld(count, seed, 0.5, 0.5, columns, 0.5 * kGrainRadius, 0.0, true, kind);
+      granularWorld(count, seed, 0.5, 0.5, columns, 0.5 * kGrainRadius, 0.0, true, kind, model);
   const double width = static_cast<double>(columns) * setup.spacing + kGrainRadius;
-  setup.world.addObstacle(openBox(width, width, setup.top + 2.0 * kGrainRadius));
+  const double height = setup.top + 2.0 * kGrainRadius;
+  if (model == ContactModel::volume)  // closed convex pieces, a grain thick (scenarios.h)
+    for (const Mesh& wall : openBoxWalls(width, width, height, 0.0, kGrainRadius))
+      setup.world.addObstacle(wall);
+  else
+    setup.world.addObstacle(openBox(width, width, height));
   const double duration = 2.0 * std::sqrt(2.0 * setup.top / kGravity) + 0.1;
   const auto steps =
       static_cast<std::size_t>(std::ceil(duration / setup.world.parameters().timeStep));
   return {"settle", std::move(setup.world), steps, framesInterval(steps)};
 }
 
-Scenario hopper(std::size_t count, std::uint64_t seed, ParticleKind kind) {
+Scenario hopper(std::size_t count, std::uint64_t seed, ParticleKind kind, ContactModel model) {
   requireCount(count, "hopper");
   const double r = kGrainRadius;
   const auto columns = static_cast<std::size_t>(std::ceil(std::cbrt(static_cast<double>(count))));
@@ -261,10 +329,17 @@ Scenario hopper(std::size_t count, std::uint64_t seed, ParticleKind kind) {
   const double outletRadius = 4.5 * r, outletHeight = 10.0 * r;
   const double topHeight =
       outletHeight + (topRadius - outletRadius) * std::tan(std::numbers::pi / 3);
-  GranularSetup setup = granularWorld(count, seed, 0.5, 0.3, columns, r, topHeight, false, kind);
-  setup.world.addObstacle(funnel(outletRadius, topRadius, outletHeight, topHeight));
+  GranularSetup setup =
+      granularWorld(count, seed, 0.5, 0.3, columns, r, topHeight, false, kind, model);
   const double floorSize = 2.0 * (topRadius + 20.0 * r);
-  setup.world.addObstacle(primitives::quad(floorSize, floorSize, {0, 0, 0}));
+  if (model == ContactModel::volume) {  // closed convex pieces, a grain thick (scenarios.h)
+    for (const Mesh& wall : funnelWalls(outletRadius, topRadius, outletHeight, topHeight, 48, r))
+      setup.world.addObstacle(wall);
+    setup.world.addObstacle(primitives::box({floorSize, floorSize, r}, {0, 0, -0.5 * r}));
+  } else {
+    setup.world.addObstacle(funnel(outletRadius, topRadius, outletHeight, topHeight));
+    setup.world.addObstacle(primitives::quad(floorSize, floorSize, {0, 0, 0}));
+  }
   const double duration = 0.5;  // the lattice falls into the funnel and flows out onto the floor
   const auto steps =
       static_cast<std::size_t>(std::ceil(duration / setup.world.parameters().timeStep));

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "delta/core/error.h"
 #include "delta/dem/scenarios.h"
@@ -62,8 +63,12 @@ void expectSameState(const World& a, const World& b) {
     EXPECT_TRUE(sameBits(a.obstacles()[o].pose.translation, b.obstacles()[o].pose.translation));
   }
   ASSERT_EQ(a.contacts().size(), b.contacts().size());
-  for (std::size_t c = 0; c < a.contacts().size(); ++c)
+  for (std::size_t c = 0; c < a.contacts().size(); ++c) {
     EXPECT_TRUE(sameBits(a.contacts()[c].force, b.contacts()[c].force)) << "contact " << c;
+    EXPECT_TRUE(sameBits(a.contacts()[c].couple, b.contacts()[c].couple)) << "contact " << c;
+    EXPECT_TRUE(sameBits(a.contacts()[c].volume, b.contacts()[c].volume)) << "contact " << c;
+  }
+  EXPECT_EQ(a.parameters().contactModel, b.parameters().contactModel);
   EXPECT_TRUE(sameBits(a.energies().total(), b.energies().total()));
   EXPECT_EQ(a.stateDigest(), b.stateDigest());
 }
@@ -83,6 +88,8 @@ std::vector<Case> cases() {
       {"settle", [] { return settle(27, 3); }, 1500, 200},
       {"settle_spheres", [] { return settle(27, 3, ParticleKind::Sphere); }, 1000, 200},
       {"hopper", [] { return hopper(40, 2); }, 6900, 100},
+      {"settle_volume_law", [] { return settle(8, 5, ParticleKind::Mesh, ContactModel::volume); },
+       1200, 200},
   };
 }
 
@@ -133,6 +140,57 @@ TEST(Checkpoint, DigestIsTheSameOnOneAndTwoThreads) {
   Scenario other = settle(27, 3);
   other.world.run(301);
   EXPECT_NE(other.world.stateDigest(), one);
+}
+
+TEST(Checkpoint, VolumeLawDigestIsTheSameOnOneAndTwoThreads) {
+  std::string one, two;
+  for (const int threads : {1, 2})
+    withThreads(threads, [&] {
+      Scenario scenario = settle(27, 3, ParticleKind::Mesh, ContactModel::volume);
+      scenario.world.run(1300);  // the first layer has landed
+      EXPECT_GT(scenario.world.contacts().size(), 0u);
+      (threads == 1 ? one : two) = scenario.world.stateDigest();
+    });
+  EXPECT_EQ(one, two);
+}
+
+/// The CRC-32 (zlib's polynomial) of `bytes`, to forge a checkpoint of the older format.
+std::uint32_t crc32Of(std::string_view bytes) {
+  std::uint32_t crc = 0xffffffffu;
+  for (const char c : bytes) {
+    crc ^= static_cast<unsigned char>(c);
+    for (int bit = 0; bit < 8; ++bit)
+      crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+TEST(Checkpoint, AVersion1CheckpointLoadsAsAPointLawWorld) {
+  // Version 1 had no contact model byte (after the gravity in PARM) and no couples or volumes
+  // in CONT. A world that has not stepped has no contacts: its version 1 file is the version 2
+  // one less that byte.
+  Scenario scenario = settle(8, 5);
+  const std::string bytes = checkpointBytes(scenario.world, "old");
+  constexpr std::size_t kHeader = 24, kModelByte = kHeader + 4 + 7 * 8 + 3 * 8;
+  ASSERT_EQ(bytes[kModelByte], 0);  // the point law
+  std::string payload = bytes.substr(kHeader);
+  payload.erase(kModelByte - kHeader, 1);
+  std::string old = bytes.substr(0, kHeader);
+  old[8] = 1;  // the version, then the payload size and its CRC, little-endian
+  for (int b = 0; b < 8; ++b)
+    old[12 + b] = static_cast<char>((std::uint64_t{payload.size()} >> (8 * b)) & 0xffu);
+  const std::uint32_t crc = crc32Of(payload);
+  for (int b = 0; b < 4; ++b)
+    old[20 + b] = static_cast<char>((crc >> (8 * b)) & 0xffu);
+  old += payload;
+  Checkpoint loaded = readCheckpoint(old, "old");
+  EXPECT_EQ(loaded.note, "old");
+  EXPECT_EQ(loaded.world.parameters().contactModel, ContactModel::point);
+  expectSameState(scenario.world, loaded.world);
+  EXPECT_EQ(checkpointBytes(loaded.world, "old"), bytes);  // written again as version 2
+  scenario.world.run(20);
+  loaded.world.run(20);
+  expectSameState(scenario.world, loaded.world);
 }
 
 TEST(Checkpoint, SaveAndLoadAFileThenContinue) {
@@ -195,8 +253,10 @@ TEST(CheckpointErrors, ForeignTruncatedCorruptAndOtherVersions) {
     EXPECT_NE(loadError(flipped).find("corrupt"), std::string::npos) << at;
   }
   std::string newer = bytes;
-  newer[8] = 2;
-  EXPECT_NE(loadError(newer).find("format version 2"), std::string::npos) << loadError(newer);
+  newer[8] = static_cast<char>(kCheckpointVersion + 1);
+  EXPECT_NE(loadError(newer).find("format version " + std::to_string(kCheckpointVersion + 1)),
+            std::string::npos)
+      << loadError(newer);
 
   const TempDir folder;
   EXPECT_NE(errorOf([&] { World::load(folder / "missing.ckpt"); }).find("missing.ckpt"),

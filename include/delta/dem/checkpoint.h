@@ -25,14 +25,17 @@
 /// made anew each step, and the built-in scenarios add no particles after the start (there is
 /// no random state to keep).
 ///
-/// Format (version 1), all little-endian, doubles as their IEEE-754 bits:
+/// Format (version 2), all little-endian, doubles as their IEEE-754 bits:
 ///
 ///     "DELTADEM"  u32 version  u64 payload bytes  u32 CRC-32 of the payload (zlib's)  payload
 ///
 /// The payload is a sequence of sections, each a four-letter tag followed by its fields:
 /// "PARM" (parameters, time, step, flags), "SHAP" (shapes), "PART" (particles), "SPRG"
 /// (springs), "OBST" (obstacles), "CONT" (contacts), "NOTE". Each count is checked against the
-/// bytes that remain before anything is allocated.
+/// bytes that remain before anything is allocated. Version 2 added the contact model (a byte
+/// after the gravity in "PARM": 0 point, 1 volume) and each contact's couple and overlap volume
+/// (after its force in "CONT"); version 1 files (written before the volume law) still load, as
+/// point-law worlds with zero couples. Files are always written as version 2.
 ///
 /// Reading throws delta::Error naming the origin (the file) for: a file that is not a
 /// checkpoint ("not a Δ DEM checkpoint"), another format version, a file cut short
@@ -43,8 +46,10 @@
 /// they may run concurrently with other const use of the same World, never with a step.
 namespace delta::dem {
 
-/// The checkpoint format version this build writes and reads.
-inline constexpr std::uint32_t kCheckpointVersion = 1;
+/// The checkpoint format version this build writes (and the newest it reads).
+inline constexpr std::uint32_t kCheckpointVersion = 2;
+/// The oldest checkpoint format version this build reads.
+inline constexpr std::uint32_t kOldestCheckpointVersion = 1;
 
 /// A World and the note it was saved with.
 ///

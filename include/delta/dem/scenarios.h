@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "delta/core/vec3.h"
 #include "delta/dem/world.h"
@@ -37,9 +38,12 @@ struct Scenario {
 /// Two icospheres (3 subdivisions, 1280 triangles, radius 1 cm) approaching along x at a
 /// relative speed of 1 m/s, no gravity, starting 1 mm (r/10) outside each other's shells. The
 /// second is shifted along y by `offsetFraction` times the sum of the radii (0: head-on; toward
-/// 1: grazing). Runs until well after they separate. Throws delta::Error unless 0 ≤ e ≤ 1,
-/// 0 ≤ offsetFraction < 1 and friction ≥ 0.
-Scenario twoParticles(double restitution = 0.9, double offsetFraction = 0.0, double friction = 0.0);
+/// 1: grazing). Runs until well after they separate. `model`: the contact law (either works;
+/// with the volume law, at the same k, the spheres sink √(2rε) ≈ 0.32·r into each other, and the
+/// run is longer by as much as the contact is: about five times).
+/// Throws delta::Error unless 0 ≤ e ≤ 1, 0 ≤ offsetFraction < 1 and friction ≥ 0.
+Scenario twoParticles(double restitution = 0.9, double offsetFraction = 0.0, double friction = 0.0,
+                      ContactModel model = ContactModel::point);
 
 /// `count` granulates (default 100), randomly shaped and turned (from `seed`), on a lattice in
 /// an open-top box whose floor is a little wider than the lattice, falling under gravity and
@@ -50,8 +54,14 @@ Scenario twoParticles(double restitution = 0.9, double offsetFraction = 0.0, dou
 /// shape whose volume is the mean volume of the granulates drawn for that seed (the same mass
 /// flows), on the same lattice with the same jitter, in the same box; ε, h, e and μ are the
 /// same, and the stiffness and time step follow the same rules from the sphere's mass.
+///
+/// `model` = ContactModel::volume (which needs closed obstacles and mesh particles: a sphere
+/// kind is refused) makes the box openBoxWalls, r thick: the same inner faces, as five closed
+/// convex obstacles. The stiffness k and time step
+/// are the point law's (contact_model.h: κ = k/(π·r_min²)²); impacts then sink deeper than ε
+/// (about √(rε) for a sphere on the floor).
 Scenario settle(std::size_t count = 100, std::uint64_t seed = 1,
-                ParticleKind kind = ParticleKind::Mesh);
+                ParticleKind kind = ParticleKind::Mesh, ContactModel model = ContactModel::point);
 
 /// `count` granulates (default 1000) on a lattice just above a conical funnel (walls at 60° to
 /// the horizontal, outlet radius 4.5 r, 10 r above a floor), flowing through it onto the floor
@@ -62,8 +72,11 @@ Scenario settle(std::size_t count = 100, std::uint64_t seed = 1,
 ///
 /// `kind` = ParticleKind::Sphere: spheres of the granulates' mean volume instead, with the same
 /// lattice, funnel and floor and the same rules as settle() states.
+///
+/// `model` = ContactModel::volume: the funnel as funnelWalls (48 closed convex obstacles, r thick)
+/// and the floor a box r thick whose top is the floor.
 Scenario hopper(std::size_t count = 1000, std::uint64_t seed = 1,
-                ParticleKind kind = ParticleKind::Mesh);
+                ParticleKind kind = ParticleKind::Mesh, ContactModel model = ContactModel::point);
 
 /// An open-top box: a floor of `width` × `depth` at height `floor`, centred on the z axis, and
 /// four walls `height` high; 10 triangles, normals inward. An obstacle for World::addObstacle.
@@ -78,6 +91,23 @@ Mesh openBox(double width, double depth, double height, double floor = 0.0);
 /// for non-positive radii, too few segments or rows, or topHeight ≤ outletHeight.
 Mesh funnel(double outletRadius, double topRadius, double outletHeight, double topHeight,
             int segments = 48, int rows = 12);
+
+/// openBox made solid for the volume contact law, which needs closed meshes: five boxes
+/// `thickness` thick whose inner faces are openBox's (a floor slab under the floor, as wide as
+/// the walls' outsides, and four walls on it, touching and not overlapping), 12 triangles each.
+/// Convex pieces, as obstacles of their own: a convex particle's overlap with each is one region,
+/// so the volume law's energy stays continuous (contact_model.h), where one closed tray would have
+/// a particle's overlap split in two at its inner corners. Throws delta::Error as openBox does,
+/// and for a thickness that is not finite and positive.
+std::vector<Mesh> openBoxWalls(double width, double depth, double height, double floor,
+                               double thickness);
+
+/// funnel made solid for the volume contact law: `segments` convex pieces, each the wall between
+/// two of funnel's generators (its inner face funnel's strip there) and `thickness` wider
+/// outward at every height, 12 triangles each; obstacles of their own, as openBoxWalls says.
+/// Throws delta::Error as funnel does, and for a thickness that is not finite and positive.
+std::vector<Mesh> funnelWalls(double outletRadius, double topRadius, double outletHeight,
+                              double topHeight, int segments, double thickness);
 
 /// Measures the normal coefficient of restitution of a collision of two particles: the
 /// relative velocity along the line of centres after they part over the one before they met,
