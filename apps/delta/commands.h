@@ -13,6 +13,7 @@ void addContactCommand(CLI::App& app);
 void addDistanceCommand(CLI::App& app);
 void addDemCommand(CLI::App& app);
 void addIbCommand(CLI::App& app);
+void addOverlapCommand(CLI::App& app);
 
 /// Thrown by the ranks of a distributed run for an error that rank 0 has reported already:
 /// main() exits with status 1 and prints nothing.

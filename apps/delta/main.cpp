@@ -101,6 +101,7 @@ int runCommand(int argc, char** argv) {
   delta::cli::addDistanceCommand(app);
   delta::cli::addDemCommand(app);
   delta::cli::addIbCommand(app);
+  delta::cli::addOverlapCommand(app);
   refuseEmptyValues(app);
 
   try {

@@ -44,6 +44,7 @@
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"
+#include "delta/query/overlap.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 #include "delta/query/sphere_contacts.h"

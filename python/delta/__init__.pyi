@@ -14,6 +14,53 @@ class Error(ValueError):
     """
     ...
 
+class IntersectionCurve:
+    """
+    A curve where the surfaces of two meshes cross: a chain of segments, each where a triangle of the first mesh crosses one of the second. Seen from outside the first mesh, the part of its surface inside the second lies to the left of the curve.
+    """
+    def __init__(self, *args: Any, **kwargs: Any) -> None: ...
+    def __len__(self) -> int:
+        """
+        The number of segments.
+        """
+        ...
+    @property
+    def closed(self) -> bool:
+        """
+        The curve ends where it starts (always, for closed meshes).
+        """
+        ...
+    @property
+    def length(self) -> float:
+        """
+        The length of the curve.
+        """
+        ...
+    @property
+    def points(self) -> numpy.ndarray:
+        """
+        The points, shape (n, 3) float64 (world frame, a copy); a closed curve's last point repeats its first.
+        """
+        ...
+    @property
+    def region(self) -> int:
+        """
+        The index into Overlap.regions of the region the curve bounds.
+        """
+        ...
+    @property
+    def triangles_a(self) -> numpy.ndarray:
+        """
+        Per segment (points[i] to points[i + 1]), the first mesh's triangle: uint32, shape (n - 1,).
+        """
+        ...
+    @property
+    def triangles_b(self) -> numpy.ndarray:
+        """
+        Per segment, the second mesh's triangle: uint32, shape (n - 1,).
+        """
+        ...
+
 class Mesh:
     """
     An indexed triangle mesh: vertices and index triples.
@@ -205,6 +252,126 @@ class MinimumDistance:
     def triangle_b(self) -> int:
         """
         Triangle id in the second mesh.
+        """
+        ...
+
+class Overlap:
+    """
+    What delta.overlap finds: the integrals over all of A ∩ B (volume, centroid, area_vector, area_vector_b, moment, curve_length), the same per connected region (regions, largest volume first), the intersection curves, and counts. True when the meshes share a volume.
+    """
+    def __init__(self, *args: Any, **kwargs: Any) -> None: ...
+    @property
+    def area_vector(self) -> numpy.ndarray:
+        """
+        ∫ n dA over the part of a's surface inside b, n a's outward normal, shape (3,): the direction the overlap pushes b out of a (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def area_vector_b(self) -> numpy.ndarray:
+        """
+        The same over the part of b's surface inside a: -area_vector up to rounding (the boundary of A ∩ B is closed), for checking (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def centroid(self) -> numpy.ndarray:
+        """
+        The centroid of the shared solid, shape (3,) (world frame; zero where there is none) (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def curve_length(self) -> float:
+        """
+        The length of the intersection curves bounding the shared solid (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def curves(self) -> List[IntersectionCurve]:
+        """
+        The intersection curves: a list of IntersectionCurve (empty with curves=False).
+        """
+        ...
+    @property
+    def moment(self) -> numpy.ndarray:
+        """
+        ∫ (x - centroid) × n dA over the part of a's surface inside b, shape (3,); about another point p it is moment + np.cross(centroid - p, area_vector) (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def regions(self) -> List[OverlapRegion]:
+        """
+        The connected pieces of A ∩ B, largest volume first: a list of OverlapRegion.
+        """
+        ...
+    @property
+    def segments(self) -> int:
+        """
+        The number of intersection segments (pairs of crossing triangles) found.
+        """
+        ...
+    @property
+    def total(self) -> OverlapRegion:
+        """
+        The integrals over all regions, as an OverlapRegion.
+        """
+        ...
+    @property
+    def touching(self) -> int:
+        """
+        Pieces of contact that enclose no volume (surfaces that only touch, faces lying on one another): counted here, left out of the regions.
+        """
+        ...
+    @property
+    def volume(self) -> float:
+        """
+        The volume of A ∩ B (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+
+class OverlapRegion:
+    """
+    One connected piece of the solid two closed meshes share (A ∩ B): its volume, centroid and surface integrals, as delta.overlap finds them.
+    """
+    def __init__(self, *args: Any, **kwargs: Any) -> None: ...
+    @property
+    def area_vector(self) -> numpy.ndarray:
+        """
+        ∫ n dA over the part of a's surface inside b, n a's outward normal, shape (3,): the direction the overlap pushes b out of a (this region).
+        """
+        ...
+    @property
+    def area_vector_b(self) -> numpy.ndarray:
+        """
+        The same over the part of b's surface inside a: -area_vector up to rounding (the boundary of A ∩ B is closed), for checking (this region).
+        """
+        ...
+    @property
+    def centroid(self) -> numpy.ndarray:
+        """
+        The centroid of the shared solid, shape (3,) (world frame; zero where there is none) (this region).
+        """
+        ...
+    @property
+    def curve_length(self) -> float:
+        """
+        The length of the intersection curves bounding the shared solid (this region).
+        """
+        ...
+    @property
+    def moment(self) -> numpy.ndarray:
+        """
+        ∫ (x - centroid) × n dA over the part of a's surface inside b, shape (3,); about another point p it is moment + np.cross(centroid - p, area_vector) (this region).
+        """
+        ...
+    @property
+    def triangles(self) -> int:
+        """
+        The number of triangles of both meshes wholly or partly on this region's boundary.
+        """
+        ...
+    @property
+    def volume(self) -> float:
+        """
+        The volume of A ∩ B (this region).
         """
         ...
 
@@ -508,6 +675,28 @@ def load_with_statistics(path: os.PathLike) -> tuple:
 def minimum_distance(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], method: str = ...) -> MinimumDistance:
     """
     The minimum distance between two meshes (Mesh or QueryMesh, where they are now) and the closest triangle pair, exact with the hybrid or brute-force method; ties go to the smallest (triangle_a, triangle_b). As `delta contact A B` without --eps.
+    """
+    ...
+
+def overlap(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], curves: bool = ...) -> Overlap:
+    """
+    The solid two closed meshes share, A ∩ B, each where it is now.
+
+    `a`, `b`: each a Mesh, or a QueryMesh at its pose. Returns a delta.Overlap: `volume`,
+    `centroid`, `area_vector` (∫ n dA over the part of a's surface inside b, n a's outward normal:
+    the direction the overlap pushes b out of a), `area_vector_b` (the same over b's surface inside
+    a: -area_vector up to rounding), `moment` (∫ (x - centroid) × n dA over a's part) and
+    `curve_length`, over all of A ∩ B; `regions`, the same per connected piece (delta.OverlapRegion,
+    largest volume first, with the count of `triangles` on its boundary); `curves`, the intersection
+    curves (delta.IntersectionCurve: `points` (n, 3), `triangles_a` and `triangles_b` per segment,
+    `region`, `closed`, `length`; none with curves=False, which the integrals do not need);
+    `segments` (crossing triangle pairs) and `touching` (contacts that enclose no volume, left out
+    of the regions). Vectors are float64 arrays of shape (3,), in the world frame. The topology is
+    exact (exact predicates; a symbolic perturbation settles touching and coplanar faces). For a
+    volume-based contact law with energy w(V): the force on b is w'(V) * area_vector, the torque on
+    b about its centre c is w'(V) * (moment + np.cross(centroid - c, area_vector)). delta.Error (a
+    ValueError) when a mesh is open, not consistently oriented, or crosses itself; TypeError when a
+    or b is not a Mesh or a QueryMesh. As `delta overlap A B`.
     """
     ...
 

@@ -10,7 +10,7 @@ namespace py = pybind11;
 
 /// delta.Error, Quaternion, RigidTransform, Mesh, primitives, load and save.
 void bindMesh(py::module_& module);
-/// QueryMesh, contacts, point_contacts, distance, filter, minimum_distance.
+/// QueryMesh, contacts, point_contacts, distance, filter, minimum_distance, overlap.
 void bindQuery(py::module_& module);
 /// The submodule dem: Parameters, ParticleShape, World, RestitutionMeter, scenarios.
 void bindDem(py::module_& dem);

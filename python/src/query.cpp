@@ -1,5 +1,5 @@
-// QueryMesh and the queries: contacts, point_contacts, distance, filter, minimum_distance. Every
-// query prepares and computes without the GIL.
+// QueryMesh and the queries: contacts, point_contacts, distance, filter, minimum_distance,
+// overlap. Every query prepares and computes without the GIL.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -24,6 +24,7 @@
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"
+#include "delta/query/overlap.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 #include "delta/query/self_intersections.h"
@@ -400,6 +401,168 @@ thread, Ctrl-C stops the query within some tens of milliseconds (KeyboardInterru
       "smallest (triangle_a, triangle_b). As `delta contact A B` without --eps.");
 }
 
+/// The common read-only attributes of an OverlapRegion and an Overlap (its total): `region`
+/// gives the integrals of an object of the class.
+template <typename Class, typename Region>
+void addRegionAttributes(Class& bound, Region region, const char* which) {
+  using Bound = typename Class::type;
+  const std::string of = std::string(" (") + which + ")";
+  bound
+      .def_property_readonly(
+          "volume", [region](const Bound& o) { return region(o).volume; },
+          ("The volume of A ∩ B" + of + ".").c_str())
+      .def_property_readonly(
+          "centroid", [region](const Bound& o) { return region(o).centroid; },
+          ("The centroid of the shared solid, shape (3,) (world frame; zero where there is none)" +
+           of + ".")
+              .c_str())
+      .def_property_readonly(
+          "area_vector", [region](const Bound& o) { return region(o).areaVector; },
+          ("∫ n dA over the part of a's surface inside b, n a's outward normal, shape (3,): the "
+           "direction the overlap pushes b out of a" +
+           of + ".")
+              .c_str())
+      .def_property_readonly(
+          "area_vector_b", [region](const Bound& o) { return region(o).areaVectorB; },
+          ("The same over the part of b's surface inside a: -area_vector up to rounding (the "
+           "boundary of A ∩ B is closed), for checking" +
+           of + ".")
+              .c_str())
+      .def_property_readonly(
+          "moment", [region](const Bound& o) { return region(o).moment; },
+          ("∫ (x - centroid) × n dA over the part of a's surface inside b, shape (3,); about "
+           "another point p it is moment + np.cross(centroid - p, area_vector)" +
+           of + ".")
+              .c_str())
+      .def_property_readonly(
+          "curve_length", [region](const Bound& o) { return region(o).curveLength; },
+          ("The length of the intersection curves bounding the shared solid" + of + ".").c_str());
+}
+
+/// The numbers of a vector of triangle ids as a uint32 array (a copy).
+py::array idArray(const std::vector<std::uint32_t>& ids) {
+  py::array_t<std::uint32_t> array(static_cast<py::ssize_t>(ids.size()));
+  if (!ids.empty())
+    std::memcpy(array.mutable_data(), ids.data(), ids.size() * sizeof(std::uint32_t));
+  return array;
+}
+
+std::string vectorRepr(const Vec3& v) {
+  return "(" + py::repr(py::float_(v.x)).cast<std::string>() + ", " +
+         py::repr(py::float_(v.y)).cast<std::string>() + ", " +
+         py::repr(py::float_(v.z)).cast<std::string>() + ")";
+}
+
+void bindOverlap(py::module_& module) {
+  auto region = py::class_<cd::OverlapRegion>(
+      module, "OverlapRegion",
+      "One connected piece of the solid two closed meshes share (A ∩ B): its volume, centroid "
+      "and surface integrals, as delta.overlap finds them.");
+  addRegionAttributes(
+      region, [](const cd::OverlapRegion& r) -> const cd::OverlapRegion& { return r; },
+      "this region");
+  region
+      .def_readonly("triangles", &cd::OverlapRegion::triangles,
+                    "The number of triangles of both meshes wholly or partly on this region's "
+                    "boundary.")
+      .def("__repr__", [](const cd::OverlapRegion& r) {
+        return "OverlapRegion(volume=" + py::repr(py::float_(r.volume)).cast<std::string>() +
+               ", centroid=" + vectorRepr(r.centroid) +
+               ", triangles=" + std::to_string(r.triangles) + ")";
+      });
+
+  py::class_<cd::IntersectionCurve>(
+      module, "IntersectionCurve",
+      "A curve where the surfaces of two meshes cross: a chain of segments, each where a "
+      "triangle of the first mesh crosses one of the second. Seen from outside the first mesh, "
+      "the part of its surface inside the second lies to the left of the curve.")
+      .def_property_readonly(
+          "points", [](const cd::IntersectionCurve& c) { return vec3Array(c.points); },
+          "The points, shape (n, 3) float64 (world frame, a copy); a closed curve's last point "
+          "repeats its first.")
+      .def_property_readonly(
+          "triangles_a", [](const cd::IntersectionCurve& c) { return idArray(c.trianglesA); },
+          "Per segment (points[i] to points[i + 1]), the first mesh's triangle: uint32, shape "
+          "(n - 1,).")
+      .def_property_readonly(
+          "triangles_b", [](const cd::IntersectionCurve& c) { return idArray(c.trianglesB); },
+          "Per segment, the second mesh's triangle: uint32, shape (n - 1,).")
+      .def_readonly("region", &cd::IntersectionCurve::region,
+                    "The index into Overlap.regions of the region the curve bounds.")
+      .def_readonly("closed", &cd::IntersectionCurve::closed,
+                    "The curve ends where it starts (always, for closed meshes).")
+      .def_readonly("length", &cd::IntersectionCurve::length, "The length of the curve.")
+      .def(
+          "__len__", [](const cd::IntersectionCurve& c) { return c.trianglesA.size(); },
+          "The number of segments.")
+      .def("__repr__", [](const cd::IntersectionCurve& c) {
+        return "IntersectionCurve(segments=" + std::to_string(c.trianglesA.size()) +
+               ", length=" + py::repr(py::float_(c.length)).cast<std::string>() +
+               ", region=" + std::to_string(c.region) +
+               ", closed=" + (c.closed ? "True" : "False") + ")";
+      });
+
+  auto found = py::class_<cd::Overlap>(
+      module, "Overlap",
+      "What delta.overlap finds: the integrals over all of A ∩ B (volume, centroid, "
+      "area_vector, area_vector_b, moment, curve_length), the same per connected region "
+      "(regions, largest volume first), the intersection curves, and counts. True when the "
+      "meshes share a volume.");
+  addRegionAttributes(
+      found, [](const cd::Overlap& o) -> const cd::OverlapRegion& { return o.total; },
+      "all regions; the centroid is their volume-weighted mean, the moment about it");
+  found
+      .def_property_readonly(
+          "total", [](const cd::Overlap& o) { return o.total; },
+          "The integrals over all regions, as an OverlapRegion.")
+      .def_property_readonly(
+          "regions", [](const cd::Overlap& o) { return o.regions; },
+          "The connected pieces of A ∩ B, largest volume first: a list of OverlapRegion.")
+      .def_property_readonly(
+          "curves", [](const cd::Overlap& o) { return o.curves; },
+          "The intersection curves: a list of IntersectionCurve (empty with curves=False).")
+      .def_readonly("segments", &cd::Overlap::segments,
+                    "The number of intersection segments (pairs of crossing triangles) found.")
+      .def_readonly("touching", &cd::Overlap::touching,
+                    "Pieces of contact that enclose no volume (surfaces that only touch, faces "
+                    "lying on one another): counted here, left out of the regions.")
+      .def("__bool__", &cd::Overlap::any, "The meshes share a volume (regions is not empty).")
+      .def("__repr__", [](const cd::Overlap& o) {
+        return "Overlap(volume=" + py::repr(py::float_(o.total.volume)).cast<std::string>() +
+               ", regions=" + std::to_string(o.regions.size()) +
+               ", curves=" + std::to_string(o.curves.size()) +
+               ", segments=" + std::to_string(o.segments) +
+               ", touching=" + std::to_string(o.touching) + ")";
+      });
+
+  module.def(
+      "overlap",
+      [](const Geometry& a, const Geometry& b, bool curves) {
+        cd::OverlapOptions options;
+        options.curves = curves;
+        py::gil_scoped_release release;
+        return cd::overlap(a.prepare(), b.prepare(), options);
+      },
+      "a"_a, "b"_a, "curves"_a = true,
+      R"(The solid two closed meshes share, A ∩ B, each where it is now.
+
+`a`, `b`: each a Mesh, or a QueryMesh at its pose. Returns a delta.Overlap: `volume`,
+`centroid`, `area_vector` (∫ n dA over the part of a's surface inside b, n a's outward normal:
+the direction the overlap pushes b out of a), `area_vector_b` (the same over b's surface inside
+a: -area_vector up to rounding), `moment` (∫ (x - centroid) × n dA over a's part) and
+`curve_length`, over all of A ∩ B; `regions`, the same per connected piece (delta.OverlapRegion,
+largest volume first, with the count of `triangles` on its boundary); `curves`, the intersection
+curves (delta.IntersectionCurve: `points` (n, 3), `triangles_a` and `triangles_b` per segment,
+`region`, `closed`, `length`; none with curves=False, which the integrals do not need);
+`segments` (crossing triangle pairs) and `touching` (contacts that enclose no volume, left out
+of the regions). Vectors are float64 arrays of shape (3,), in the world frame. The topology is
+exact (exact predicates; a symbolic perturbation settles touching and coplanar faces). For a
+volume-based contact law with energy w(V): the force on b is w'(V) * area_vector, the torque on
+b about its centre c is w'(V) * (moment + np.cross(centroid - c, area_vector)). delta.Error (a
+ValueError) when a mesh is open, not consistently oriented, or crosses itself; TypeError when a
+or b is not a Mesh or a QueryMesh. As `delta overlap A B`.)");
+}
+
 }  // namespace
 
 void bindQuery(py::module_& module) {
@@ -408,6 +571,7 @@ void bindQuery(py::module_& module) {
   module.attr("NO_TRIANGLE") = cd::kNoTriangle;
   bindQueryMesh(module);
   bindQueries(module);
+  bindOverlap(module);
 }
 
 }  // namespace delta::python

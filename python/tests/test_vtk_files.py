@@ -8,6 +8,8 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pytest
 
+import delta
+
 from conftest import read_csv, write_xyz
 
 vtk_io = pytest.importorskip("vtkmodules.vtkIOXML", reason="VTK's Python module (python3-vtk9)")
@@ -217,3 +219,32 @@ def test_distance_and_contact_points_open_with_their_csv_values(cli, tmp_path):
     np.testing.assert_array_equal(array(data, "distance", FLOAT64, 1),
                                   [float(r["distance"]) for r in rows])
     np.testing.assert_array_equal(points(data), [[float(r[c]) for c in "xyz"] for r in rows])
+
+
+def test_overlap_curves_open_as_the_polylines_delta_computed(cli, tmp_path):
+    vtp = tmp_path / "curves.vtp"
+    cli("overlap", "builtin:granulate:1", "builtin:granulate:2", "--translate-b", "0.3,0,0",
+        "--quiet", "--out", vtp)
+    found = delta.overlap(delta.granulate(1), delta.granulate(2).translate((0.3, 0, 0)))
+    data = read(vtp)
+    assert data.GetNumberOfLines() == data.GetNumberOfCells() == len(found.curves) > 0
+    assert data.GetNumberOfVerts() == data.GetNumberOfPolys() == 0
+    np.testing.assert_array_equal(array(data, "curve", UINT32, 1, where="cell"),
+                                  range(len(found.curves)))
+    regions = array(data, "region", UINT32, 1, where="cell")
+    closed = array(data, "closed", UINT8, 1, where="cell")
+    lengths = array(data, "length", FLOAT64, 1, where="cell")
+    triangle_a = array(data, "triangle_a", UINT32, 1)
+    triangle_b = array(data, "triangle_b", UINT32, 1)
+    corners = points(data)
+    for c, curve in enumerate(found.curves):
+        assert regions[c] == curve.region and closed[c] == curve.closed
+        assert lengths[c] == curve.length
+        cell = data.GetCell(c)
+        ids = [cell.GetPointId(k) for k in range(cell.GetNumberOfPoints())]
+        # A closed curve's polyline ends at its first point, which is stored once.
+        assert len(ids) == len(curve.points) and (ids[0] == ids[-1]) == curve.closed
+        np.testing.assert_array_equal(corners[ids], curve.points)
+        segments = ids[:-1]
+        assert triangle_a[segments].tolist() == curve.triangles_a.tolist()
+        assert triangle_b[segments].tolist() == curve.triangles_b.tolist()

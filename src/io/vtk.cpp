@@ -286,6 +286,39 @@ std::string vertexCellArrays(std::size_t count, AppendedData& appended) {
                                  : vertexCellArrays<std::int64_t>(count, "Int64", appended);
 }
 
+/// The connectivity and offsets elements of polylines (the content of a Lines element), checked
+/// against the points: each of two points at least, none past the last.
+template <typename T>
+std::string polylineArrays(const std::vector<std::vector<std::uint32_t>>& lines, const char* type,
+                           AppendedData& appended) {
+  std::vector<T> connectivity, offsets;
+  offsets.reserve(lines.size());
+  for (const std::vector<std::uint32_t>& line : lines) {
+    connectivity.insert(connectivity.end(), line.begin(), line.end());
+    offsets.push_back(static_cast<T>(connectivity.size()));
+  }
+  std::string xml = appended.add(std::move(connectivity), type, "connectivity", 1);
+  xml += appended.add(std::move(offsets), type, "offsets", 1);
+  return xml;
+}
+
+std::string polylineArrays(const std::vector<std::vector<std::uint32_t>>& lines, std::size_t points,
+                           AppendedData& appended) {
+  std::size_t references = 0;
+  for (std::size_t l = 0; l < lines.size(); ++l) {
+    if (lines[l].size() < 2)
+      throw Error("polyline " + std::to_string(l) + " has " + std::to_string(lines[l].size()) +
+                  " point(s), fewer than two");
+    for (std::uint32_t index : lines[l])
+      if (index >= points)
+        throw Error("polyline " + std::to_string(l) + " refers to point " + std::to_string(index) +
+                    " of " + std::to_string(points));
+    references += lines[l].size();
+  }
+  return fitsInt32(points, references) ? polylineArrays<std::int32_t>(lines, "Int32", appended)
+                                       : polylineArrays<std::int64_t>(lines, "Int64", appended);
+}
+
 std::string dataSection(const char* tag, const std::vector<VtkArray>& arrays, const char* what,
                         AppendedData& appended) {
   std::string xml = std::string("<") + tag + ">\n";
@@ -315,16 +348,22 @@ std::string document(const char* type, const std::string& pieceAttributes,
 
 std::string polyDataDocument(const VtkPolyData& data, AppendedData& appended) {
   const std::size_t verts = data.pointsAsVertices ? data.points.size() : 0;
-  const std::string attributes = "NumberOfPoints=\"" + std::to_string(data.points.size()) +
-                                 "\" NumberOfVerts=\"" + std::to_string(verts) +
-                                 "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" +
-                                 std::to_string(data.triangles.size()) + "\"";
+  const std::string attributes =
+      "NumberOfPoints=\"" + std::to_string(data.points.size()) + "\" NumberOfVerts=\"" +
+      std::to_string(verts) + "\" NumberOfLines=\"" + std::to_string(data.lines.size()) +
+      "\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(data.triangles.size()) + "\"";
   std::string content = dataSection("PointData", data.pointData, "point", appended);
   content += dataSection("CellData", data.cellData, "cell", appended);
   content += pointSection(data.points, appended);
   content += "<Verts>\n";
   content += vertexCellArrays(verts, appended);
-  content += "</Verts>\n<Polys>\n";
+  content += "</Verts>\n";
+  if (!data.lines.empty()) {  // files without polylines stay as they were
+    content += "<Lines>\n";
+    content += polylineArrays(data.lines, data.points.size(), appended);
+    content += "</Lines>\n";
+  }
+  content += "<Polys>\n";
   content += cellArrays(data.triangles, data.points.size(), "triangle", appended);
   content += "</Polys>\n";
   return document("PolyData", attributes, content, appended.compressed());

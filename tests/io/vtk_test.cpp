@@ -91,6 +91,44 @@ TEST(Vtk, RejectsMismatchedArraysAndWritesNothing) {
   EXPECT_THROW(writeVtp(VtkPolyData::fromPoints({}), "/nonexistent/dir/x.vtp"), Error);
 }
 
+TEST(Vtk, WritesPolylinesBetweenVertsAndPolys) {
+  VtkPolyData data;
+  data.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {5, 5, 5}, {6, 5, 5}};
+  data.lines = {{0, 1, 2, 0}, {3, 4}};  // a closed triangle, then an open segment
+  data.cellData.push_back({"region", 1, {0, 1}, VtkType::UInt32});
+  data.pointData.push_back({"t", 1, {0, 1, 2, 3, 4}});
+  const fs::path path = tempFile("lines.vtp");
+  writeVtp(data, path, {.compressionLevel = 0});
+  const std::string file = readFile(path);
+  EXPECT_NE(file.find("NumberOfVerts=\"0\" NumberOfLines=\"2\""), std::string::npos);
+  const std::size_t lines = file.find("<Lines>\n");
+  ASSERT_NE(lines, std::string::npos);
+  EXPECT_LT(file.find("</Verts>"), lines);
+  EXPECT_LT(lines, file.find("<Polys>"));
+  // The arrays after <Lines> (the offsets in the raw appended data are unchanged by the cut).
+  const std::string fromLines = file.substr(lines);
+  EXPECT_EQ(readVtkArray<std::int32_t>(fromLines, "connectivity"),
+            (std::vector<std::int32_t>{0, 1, 2, 0, 3, 4}));
+  EXPECT_EQ(readVtkArray<std::int32_t>(fromLines, "offsets"), (std::vector<std::int32_t>{4, 6}));
+  EXPECT_EQ(readVtkArray<std::uint32_t>(file, "region"), (std::vector<std::uint32_t>{0, 1}));
+  // Compressed, the same file reads back the same.
+  writeVtp(data, path);
+  EXPECT_NE(readFile(path).find("NumberOfLines=\"2\""), std::string::npos);
+  // A polyline of one point, or one past the points, is refused and the last file stays.
+  const std::string before = readFile(path);
+  data.lines = {{0}};
+  EXPECT_THROW(writeVtp(data, path), Error);
+  data.lines = {{0, 5}};
+  EXPECT_THROW(writeVtp(data, path), Error);
+  data.lines = {{0, 1}};  // one cell now, two cell values
+  EXPECT_THROW(writeVtp(data, path), Error);
+  EXPECT_EQ(readFile(path), before);
+  // Without polylines, no Lines element: such files are as they were before polylines.
+  writeVtp(VtkPolyData::fromPoints({{0, 0, 0}}), path);
+  EXPECT_EQ(readFile(path).find("<Lines>"), std::string::npos);
+  fs::remove(path);
+}
+
 /// The piece of a parallel run: points with a scalar and a vector per point and a scalar per
 /// vertex cell.
 VtkPolyData piece(std::vector<Vec3> points) {

@@ -81,6 +81,14 @@ TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {
   }
 }
 
+TEST(Overlap, TouchingFacesAreCountedWhereTheDisplacementMovesBIntoA) {
+  const QueryMesh a(primitives::box({1, 1, 1}));
+  // B is displaced along +x first: from A's −x side into A (a piece of no volume), from its +x
+  // side away (nothing).
+  EXPECT_EQ(overlap(a, QueryMesh(primitives::box({1, 1, 1}, {-1, 0, 0}))).touching, 1u);
+  EXPECT_EQ(overlap(a, QueryMesh(primitives::box({1, 1, 1}, {1, 0, 0}))).touching, 0u);
+}
+
 TEST(Overlap, CoplanarFacesAndTheSameMeshTwice) {
   const QueryMesh a(primitives::box({1, 1, 1}));
   const QueryMesh b(primitives::box({1, 1, 1}, {0.5, 0, 0}));

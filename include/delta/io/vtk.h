@@ -77,14 +77,18 @@ struct VtkWriteOptions {
 /// may be shorter.
 inline constexpr std::size_t kVtkBlockBytes = std::size_t{1} << 15;
 
-/// Points, optionally joined into triangles, with data per point and per cell.
+/// Points, optionally joined into polylines and triangles, with data per point and per cell.
 ///
-/// Cells are, in this order: one vertex cell per point when `pointsAsVertices` (so that a bare
-/// point set shows in ParaView), then the triangles. A cell array has one element per cell.
+/// Cells are, in VTK's order: one vertex cell per point when `pointsAsVertices` (so that a bare
+/// point set shows in ParaView), then the polylines, then the triangles. A cell array has one
+/// element per cell.
 ///
 /// Threading: a value type; no shared state.
 struct VtkPolyData {
   std::vector<Vec3> points;
+  /// Polylines (VTK's Lines cells): each the indices of its points in order, two at least; a
+  /// closed curve repeats its first index at the end.
+  std::vector<std::vector<std::uint32_t>> lines;
   std::vector<TriangleIndices> triangles;
   bool pointsAsVertices = false;
   std::vector<VtkArray> pointData;
@@ -95,9 +99,9 @@ struct VtkPolyData {
   /// A point set, each point a vertex cell.
   static VtkPolyData fromPoints(std::vector<Vec3> points);
 
-  /// Vertex cells (when `pointsAsVertices`) plus triangles.
+  /// Vertex cells (when `pointsAsVertices`) plus polylines plus triangles.
   std::size_t cellCount() const noexcept {
-    return (pointsAsVertices ? points.size() : 0) + triangles.size();
+    return (pointsAsVertices ? points.size() : 0) + lines.size() + triangles.size();
   }
 };
 
@@ -105,8 +109,9 @@ struct VtkPolyData {
 /// encoded as `options` say, Float64 points, each array as its VtkType; connectivity and offsets
 /// Int32 where the points and the cells' point references fit, 2^31 − 1 at most, Int64
 /// otherwise). Throws delta::Error naming the path when an array's size does not match its
-/// points or cells, an integer array holds a value its type cannot store exactly, a triangle
-/// refers past the points, the compression level is not 0 to 9, or writing fails.
+/// points or cells, an integer array holds a value its type cannot store exactly, a polyline
+/// has fewer than two points, a polyline or a triangle refers past the points, the compression
+/// level is not 0 to 9, or writing fails.
 void writeVtp(const VtkPolyData& data, const std::filesystem::path& path,
               const VtkWriteOptions& options = {});
 

@@ -65,8 +65,10 @@ struct Overlap {
   std::vector<OverlapRegion> regions;
   std::vector<IntersectionCurve> curves;
   std::size_t segments = 0;  ///< intersection segments found (curves or not)
-  /// Pieces of contact that enclose no volume (surfaces that only touch, faces that lie on one
-  /// another): left out of `regions` and `total`, counted here.
+  /// Pieces of contact that enclose no volume, left out of `regions` and `total` and counted
+  /// here. Surfaces that only touch (faces lying on one another, a vertex on a face) give either
+  /// such a piece or nothing, as the symbolic displacement of B (along +x first) moves B into A
+  /// or away from it: two unit cubes side by side give 1 with B on A's −x side, 0 on its +x side.
   std::size_t touching = 0;
   bool any() const noexcept { return !regions.empty(); }
 };
