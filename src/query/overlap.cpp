@@ -510,12 +510,23 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
 }
 
 /// Whether the segment from vertex `from` of `side` to a point beyond the other mesh's box
-/// crosses `other` an odd number of times: `from` lies inside it.
+/// crosses `other` an odd number of times: `from` lies inside it. (Any such point gives the same
+/// parity: it lies outside the other mesh, displaced or not.)
 bool insideByRay(Side& side, Side& other, const Vec3& from) {
+  // Out through the nearest face of the other's box (the shortest ray meets the fewest
+  // triangles), to a point beyond it.
   const Aabb& box = other.box();
-  const double beyond =
-      box.upper.x + std::max({1.0, std::abs(box.upper.x), box.upper.x - box.lower.x});
-  const Vec3 to{beyond, from.y, from.z};
+  std::size_t axis = 0;
+  bool up = true;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (box.upper[k] - from[k] < nearest) nearest = box.upper[k] - from[k], axis = k, up = true;
+    if (from[k] - box.lower[k] < nearest) nearest = from[k] - box.lower[k], axis = k, up = false;
+  }
+  const double step = std::max({1.0, std::abs(box.upper[axis]), std::abs(box.lower[axis]),
+                                box.upper[axis] - box.lower[axis]});
+  Vec3 to = from;
+  to[axis] = up ? box.upper[axis] + step : box.lower[axis] - step;
   Aabb ray;
   ray.extend(from);
   ray.extend(to);
@@ -639,11 +650,16 @@ void classify(Side& side, Side& other) {
         pending.push_back(k);
     }
     if (pending.empty()) break;
-    // Nothing decides these: one ray test, then the walk goes on from there.
-    const std::uint32_t k = pending.back();
-    const std::int32_t slot = side.placed(k).slots[0];
-    if (side.state(slot).inside == -1)
+    // The walk may since have decided a corner of some of these; where it has not decided any,
+    // one ray test, and the walk goes on from there.
+    bool decided = false;
+    for (const std::uint32_t k : pending)
+      for (const std::int32_t slot : side.placed(k).slots)
+        decided |= side.state(slot).inside != -1;
+    if (!decided) {
+      const std::int32_t slot = side.placed(pending.back()).slots[0];
       side.state(slot).inside = insideByRay(side, other, side.state(slot).world) ? 1 : 0;
+    }
     queue.insert(queue.end(), pending.begin(), pending.end());
     pending.clear();
   }
@@ -679,25 +695,6 @@ EndKey vertexKey(std::uint32_t vertex) noexcept {
   return {vertex, std::uint64_t{2} << 32};
 }
 
-/// An interval of an edge inside the other mesh, by its end nodes (smaller key first): the two
-/// triangles of the edge both see it, which joins their faces.
-struct IntervalKey {
-  EndKey first, second;
-  bool operator==(const IntervalKey&) const noexcept = default;
-};
-
-struct IntervalKeyHash {
-  std::size_t operator()(const IntervalKey& key) const noexcept {
-    const EndKeyHash hash;
-    return hash(key.first) * 31 + hash(key.second);
-  }
-};
-
-IntervalKey intervalKey(const EndKey& a, const EndKey& b) noexcept {
-  const bool less = a.edge < b.edge || (a.edge == b.edge && a.triangle < b.triangle);
-  return less ? IntervalKey{a, b} : IntervalKey{b, a};
-}
-
 constexpr std::size_t kNoSegment = std::numeric_limits<std::size_t>::max();
 
 /// One oriented piece of a triangle's boundary chain, between two of its nodes.
@@ -705,6 +702,7 @@ struct Element {
   std::size_t from = 0, to = 0;  ///< nodes
   Vec3 p, q;
   std::size_t segment = kNoSegment;  ///< the Segment, or kNoSegment for a part of an edge
+  std::size_t edge = 3;              ///< the triangle's edge it is a part of (3: a segment)
 };
 
 /// Union–find over small index sets.
@@ -782,8 +780,11 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       segmentOrder[fill[pieceOf(query.segments[s])]++] = static_cast<std::uint32_t>(s);
   }
 
-  thread_local std::unordered_map<IntervalKey, std::size_t, IntervalKeyHash> intervalFace;
-  intervalFace.clear();
+  // Per piece and edge, the faces of the edge's inside intervals in order along it: the triangle
+  // across the edge sees the same intervals in the opposite order, and their faces join.
+  std::vector<std::uint32_t>& intervalStart = recycled<std::uint32_t, 6>();
+  std::vector<std::size_t>& intervalFaces = recycled<std::size_t, 5>();
+  intervalStart.resize(3 * count + 1);
   std::vector<EndKey>& nodes = recycled<EndKey, 0>();
   std::vector<Element>& elements = recycled<Element, 0>();
   std::vector<const EdgeCrossing*>& along = recycled<const EdgeCrossing*, 0>();
@@ -846,7 +847,8 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       Vec3 previousPoint = t.local[i];
       for (const EdgeCrossing* c : along) {
         if (inside == 1)
-          elements.push_back({node(previous), node(c->key), previousPoint, c->point, kNoSegment});
+          elements.push_back(
+              {node(previous), node(c->key), previousPoint, c->point, kNoSegment, i});
         inside += c->sigma;
         previous = c->key;
         previousPoint = c->point;
@@ -854,7 +856,7 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       if (inside != side.state(t.slots[i1]).inside) inconsistent();
       if (inside == 1)
         elements.push_back({node(previous), node(vertexKey(side.corner(sorted, i1))), previousPoint,
-                            t.local[i1], kNoSegment});
+                            t.local[i1], kNoSegment, i});
     }
     // The cycles, and a face per cycle.
     cycles.reset(nodes.size());
@@ -919,6 +921,8 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
       global[f] = faces.size();
       faces.push_back(local[f]);
     }
+    std::size_t edge = 0;
+    intervalStart[3 * p] = static_cast<std::uint32_t>(intervalFaces.size());
     for (std::size_t e = 0; e < elements.size(); ++e) {
       const std::size_t face = global[faceOf[e]];
       const Element& element = elements[e];
@@ -927,9 +931,38 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
         (ofA ? segment.faceA : segment.faceB) = face;
         continue;
       }
-      const auto [slot, made] =
-          intervalFace.emplace(intervalKey(nodes[element.from], nodes[element.to]), face);
-      if (!made) joins.emplace_back(slot->second, face);
+      while (edge < element.edge)  // the edges' parts come in order of edges, each along it
+        intervalStart[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces.size());
+      intervalFaces.push_back(face);
+    }
+    while (edge < 2)
+      intervalStart[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces.size());
+  }
+  intervalStart[3 * count] = static_cast<std::uint32_t>(intervalFaces.size());
+  const auto intervalsOf = [&](std::size_t p, std::size_t i) {
+    return std::pair{intervalStart[3 * p + i], intervalStart[3 * p + i + 1]};
+  };
+  for (std::size_t p = 0; p < count; ++p) {
+    const std::uint32_t sorted = pieces[p].sorted;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const auto [from, to] = intervalsOf(p, i);
+      if (from == to) continue;
+      const std::uint32_t across = side.across(sorted, i);
+      const std::int32_t twin =
+          across == detail::Pseudonormals::kNone ? kAbsent : side.pieceSlot(across);
+      if (twin == kAbsent) inconsistent();
+      const auto other = static_cast<std::size_t>(twin);
+      if (other < p) continue;  // joined from there
+      std::size_t shared = 3;
+      for (std::size_t j = 0; j < 3; ++j)
+        if (side.corner(across, j) == side.corner(sorted, (i + 1) % 3) &&
+            side.corner(across, (j + 1) % 3) == side.corner(sorted, i))
+          shared = j;
+      if (shared == 3) inconsistent();
+      const auto [twinFrom, twinTo] = intervalsOf(other, shared);
+      if (twinTo - twinFrom != to - from) inconsistent();
+      for (std::uint32_t j = 0; j < to - from; ++j)
+        joins.emplace_back(intervalFaces[from + j], intervalFaces[twinTo - 1 - j]);
     }
   }
 }
