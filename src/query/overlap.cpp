@@ -798,7 +798,21 @@ void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
   };
   for (std::size_t p = 0; p < count; ++p) {
     const std::uint32_t sorted = pieces[p].sorted;
-    const PlacedTriangle t = side.triangle(sorted);
+    const PlacedTriangle& t = side.triangle(sorted);
+    if (crossingStart[p] == crossingStart[p + 1] && segmentStart[p] == segmentStart[p + 1] &&
+        side.state(t.slots[0]).inside == 1 && side.state(t.slots[1]).inside == 1 &&
+        side.state(t.slots[2]).inside == 1) {
+      // Wholly inside (most triangles of a deep overlap): one face, its whole boundary, one
+      // interval an edge.
+      Face whole{{}, ofA};
+      whole.integrals.add(t.local[0], t.local[1], t.local[2]);
+      for (std::size_t i = 0; i < 3; ++i) {
+        intervalStart[3 * p + i] = static_cast<std::uint32_t>(intervalFaces.size());
+        intervalFaces.push_back(faces.size());
+      }
+      faces.push_back(whole);
+      continue;
+    }
     nodes.clear();
     elements.clear();
     const auto node = [&](const EndKey& key) {
@@ -1161,7 +1175,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     double curveLength = 0.0;
     std::size_t faces = 0;
   };
-  std::unordered_map<std::size_t, Sums> byRoot;
+  std::vector<Sums>& byRoot = recycled<Sums, 0>();
+  byRoot.resize(faces.size());
   for (std::size_t f = 0; f < faces.size(); ++f) {
     Sums& sums = byRoot[regions.find(f)];
     const Integrals& integrals = faces[f].integrals;
@@ -1184,7 +1199,9 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   constexpr double kRoundingFactor = 1024.0 * std::numeric_limits<double>::epsilon();
   std::vector<std::pair<std::size_t, Sums>> kept;
   std::vector<Sums> cavities;
-  for (const auto& [root, sums] : byRoot) {
+  for (std::size_t root = 0; root < byRoot.size(); ++root) {
+    const Sums& sums = byRoot[root];
+    if (sums.faces == 0) continue;
     if (std::abs(sums.integrals.volume) <= kRoundingFactor * sums.integrals.volumeScale)
       ++result.touching;
     else if (sums.integrals.volume < 0.0)
@@ -1210,7 +1227,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     return region;
   };
   Sums total;
-  std::unordered_map<std::size_t, std::size_t> regionOfRoot;
+  std::vector<std::size_t>& regionOfRoot = recycled<std::size_t, 1>();
+  regionOfRoot.assign(faces.size(), kNoSegment);
   const auto addTo = [](Sums& into, const Sums& sums) {
     into.integrals.add(sums.integrals);
     into.areaB += sums.areaB;
@@ -1218,7 +1236,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     into.faces += sums.faces;
   };
   for (const auto& [root, sums] : kept) {
-    regionOfRoot.emplace(root, result.regions.size());
+    regionOfRoot[root] = result.regions.size();
     result.regions.push_back(finish(sums));
     addTo(total, sums);
   }
@@ -1231,8 +1249,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     std::vector<std::size_t> regionOfSegment(query.segments.size(),
                                              std::numeric_limits<std::size_t>::max());
     for (std::size_t s = 0; s < query.segments.size(); ++s) {
-      const auto found = regionOfRoot.find(regions.find(query.segments[s].faceA));
-      if (found != regionOfRoot.end()) regionOfSegment[s] = found->second;
+      regionOfSegment[s] = regionOfRoot[regions.find(query.segments[s].faceA)];
     }
     result.curves = chainCurves(query, regionOfSegment);
   }
