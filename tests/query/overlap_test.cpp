@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <thread>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/mesh/mass_properties.h"
@@ -164,6 +166,33 @@ TEST(Overlap, AnInsideOutMeshBoundsTheSameSolid) {
   }
   EXPECT_NEAR(length(overlap(insideOut, box).total.areaVector - expected.total.areaVector), 0.0,
               1e-14);
+}
+
+TEST(Overlap, ManyThreadsOnFreshMeshesGetTheSameAnswers) {
+  // Fresh meshes: the threads race to make the lazily built parts (the edges' neighbours, the
+  // connected pieces, the self-intersection check), and each keeps its own buffers.
+  const Mesh granulate = primitives::granulate(5), sphere = primitives::icosphere(3, 0.8);
+  const QueryMesh a(granulate);
+  const QueryMesh b = placed(sphere, {Quaternion::fromAxisAngle({1, 2, 3}, 0.7), {0.9, 0.2, 0}});
+  std::vector<double> volumes(8, 0.0);
+  std::vector<std::size_t> segments(8, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < volumes.size(); ++t)
+    threads.emplace_back([&, t] {
+      for (int repeat = 0; repeat < 20; ++repeat) {
+        const Overlap o = t % 2 == 0 ? overlap(a, b) : overlap(b, a);
+        volumes[t] = o.total.volume;
+        segments[t] = o.segments;
+      }
+    });
+  for (std::thread& thread : threads)
+    thread.join();
+  const Overlap serial[2] = {overlap(a, b), overlap(b, a)};
+  ASSERT_GT(serial[0].total.volume, 0.0);
+  for (std::size_t t = 0; t < volumes.size(); ++t) {  // the same bits as one thread alone
+    EXPECT_EQ(volumes[t], serial[t % 2].total.volume) << t;
+    EXPECT_EQ(segments[t], serial[t % 2].segments) << t;
+  }
 }
 
 TEST(Overlap, RefusesMeshesThatBoundNoVolume) {
