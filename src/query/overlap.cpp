@@ -208,6 +208,22 @@ class SlotMap {
   std::vector<std::size_t> used_;
 };
 
+/// The box of `box` moved by `motion`: its centre moved, its half extents through |R| (as the
+/// trees move their boxes, dual_traversal.h). Contains every moved point of `box` up to the
+/// rounding of these few operations, a few ulps of the coordinates, which the callers' margins
+/// (2⁻⁴⁰ of them) cover. Nine multiply–adds where the eight moved corners took eight rotations.
+Aabb movedBox(const Aabb& box, const detail::MatrixMotion& motion) noexcept {
+  const Vec3 centre = motion.apply(box.center());
+  const Vec3 half = box.extent() * 0.5;
+  Vec3 reach;
+  for (int row = 0; row < 3; ++row) {
+    const Vec3 r = motion.rotation.row(row);
+    reach[static_cast<std::size_t>(row)] =
+        std::abs(r.x) * half.x + std::abs(r.y) * half.y + std::abs(r.z) * half.z;
+  }
+  return {centre - reach, centre + reach};
+}
+
 /// One mesh's part of the query: its data, where it is, and what the query has learnt of it.
 /// Sparse: only the vertices and triangles the query reaches get a slot (a DEM step compares a
 /// small particle with a large obstacle many times).
@@ -218,6 +234,7 @@ class Side {
         pose_(mesh.pose()),
         inverse_(mesh.inversePose()),
         motion_(detail::matrixMotion(mesh.pose())),
+        inverseMotion_(detail::matrixMotion(mesh.inversePose())),
         moved_(mesh.moved()),
         isA_(isA),
         flip_(mesh.data().orientation < 0.0),
@@ -230,7 +247,7 @@ class Side {
         pieces_(recycled<Piece, 0>(isA ? 0 : 1)),
         crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
-    const Aabb moved = moved_ ? detail::movedBox(data_.bounds, pose_) : data_.bounds;
+    const Aabb moved = moved_ ? movedBox(data_.bounds, motion_) : data_.bounds;
     margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
     box_ = moved.grown(margin_ + data_.slack);
   }
@@ -262,7 +279,7 @@ class Side {
 
   /// A world box carried into this mesh's prepared frame, conservatively.
   Aabb toPrepared(const Aabb& world) const noexcept {
-    const Aabb box = moved_ ? detail::movedBox(world, inverse_) : world;
+    const Aabb box = moved_ ? movedBox(world, inverseMotion_) : world;
     return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
   }
   /// Whether sorted triangle k, where it was prepared, meets `box` (in that frame): a test
@@ -323,7 +340,7 @@ class Side {
   }
   /// The world box of `prepared`, a box in this mesh's prepared frame, conservatively.
   Aabb toWorld(const Aabb& prepared) const noexcept {
-    const Aabb box = moved_ ? detail::movedBox(prepared, pose_) : prepared;
+    const Aabb box = moved_ ? movedBox(prepared, motion_) : prepared;
     return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
   }
 
@@ -346,7 +363,7 @@ class Side {
  private:
   const QueryMeshData& data_;
   RigidTransform pose_, inverse_;
-  detail::MatrixMotion motion_;
+  detail::MatrixMotion motion_, inverseMotion_;
   bool moved_;
   bool isA_;
   bool flip_;
