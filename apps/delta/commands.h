@@ -15,6 +15,10 @@ void addDemCommand(CLI::App& app);
 void addIbCommand(CLI::App& app);
 void addOverlapCommand(CLI::App& app);
 
+struct SecondMeshMotion;
+/// Adds --translate-b and --rotate-b, read into `motion` (motion_options.h).
+void addSecondMeshMotion(CLI::App& command, SecondMeshMotion& motion);
+
 /// Thrown by the ranks of a distributed run for an error that rank 0 has reported already:
 /// main() exits with status 1 and prints nothing.
 struct QuietFailure {};

@@ -33,19 +33,13 @@ struct ContactOptions {
   std::optional<double> epsilon;
   std::string method = "hybrid";
   std::optional<double> filter;
-  std::string translateB, rotateB;
+  SecondMeshMotion moveB;
   std::string out;
   bool json = false;
 };
 
-/// --rotate-b about the centre of B's box, then --translate-b.
-void moveB(Mesh& b, const ContactOptions& options) {
-  if (!options.rotateB.empty())
-    b.rotate(parseRotation(options.rotateB, "--rotate-b"), b.bounds().center());
-  if (!options.translateB.empty()) b.translate(parseVector(options.translateB, "--translate-b"));
-}
-
 void validate(const ContactOptions& options) {
+  options.moveB.validate();
   if (options.epsilon && !(std::isfinite(*options.epsilon) && *options.epsilon > 0.0))
     throw Error("--eps " + toString(*options.epsilon) + " must be finite and positive");
   if (options.filter && !(std::isfinite(*options.filter) && *options.filter > 0.0))
@@ -102,7 +96,7 @@ void run(const ContactOptions& options) {
   Stopwatch clock;
   const Mesh a = loadMeshSource(options.meshA).mesh;
   Mesh b = loadMeshSource(options.meshB).mesh;
-  moveB(b, options);
+  options.moveB.apply(b);
   const double loadSeconds = clock.restart();
   const QueryMesh queryA(a), queryB(b);
   const double buildSeconds = clock.restart();
@@ -165,9 +159,7 @@ void addContactCommand(CLI::App& app) {
   contact->add_option("--method", options->method, "Solver: hybrid (default), penalty, bruteforce");
   contact->add_option("--filter", options->filter,
                       "Keep a contact only if no deeper kept contact lies closer than H");
-  contact->add_option("--translate-b", options->translateB, "Move B by X,Y,Z (after rotating)");
-  contact->add_option("--rotate-b", options->rotateB,
-                      "Turn B about the centre of its box: axis AX,AY,AZ and DEGREES");
+  addSecondMeshMotion(*contact, options->moveB);
   contact->add_option("--out", options->out,
                       "Write the contact points: FILE.csv (one row each, sorted by triangle ids) "
                       "or FILE.vtp (ParaView)");

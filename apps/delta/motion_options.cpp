@@ -8,6 +8,8 @@
 
 #include "delta/core/error.h"
 
+#include "commands.h"
+
 namespace delta::cli {
 
 std::vector<double> parseNumbers(const std::string& text, std::size_t count, const char* option) {
@@ -51,6 +53,22 @@ Quaternion parseRotation(const std::string& text, const char* option) {
   if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0)
     throw Error(std::string(option) + " '" + text + "': the axis AX,AY,AZ must not be zero");
   return Quaternion::fromAxisAngle({r[0], r[1], r[2]}, r[3] * std::numbers::pi / 180.0);
+}
+
+void SecondMeshMotion::validate() const {
+  if (!rotate.empty()) parseRotation(rotate, "--rotate-b");
+  if (!translate.empty()) parseVector(translate, "--translate-b");
+}
+
+void SecondMeshMotion::apply(Mesh& b) const {
+  if (!rotate.empty()) b.rotate(parseRotation(rotate, "--rotate-b"), b.bounds().center());
+  if (!translate.empty()) b.translate(parseVector(translate, "--translate-b"));
+}
+
+void addSecondMeshMotion(CLI::App& command, SecondMeshMotion& motion) {
+  command.add_option("--translate-b", motion.translate, "Move B by X,Y,Z (after rotating)");
+  command.add_option("--rotate-b", motion.rotate,
+                     "Turn B about the centre of its box: axis AX,AY,AZ and DEGREES");
 }
 
 }  // namespace delta::cli

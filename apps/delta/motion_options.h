@@ -6,6 +6,7 @@
 
 #include "delta/core/rotation.h"
 #include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
 
 /// The values of options that move a mesh (delta contact --rotate-b/--translate-b, delta ib
 /// --rotate/--translate). Each throws delta::Error naming `option` and the text when the text is
@@ -31,5 +32,14 @@ std::size_t parseStepCount(const std::string& text, const std::string& origin, s
 /// "AX,AY,AZ,DEGREES": the turn by DEGREES about the axis (AX, AY, AZ), right-handed; the axis
 /// must not be zero.
 Quaternion parseRotation(const std::string& text, const char* option);
+
+/// `delta contact`'s and `delta overlap`'s --rotate-b and --translate-b: B turned about the
+/// centre of its box, then moved.
+struct SecondMeshMotion {
+  std::string rotate, translate;
+  /// Parses both (so that a bad value is reported before the meshes load).
+  void validate() const;
+  void apply(Mesh& b) const;
+};
 
 }  // namespace delta::cli

@@ -29,7 +29,7 @@ namespace cd = contactdetection;
 
 struct OverlapCliOptions {
   std::string meshA, meshB;
-  std::string translateB, rotateB;
+  SecondMeshMotion moveB;
   std::string out;
   bool json = false;
   bool quiet = false;
@@ -38,16 +38,7 @@ struct OverlapCliOptions {
 void validate(const OverlapCliOptions& options) {
   if (!options.out.empty() && extensionOf(options.out) != ".vtp")
     throw Error("--out '" + options.out + "': write the curves as FILE.vtp");
-  // Parsed now, so that a bad value is reported before the meshes load.
-  if (!options.rotateB.empty()) parseRotation(options.rotateB, "--rotate-b");
-  if (!options.translateB.empty()) parseVector(options.translateB, "--translate-b");
-}
-
-/// --rotate-b about the centre of B's box, then --translate-b (as `delta contact`).
-void moveB(Mesh& b, const OverlapCliOptions& options) {
-  if (!options.rotateB.empty())
-    b.rotate(parseRotation(options.rotateB, "--rotate-b"), b.bounds().center());
-  if (!options.translateB.empty()) b.translate(parseVector(options.translateB, "--translate-b"));
+  options.moveB.validate();
 }
 
 /// Throws delta::Error unless every number of `region` (called `what`) is finite: a non-finite
@@ -186,7 +177,7 @@ void run(const OverlapCliOptions& options) {
   Stopwatch clock;
   const Mesh a = loadMeshSource(options.meshA).mesh;
   Mesh b = loadMeshSource(options.meshB).mesh;
-  moveB(b, options);
+  options.moveB.apply(b);
   const double loadSeconds = clock.restart();
   const QueryMesh queryA(a), queryB(b);
   const double buildSeconds = clock.restart();
@@ -217,9 +208,7 @@ void addOverlapCommand(CLI::App& app) {
   overlap->add_option("MESH_A", options->meshA, meshSourceHelp())->required();
   overlap->add_option("MESH_B", options->meshB, "The second mesh (same forms as MESH_A)")
       ->required();
-  overlap->add_option("--translate-b", options->translateB, "Move B by X,Y,Z (after rotating)");
-  overlap->add_option("--rotate-b", options->rotateB,
-                      "Turn B about the centre of its box: axis AX,AY,AZ and DEGREES");
+  addSecondMeshMotion(*overlap, options->moveB);
   overlap->add_option("--out", options->out,
                       "Write the intersection curves as FILE.vtp (ParaView): one polyline a "
                       "curve, cell data curve, region, closed, length; point data triangle_a, "
