@@ -243,7 +243,6 @@ class Side {
         triangleSlot_(SlotMap::of(isA ? 0 : 1, 2, data_.size())),
         vertices_(recycled<VertexState, 0>(isA ? 0 : 1)),
         triangles_(recycled<PlacedTriangle, 0>(isA ? 0 : 1)),
-        vertexIds_(recycled<std::uint32_t, 0>(isA ? 0 : 1)),
         pieces_(recycled<Piece, 0>(isA ? 0 : 1)),
         crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
@@ -304,15 +303,12 @@ class Side {
       slot = static_cast<std::int32_t>(vertices_.size());
       const Vec3 world = moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v];
       vertices_.push_back({world, world - reference_, -1});
-      vertexIds_.push_back(v);
     }
     return slot;
   }
   VertexState& state(std::int32_t slot) noexcept {
     return vertices_[static_cast<std::size_t>(slot)];
   }
-  std::size_t vertexCount() const noexcept { return vertices_.size(); }
-  std::uint32_t vertexId(std::size_t slot) const noexcept { return vertexIds_[slot]; }
 
   /// Sorted triangle k where it is, made on first use. The reference holds until the next call.
   const PlacedTriangle& triangle(std::uint32_t k) {
@@ -374,7 +370,6 @@ class Side {
   SlotMap &vertexSlot_, &pieceSlot_, &triangleSlot_;
   std::vector<VertexState>& vertices_;
   std::vector<PlacedTriangle>& triangles_;
-  std::vector<std::uint32_t>& vertexIds_;
   std::vector<Piece>& pieces_;
   std::vector<EdgeCrossing>& crossings_;
 };
