@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -162,9 +163,8 @@ inline int filteredSide(const PlacedTriangle& t, const Vec3& s) noexcept {
   constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;
   constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
   const double bound = kBound * permanent;
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return 0;
+  // Without branches: the signs of a triangle pair's corners are a coin toss to the predictor.
+  return static_cast<int>(det > bound) - static_cast<int>(-det > bound);
 }
 
 /// The side of triangle t of B on which vertex s of A lies (B perturbed).
@@ -185,10 +185,10 @@ inline int sideOfBVertex(const PlacedTriangle& t, const Vec3& s) {
 /// and should not pay for the obstacle's size each time.
 class SlotMap {
  public:
-  /// The map of this thread for side `which` (0 or 1) and kind `kind` (0–2), sized for `count`
+  /// The map of this thread for side `which` (0 or 1) and kind `kind` (0–3), sized for `count`
   /// ids. At most one query per thread at a time uses it (queries never nest).
   static SlotMap& of(std::size_t which, std::size_t kind, std::size_t count) {
-    thread_local SlotMap maps[2][3];
+    thread_local SlotMap maps[2][4];
     SlotMap& map = maps[which][kind];
     if (map.slots_.size() < count) map.slots_.resize(count, kAbsent);
     return map;
@@ -224,6 +224,26 @@ Aabb movedBox(const Aabb& box, const detail::MatrixMotion& motion) noexcept {
   return {centre - reach, centre + reach};
 }
 
+/// A float no greater than `x` (a lower bound's: −∞ below single precision's range, its largest
+/// float above it), or no less (floatAbove): `x` widened by 2⁻²² of itself, more than the
+/// conversion rounds, and by 2⁻¹⁴⁰, more than a subnormal's rounding.
+float floatBelow(double x) noexcept {
+  constexpr double kLargest = std::numeric_limits<float>::max();
+  x -= 0x1p-22 * std::abs(x) + 0x1p-140;
+  return x < -kLargest ? -std::numeric_limits<float>::infinity()
+                       : static_cast<float>(std::min(x, kLargest));
+}
+float floatAbove(double x) noexcept {
+  return -floatBelow(-x);
+}
+
+/// A leaf's triangles' world boxes (less the reference point, single precision, conservative)
+/// and which of them meet the other mesh's box.
+struct LeafBoxes {
+  detail::FloatOctet boxes;
+  std::uint32_t nearOther = 0;
+};
+
 /// One mesh's part of the query: its data, where it is, and what the query has learnt of it.
 /// Sparse: only the vertices and triangles the query reaches get a slot (a DEM step compares a
 /// small particle with a large obstacle many times).
@@ -244,7 +264,9 @@ class Side {
         vertices_(recycled<VertexState, 0>(isA ? 0 : 1)),
         triangles_(recycled<PlacedTriangle, 0>(isA ? 0 : 1)),
         pieces_(recycled<Piece, 0>(isA ? 0 : 1)),
-        crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)) {
+        crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)),
+        leafSlot_(SlotMap::of(isA ? 0 : 1, 3, data_.levels[0].size())),
+        leafBoxes_(recycled<LeafBoxes, 0>(isA ? 0 : 1)) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
     const Aabb moved = moved_ ? movedBox(data_.bounds, motion_) : data_.bounds;
     margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
@@ -254,6 +276,7 @@ class Side {
     vertexSlot_.reset();
     pieceSlot_.reset();
     triangleSlot_.reset();
+    leafSlot_.reset();
   }
   Side(const Side&) = delete;
   Side& operator=(const Side&) = delete;
@@ -263,8 +286,12 @@ class Side {
   const Aabb& box() const noexcept { return box_; }
   double margin() const noexcept { return margin_; }
   const RigidTransform& inversePose() const noexcept { return inverse_; }
-  /// The point that the numbers are relative to; set before any vertex is placed.
-  void setReference(const Vec3& reference) noexcept { reference_ = reference; }
+  /// The point that the numbers are relative to, and the other mesh's world box; set before any
+  /// vertex is placed.
+  void setReference(const Vec3& reference, const Aabb& otherBox) noexcept {
+    reference_ = reference;
+    otherBox_ = otherBox;
+  }
 
   /// Corner i of sorted triangle k, in the order that makes its normal point out of the solid
   /// (an inside-out mesh's triangles are read reversed: 0, 2, 1).
@@ -281,19 +308,6 @@ class Side {
     const Aabb box = moved_ ? movedBox(world, inverseMotion_) : world;
     return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
   }
-  /// Whether sorted triangle k, where it was prepared, meets `box` (in that frame): a test
-  /// before placing it.
-  bool meets(std::uint32_t k, const Aabb& box) const noexcept {
-    const TriangleIndices& c = data_.corners[k];
-    const Vec3 &p = data_.vertices[c[0]], &q = data_.vertices[c[1]], &r = data_.vertices[c[2]];
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (std::max({p[axis], q[axis], r[axis]}) < box.lower[axis] ||
-          std::min({p[axis], q[axis], r[axis]}) > box.upper[axis])
-        return false;
-    }
-    return true;
-  }
-
   /// The slot of vertex `v`, made with its world position on first use (moved as
   /// Mesh::transform moves a vertex).
   std::int32_t vertex(std::uint32_t v) {
@@ -340,6 +354,34 @@ class Side {
     return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
   }
 
+  /// The world boxes of leaf `leaf`'s triangles, made on first use (a leaf meets several of the
+  /// other's): from the single-precision copy, moved in single precision, so that the triangles
+  /// of a leaf pair are matched before any is placed. The reference holds until the next call.
+  const LeafBoxes& leafBoxes(std::size_t leaf) {
+    std::int32_t& slot = leafSlot_[leaf];
+    if (slot != kAbsent) return leafBoxes_[static_cast<std::size_t>(slot)];
+    leafSlot_.used(leaf);
+    slot = static_cast<std::int32_t>(leafBoxes_.size());
+    LeafBoxes& made = leafBoxes_.emplace_back();
+    const std::size_t count = std::min(detail::kFanout, data_.size() - leaf * detail::kFanout);
+    made.boxes =
+        detail::movedLeafBoxes(data_.lanes, leaf, count, moved_ ? &motion_ : nullptr, reference_);
+    // The lanes that meet the other mesh's box (the padding's are empty).
+    const detail::FloatOctet& boxes = made.boxes;
+    std::array<std::int32_t, detail::kFanout> meets;
+    meets.fill(1);
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const float lowest = floatBelow(otherBox_.lower[axis] - reference_[axis]);
+      const float highest = floatAbove(otherBox_.upper[axis] - reference_[axis]);
+      for (std::size_t i = 0; i < detail::kFanout; ++i)
+        meets[i] &= static_cast<std::int32_t>(boxes.upper[axis][i] >= lowest) &
+                    static_cast<std::int32_t>(boxes.lower[axis][i] <= highest);
+    }
+    for (std::size_t i = 0; i < count; ++i)
+      made.nearOther |= static_cast<std::uint32_t>(meets[i]) << i;
+    return made;
+  }
+
   /// The piece of sorted triangle k, made on first use.
   Piece& piece(std::uint32_t k) {
     std::int32_t& slot = pieceSlot_[k];
@@ -372,6 +414,9 @@ class Side {
   std::vector<PlacedTriangle>& triangles_;
   std::vector<Piece>& pieces_;
   std::vector<EdgeCrossing>& crossings_;
+  SlotMap& leafSlot_;
+  std::vector<LeafBoxes>& leafBoxes_;
+  Aabb otherBox_;
 };
 
 /// Closed boxes that share a point.
@@ -1122,8 +1167,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   // overlap so that they keep their accuracy far from the world's origin).
   Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
   query.reference = common.center();
-  a.setReference(query.reference);
-  b.setReference(query.reference);
+  a.setReference(query.reference, b.box());
+  b.setReference(query.reference, a.box());
 
   // Every pair of triangles whose boxes meet: both trees descended together in A's frame.
   const detail::QueryMeshData &dataA = a.data(), &dataB = b.data();
@@ -1134,34 +1179,36 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
   const std::vector<detail::LeafPair> leafPairs =
       detail::leafPairsWithin(dataA, dataB, secondTree, reach);
-  // Each leaf's box in the other's prepared frame (the moved box of a box, as the traversal
-  // moves them, widened by the rounding between the frames): most triangles of a leaf are
-  // rejected there, against the other leaf, before they are placed.
-  const detail::MatrixMotion inverseMotion = detail::matrixMotion(secondToFirst.inverse());
-  const detail::MovedTree firstTree(dataA.levels, moved ? &inverseMotion : nullptr);
+  // Per leaf pair, the triangles whose world boxes meet (single precision, conservative): only
+  // these are placed and crossed.
   for (const detail::LeafPair& pair : leafPairs) {
-    const Aabb bInA = secondTree.box(0, pair.second).grown(reach);
-    const Aabb aInB = firstTree.box(0, pair.first).grown(reach);
+    const LeafBoxes& boxesB = b.leafBoxes(pair.second);
+    if (boxesB.nearOther == 0) continue;
+    const LeafBoxes& boxesA = a.leafBoxes(pair.first);
     const std::size_t fromA = std::size_t{pair.first} * detail::kFanout;
-    const std::size_t toA = std::min(fromA + detail::kFanout, dataA.size());
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
-    const std::size_t toB = std::min(fromB + detail::kFanout, dataB.size());
-    // The second leaf's triangles that can meet the first mesh, once for the leaf pair.
-    std::array<std::uint32_t, detail::kFanout> near;
-    std::size_t nearCount = 0;
-    for (std::size_t j = fromB; j < toB; ++j) {
-      const auto k = static_cast<std::uint32_t>(j);
-      if (b.meets(k, aInB) && meet(b.triangle(k).box, a.box())) near[nearCount++] = k;
-    }
-    if (nearCount == 0) continue;
-    for (std::size_t i = fromA; i < toA; ++i) {
-      if (!a.meets(static_cast<std::uint32_t>(i), bInA)) continue;
-      const PlacedTriangle& ta = a.triangle(static_cast<std::uint32_t>(i));
-      if (!meet(ta.box, b.box())) continue;
-      for (std::size_t n = 0; n < nearCount; ++n) {
-        const PlacedTriangle& tb = b.triangle(near[n]);
-        if (!meet(ta.box, tb.box)) continue;
-        crossPair(query, static_cast<std::uint32_t>(i), near[n], ta, tb);
+    for (std::uint32_t firsts = boxesA.nearOther; firsts != 0; firsts &= firsts - 1) {
+      const auto lane = static_cast<std::size_t>(std::countr_zero(firsts));
+      // B's lanes whose boxes meet this one's, all eight at once and without branches.
+      std::array<std::int32_t, detail::kFanout> meets;
+      meets.fill(1);
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const float low = boxesA.boxes.lower[axis][lane], high = boxesA.boxes.upper[axis][lane];
+        for (std::size_t n = 0; n < detail::kFanout; ++n)
+          meets[n] &= static_cast<std::int32_t>(low <= boxesB.boxes.upper[axis][n]) &
+                      static_cast<std::int32_t>(boxesB.boxes.lower[axis][n] <= high);
+      }
+      std::uint32_t hits = 0;
+      for (std::size_t n = 0; n < detail::kFanout; ++n)
+        hits |= static_cast<std::uint32_t>(meets[n]) << n;
+      hits &= boxesB.nearOther;
+      if (hits == 0) continue;
+      const auto i = static_cast<std::uint32_t>(fromA + lane);
+      const PlacedTriangle& ta = a.triangle(i);  // B's placing leaves it where it is
+      for (; hits != 0; hits &= hits - 1) {
+        const auto k = static_cast<std::uint32_t>(fromB + std::countr_zero(hits));
+        const PlacedTriangle& tb = b.triangle(k);
+        if (meet(ta.box, tb.box)) crossPair(query, i, k, ta, tb);
       }
     }
   }

@@ -46,6 +46,68 @@ MovedOctet boxesOf(const Triangle* triangles, std::size_t count, double slack) n
   return octet;
 }
 
+FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::size_t count,
+                          const MatrixMotion* motion, const Vec3& reference) noexcept {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  // Moved, less the reference: R·(f + origin) + t − reference = R·f + c, f a corner of the copy.
+  const Mat3 rotation = motion ? motion->rotation : Mat3::identity();
+  const Vec3 translation = motion ? motion->translation : Vec3{};
+  const Vec3 c = rotation * lanes.origin + translation - reference;
+  // Every rounding, generously: the copy's (δ, at most √3·δ through R), single precision's in
+  // R·f + c and in the bounds (a few 2⁻²⁴ of |R·f| + |c| ≤ √3·largest + |c|), double's in c and
+  // in the corners the queries move (2⁻⁵³ of their terms).
+  constexpr double kRootThree = 1.7320508075688772;
+  const double largest = 0x1p22 * lanes.rounding;  // ≥ every |coordinate| of the copy
+  const double terms =
+      kRootThree * (largest + maxAbs(lanes.origin)) + maxAbs(translation) + maxAbs(reference);
+  double slack[3];
+  for (std::size_t k = 0; k < 3; ++k)
+    slack[k] = kRootThree * lanes.rounding + 0x1p-19 * (kRootThree * largest + std::abs(c[k])) +
+               0x1p-48 * terms + 0x1p-140;
+  // Single precision holds it all while it stays below 2¹¹⁰ (its limit is 2¹²⁸); beyond, boxes
+  // without bounds.
+  const bool bounded =
+      largest < 0x1p100 && std::max({maxAbs(c), slack[0], slack[1], slack[2]}) < 0x1p110;
+  FloatOctet boxes;
+  for (std::size_t axis = 0; axis < 3; ++axis)
+    for (std::size_t i = 0; i < kFanout; ++i) {
+      const bool unbounded = i < count && !bounded;
+      boxes.lower[axis][i] = unbounded ? -kInfinity : kInfinity;
+      boxes.upper[axis][i] = unbounded ? kInfinity : -kInfinity;
+    }
+  if (!bounded) return boxes;
+  float r[3][3], offset[3], widen[3];
+  for (int row = 0; row < 3; ++row) {
+    const auto k = static_cast<std::size_t>(row);
+    for (int column = 0; column < 3; ++column)
+      r[k][static_cast<std::size_t>(column)] = static_cast<float>(rotation(row, column));
+    offset[k] = static_cast<float>(c[k]);
+    widen[k] = static_cast<float>(slack[k]);
+  }
+  const float* block = lanes.coordinates.data() + leaf * 9 * kFanout;
+  for (std::size_t row = 0; row < 3; ++row) {
+    float low[kFanout], high[kFanout];
+    for (std::size_t i = 0; i < kFanout; ++i) {
+      low[i] = kInfinity;
+      high[i] = -kInfinity;
+    }
+    for (std::size_t corner = 0; corner < 3; ++corner) {
+      const float* f = block + 3 * corner * kFanout;
+      for (std::size_t i = 0; i < kFanout; ++i) {
+        const float moved = r[row][0] * f[i] + r[row][1] * f[kFanout + i] +
+                            r[row][2] * f[2 * kFanout + i] + offset[row];
+        low[i] = std::min(low[i], moved);  // NaN (padding) leaves the lane empty
+        high[i] = std::max(high[i], moved);
+      }
+    }
+    for (std::size_t i = 0; i < kFanout; ++i) {
+      boxes.lower[row][i] = low[i] - widen[row];
+      boxes.upper[row][i] = high[i] + widen[row];
+    }
+  }
+  return boxes;
+}
+
 MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
                      const MatrixMotion* motion) noexcept
     : levels_(levels), motion_(motion) {

@@ -42,6 +42,21 @@ struct MovedOctet {
 /// `count` empty (+∞, −∞: infinitely far).
 MovedOctet boxesOf(const Triangle* triangles, std::size_t count, double slack) noexcept;
 
+/// The world boxes of a leaf's triangles less a reference point, in single precision, side by
+/// side (axis, then lane). Empty past the leaf's last triangle (+∞, −∞).
+struct FloatOctet {
+  float lower[3][kFanout];
+  float upper[3][kFanout];
+};
+
+/// The boxes of leaf `leaf`'s triangles (of `lanes`, a mesh's single-precision copy) moved by
+/// `motion` (nullptr: not moved), less `reference`: computed in single precision, eight at once,
+/// and widened by every rounding, so that each holds its triangle's corners as the queries move
+/// them (motion.apply in double, then less `reference`). Moved coordinates beyond about 2¹⁰⁰
+/// give boxes without bounds (−∞, +∞).
+FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::size_t count,
+                          const MatrixMotion* motion, const Vec3& reference) noexcept;
+
 /// Lane i of an octet's boxes along `axis`.
 inline double lowerOf(const MovedOctet& boxes, std::size_t axis, std::size_t i) noexcept {
   return boxes.lower[axis][i];
