@@ -8,7 +8,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
-#include <unordered_map>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -47,12 +47,6 @@ struct EndKey {
   std::uint64_t edge = 0;
   std::uint64_t triangle = 0;
   bool operator==(const EndKey&) const noexcept = default;
-};
-
-struct EndKeyHash {
-  std::size_t operator()(const EndKey& key) const noexcept {
-    return std::hash<std::uint64_t>{}(key.edge * 0x9E3779B97F4A7C15ull ^ key.triangle);
-  }
 };
 
 EndKey endKey(bool ofA, std::uint32_t v0, std::uint32_t v1, std::uint32_t triangle) noexcept {
@@ -367,18 +361,12 @@ class Side {
     made.boxes =
         detail::movedLeafBoxes(data_.lanes, leaf, count, moved_ ? &motion_ : nullptr, reference_);
     // The lanes that meet the other mesh's box (the padding's are empty).
-    const detail::FloatOctet& boxes = made.boxes;
-    std::array<std::int32_t, detail::kFanout> meets;
-    meets.fill(1);
+    float lower[3], upper[3];
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      const float lowest = floatBelow(otherBox_.lower[axis] - reference_[axis]);
-      const float highest = floatAbove(otherBox_.upper[axis] - reference_[axis]);
-      for (std::size_t i = 0; i < detail::kFanout; ++i)
-        meets[i] &= static_cast<std::int32_t>(boxes.upper[axis][i] >= lowest) &
-                    static_cast<std::int32_t>(boxes.lower[axis][i] <= highest);
+      lower[axis] = floatBelow(otherBox_.lower[axis] - reference_[axis]);
+      upper[axis] = floatAbove(otherBox_.upper[axis] - reference_[axis]);
     }
-    for (std::size_t i = 0; i < count; ++i)
-      made.nearOther |= static_cast<std::uint32_t>(meets[i]) << i;
+    made.nearOther = detail::lanesMeeting(made.boxes, lower, upper);
     return made;
   }
 
@@ -1056,50 +1044,67 @@ std::vector<IntersectionCurve> chainCurves(const Query& query,
                                            const std::vector<std::size_t>& regionOfSegment) {
   std::vector<IntersectionCurve> curves;
   const std::vector<Segment>& segments = query.segments;
-  std::unordered_map<EndKey, std::size_t, EndKeyHash> startingAt;
-  startingAt.reserve(segments.size());
-  for (std::size_t s = 0; s < segments.size(); ++s)
-    startingAt.emplace(segments[s].startKey, s);
-  std::vector<bool> used(segments.size(), false);
+  // The segments by the key of their start, and of their end: sorted, searched by halves (a
+  // few dozen keys; hash maps allocated a node each).
+  using Keyed = std::pair<EndKey, std::size_t>;
+  const auto byKey = [](const Keyed& x, const Keyed& y) {
+    return std::tie(x.first.edge, x.first.triangle, x.second) <
+           std::tie(y.first.edge, y.first.triangle, y.second);
+  };
+  std::vector<Keyed>& startingAt = recycled<Keyed, 0>();
+  std::vector<Keyed>& endingAt = recycled<Keyed, 1>();
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    startingAt.emplace_back(segments[s].startKey, s);
+    endingAt.emplace_back(segments[s].endKey, s);
+  }
+  std::sort(startingAt.begin(), startingAt.end(), byKey);
+  std::sort(endingAt.begin(), endingAt.end(), byKey);
+  // The first segment whose key is `key`, or segments.size().
+  const auto find = [&](const std::vector<Keyed>& keyed, const EndKey& key) {
+    const auto at = std::lower_bound(keyed.begin(), keyed.end(), Keyed{key, 0}, byKey);
+    return at != keyed.end() && at->first == key ? at->second : segments.size();
+  };
+  std::vector<std::uint8_t>& used = recycled<std::uint8_t, 0>();
+  used.assign(segments.size(), 0);
   const auto& orderA = query.a.data().order;
   const auto& orderB = query.b.data().order;
   // Open chains first start where no segment ends; then the closed loops.
-  std::unordered_map<EndKey, std::size_t, EndKeyHash> endingAt;
+  std::vector<std::size_t>& heads = recycled<std::size_t, 7>();
   for (std::size_t s = 0; s < segments.size(); ++s)
-    endingAt.emplace(segments[s].endKey, s);
-  std::vector<std::size_t> heads;
-  for (std::size_t s = 0; s < segments.size(); ++s)
-    if (!endingAt.contains(segments[s].startKey)) heads.push_back(s);
+    if (find(endingAt, segments[s].startKey) == segments.size()) heads.push_back(s);
   for (std::size_t s = 0; s < segments.size(); ++s)
     heads.push_back(s);
   for (const std::size_t head : heads) {
     if (used[head] || regionOfSegment[head] == std::numeric_limits<std::size_t>::max()) continue;
+    // The chain from `head`: its segments, then the curve made at its size.
+    std::vector<std::size_t>& chain = recycled<std::size_t, 9>();
+    bool closed = false;
+    for (std::size_t s = head;;) {
+      used[s] = 1;
+      chain.push_back(s);
+      const std::size_t next = find(startingAt, segments[s].endKey);
+      if (next == segments.size() || (next != head && used[next])) break;
+      if (next == head) {
+        closed = true;
+        break;
+      }
+      s = next;
+    }
     IntersectionCurve curve;
     curve.region = regionOfSegment[head];
+    curve.closed = closed;
+    curve.points.reserve(chain.size() + 1);
+    curve.trianglesA.reserve(chain.size());
+    curve.trianglesB.reserve(chain.size());
     curve.points.push_back(query.reference + segments[head].start);
-    std::size_t s = head;
-    while (true) {
-      used[s] = true;
+    for (const std::size_t s : chain) {
       const Segment& segment = segments[s];
       curve.points.push_back(query.reference + segment.end);
       curve.trianglesA.push_back(orderA[segment.sortedA]);
       curve.trianglesB.push_back(orderB[segment.sortedB]);
       curve.length += length(segment.end - segment.start);
-      const auto next = startingAt.find(segment.endKey);
-      if (next == startingAt.end()) {
-        curve.closed = false;
-        break;
-      }
-      if (next->second == head) {
-        curve.points.back() = curve.points.front();
-        break;
-      }
-      if (used[next->second]) {
-        curve.closed = false;
-        break;
-      }
-      s = next->second;
     }
+    if (closed) curve.points.back() = curve.points.front();
     curves.push_back(std::move(curve));
   }
   return curves;
@@ -1177,8 +1182,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const bool moved = first.moved() || second.moved();
   const detail::MovedTree secondTree(dataB.levels, moved ? &motion : nullptr);
   const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
-  const std::vector<detail::LeafPair> leafPairs =
-      detail::leafPairsWithin(dataA, dataB, secondTree, reach);
+  std::vector<detail::LeafPair>& leafPairs = recycled<detail::LeafPair, 0>();
+  detail::leafPairsWithin(dataA, dataB, secondTree, reach, leafPairs);
   // Per leaf pair, the triangles whose world boxes meet (single precision, conservative): only
   // these are placed and crossed.
   for (const detail::LeafPair& pair : leafPairs) {
@@ -1189,18 +1194,12 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
     for (std::uint32_t firsts = boxesA.nearOther; firsts != 0; firsts &= firsts - 1) {
       const auto lane = static_cast<std::size_t>(std::countr_zero(firsts));
-      // B's lanes whose boxes meet this one's, all eight at once and without branches.
-      std::array<std::int32_t, detail::kFanout> meets;
-      meets.fill(1);
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const float low = boxesA.boxes.lower[axis][lane], high = boxesA.boxes.upper[axis][lane];
-        for (std::size_t n = 0; n < detail::kFanout; ++n)
-          meets[n] &= static_cast<std::int32_t>(low <= boxesB.boxes.upper[axis][n]) &
-                      static_cast<std::int32_t>(boxesB.boxes.lower[axis][n] <= high);
-      }
-      std::uint32_t hits = 0;
-      for (std::size_t n = 0; n < detail::kFanout; ++n)
-        hits |= static_cast<std::uint32_t>(meets[n]) << n;
+      // B's lanes whose boxes meet this one's.
+      const float lower[3] = {boxesA.boxes.lower[0][lane], boxesA.boxes.lower[1][lane],
+                              boxesA.boxes.lower[2][lane]};
+      const float upper[3] = {boxesA.boxes.upper[0][lane], boxesA.boxes.upper[1][lane],
+                              boxesA.boxes.upper[2][lane]};
+      std::uint32_t hits = detail::lanesMeeting(boxesB.boxes, lower, upper);
       hits &= boxesB.nearOther;
       if (hits == 0) continue;
       const auto i = static_cast<std::uint32_t>(fromA + lane);
@@ -1256,8 +1255,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   // A region whose volume is within the rounding of its terms encloses nothing: surfaces that
   // touch, or faces that lie on one another (the perturbation puts them a zero distance apart).
   constexpr double kRoundingFactor = 1024.0 * std::numeric_limits<double>::epsilon();
-  std::vector<std::pair<std::size_t, Sums>> kept;
-  std::vector<Sums> cavities;
+  std::vector<std::pair<std::size_t, Sums>>& kept = recycled<std::pair<std::size_t, Sums>, 0>();
+  std::vector<Sums>& cavities = recycled<Sums, 1>();
   for (std::size_t root = 0; root < byRoot.size(); ++root) {
     const Sums& sums = byRoot[root];
     if (sums.faces == 0) continue;
@@ -1305,8 +1304,8 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
 
   result.segments = query.segments.size();
   if (options.curves && !query.segments.empty()) {
-    std::vector<std::size_t> regionOfSegment(query.segments.size(),
-                                             std::numeric_limits<std::size_t>::max());
+    std::vector<std::size_t>& regionOfSegment = recycled<std::size_t, 8>();
+    regionOfSegment.resize(query.segments.size());
     for (std::size_t s = 0; s < query.segments.size(); ++s) {
       regionOfSegment[s] = regionOfRoot[regions.find(query.segments[s].faceA)];
     }

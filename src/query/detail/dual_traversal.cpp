@@ -93,6 +93,7 @@ FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::si
     }
     for (std::size_t corner = 0; corner < 3; ++corner) {
       const float* f = block + 3 * corner * kFanout;
+#pragma GCC unroll 1  // vectorised whole (see lanesMeeting)
       for (std::size_t i = 0; i < kFanout; ++i) {
         const float moved = r[row][0] * f[i] + r[row][1] * f[kFanout + i] +
                             r[row][2] * f[2 * kFanout + i] + offset[row];
@@ -108,6 +109,23 @@ FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::si
   return boxes;
 }
 
+std::uint32_t lanesMeeting(const FloatOctet& boxes, const float lower[3],
+                           const float upper[3]) noexcept {
+  // Without branches, so that it vectorises (a branch a lane would be a coin toss).
+  std::int32_t meets[kFanout];
+  for (std::size_t i = 0; i < kFanout; ++i)
+    meets[i] = 1;
+  for (std::size_t axis = 0; axis < 3; ++axis)
+#pragma GCC unroll 1  // left whole, GCC vectorises the loop; unrolled first, it did not
+    for (std::size_t i = 0; i < kFanout; ++i)
+      meets[i] &= static_cast<std::int32_t>(lower[axis] <= boxes.upper[axis][i]) &
+                  static_cast<std::int32_t>(boxes.lower[axis][i] <= upper[axis]);
+  std::uint32_t mask = 0;
+  for (std::size_t i = 0; i < kFanout; ++i)
+    mask |= static_cast<std::uint32_t>(meets[i]) << i;
+  return mask;
+}
+
 MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
                      const MatrixMotion* motion) noexcept
     : levels_(levels), motion_(motion) {
@@ -120,6 +138,13 @@ MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
 std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
                                       const QueryMeshData& secondMesh, const MovedTree& second,
                                       double reach) {
+  std::vector<LeafPair> pairs;
+  leafPairsWithin(firstMesh, secondMesh, second, reach, pairs);
+  return pairs;
+}
+
+void leafPairsWithin(const QueryMeshData& firstMesh, const QueryMeshData& secondMesh,
+                     const MovedTree& second, double reach, std::vector<LeafPair>& pairs) {
   // Pairs are tested when they are found, so that the box that stays (the second one, moved,
   // when the first node splits) is computed once for its eight partners, and only pairs within
   // reach are stacked; a stacked pair and a pair of leaves must also have their slabs within
@@ -131,12 +156,15 @@ std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
     return slabGap(firstMesh.slabs[firstLevel][first], a,
                    second.moved(secondMesh.slabs[secondLevel][secondNode]), b, margin) >= reach;
   };
-  std::vector<LeafPair> pairs;
-  std::vector<NodePair> stack;
+  pairs.clear();
+  thread_local std::vector<NodePair> stack;  // empty between calls (the loop below empties it)
   const auto firstRoot = static_cast<std::uint32_t>(firstLevels.size() - 1);
   const auto secondRoot = static_cast<std::uint32_t>(second.levelCount() - 1);
   if (!apart(firstLevels[firstRoot][0], second.box(secondRoot, 0), reach)) {
-    if (firstRoot == 0 && secondRoot == 0) return {{0, 0}};
+    if (firstRoot == 0 && secondRoot == 0) {
+      pairs.push_back({0, 0});
+      return;
+    }
     stack.push_back({firstRoot, 0, secondRoot, 0});
   }
   while (!stack.empty()) {
@@ -182,7 +210,6 @@ std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
       }
     }
   }
-  return pairs;
 }
 
 }  // namespace delta::detail

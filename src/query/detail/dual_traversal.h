@@ -57,6 +57,11 @@ struct FloatOctet {
 FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::size_t count,
                           const MatrixMotion* motion, const Vec3& reference) noexcept;
 
+/// The lanes of `boxes` (bit i: lane i) that meet the box [lower, upper] (closed boxes; an empty
+/// lane meets nothing), all eight at once.
+std::uint32_t lanesMeeting(const FloatOctet& boxes, const float lower[3],
+                           const float upper[3]) noexcept;
+
 /// Lane i of an octet's boxes along `axis`.
 inline double lowerOf(const MovedOctet& boxes, std::size_t axis, std::size_t i) noexcept {
   return boxes.lower[axis][i];
@@ -254,5 +259,9 @@ inline bool separated(const SeparatingPlane& plane, const Triangle& t, double ma
 std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
                                       const QueryMeshData& secondMesh, const MovedTree& second,
                                       double reach);
+/// The same into `pairs` (emptied first, its capacity kept: a DEM step's many small queries
+/// spent a tenth of their descent growing a fresh vector).
+void leafPairsWithin(const QueryMeshData& firstMesh, const QueryMeshData& secondMesh,
+                     const MovedTree& second, double reach, std::vector<LeafPair>& pairs);
 
 }  // namespace delta::detail
