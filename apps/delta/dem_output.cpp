@@ -82,6 +82,7 @@ io::VtkPolyData contactsOf(const dem::World& world) {
   std::vector<Vec3> points;
   io::VtkArray force{"force", 3, {}}, direction{"direction", 3, {}};
   io::VtkArray depth{"depth", 1, {}}, distance{"distance", 1, {}};
+  io::VtkArray couple{"couple", 3, {}}, volume{"volume", 1, {}};  // the volume law's (else 0)
   io::VtkArray overlap{"overlap", 1, {}, io::VtkType::UInt8};
   io::VtkArray converged{"converged", 1, {}, io::VtkType::UInt8};
   io::VtkArray first{"particle", 1, {}, io::VtkType::UInt32};
@@ -92,6 +93,8 @@ io::VtkPolyData contactsOf(const dem::World& world) {
     append(force, contact.force);
     append(direction, contact.point.direction);
     depth.values.push_back(contact.depth);
+    append(couple, contact.couple);
+    volume.values.push_back(contact.volume);
     distance.values.push_back(contact.point.distance);
     overlap.values.push_back(contact.point.overlap ? 1.0 : 0.0);
     converged.values.push_back(contact.point.converged ? 1.0 : 0.0);
@@ -100,7 +103,8 @@ io::VtkPolyData contactsOf(const dem::World& world) {
     obstacle.values.push_back(contact.withObstacle ? 1.0 : 0.0);
   }
   io::VtkPolyData data = io::VtkPolyData::fromPoints(std::move(points));
-  data.pointData = {force, direction, depth, distance, overlap, converged, first, second, obstacle};
+  data.pointData = {force,   direction, depth, distance, couple,  volume,
+                    overlap, converged, first, second,   obstacle};
   return data;
 }
 

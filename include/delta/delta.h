@@ -15,6 +15,7 @@
 #include "delta/core/version.h"
 #include "delta/dem/bisection.h"
 #include "delta/dem/broad_phase.h"
+#include "delta/dem/checkpoint.h"
 #include "delta/dem/contact_model.h"
 #include "delta/dem/narrow_phase.h"
 #include "delta/dem/particle_shape.h"

@@ -140,12 +140,27 @@ def test_dem_frames_open_and_glyphs_rebuild_the_particles(cli, tmp_path):
         force = array(contacts, "force", FLOAT64, 3)
         assert np.isfinite(force).all()
         array(contacts, "depth", FLOAT64, 1)
+        # The point law has no couple and no overlap volume.
+        np.testing.assert_array_equal(array(contacts, "couple", FLOAT64, 3), 0.0)
+        np.testing.assert_array_equal(array(contacts, "volume", FLOAT64, 1), 0.0)
         for flag in ("overlap", "converged", "with_obstacle"):
             assert set(array(contacts, flag, UINT8, 1).tolist()) <= {0, 1}
         assert not array(contacts, "with_obstacle", UINT8, 1).any()
         pairs = zip(array(contacts, "particle", UINT32, 1), array(contacts, "other", UINT32, 1))
         assert all({int(a), int(b)} == {0, 1} for a, b in pairs)
     assert touching > 0, "the particles collide"
+
+    # The volume law: each contact is an overlap region, its volume positive, its couple finite.
+    out = tmp_path / "two-volume"
+    cli("dem", "two-particles", "--contact-model", "volume", "--output-every", 5, "--quiet",
+        "--out", out)
+    regions = 0
+    for _, file in series(out / "contacts.pvd"):
+        contacts = read(file)
+        regions += contacts.GetNumberOfPoints()
+        assert (array(contacts, "volume", FLOAT64, 1) > 0).all()
+        assert np.isfinite(array(contacts, "couple", FLOAT64, 3)).all()
+    assert regions > 0, "the particles collide"
 
 
 def test_ib_grid_opens_with_the_distances_delta_computed(cli, cli_json, tmp_path):

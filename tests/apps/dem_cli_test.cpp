@@ -245,7 +245,8 @@ TEST(DemCli, ContactFramesHoldTheContactPoints) {
     ASSERT_TRUE(vtp.wellFormed) << frame << ": " << vtp.problem;
     EXPECT_EQ(vtp.verts, vtp.points) << "each contact point a vertex cell";
     withContacts += vtp.points > 0;
-    for (const char* name : {"force", "direction", "depth", "overlap", "converged"})
+    for (const char* name :
+         {"force", "direction", "depth", "couple", "volume", "overlap", "converged"})
       EXPECT_NE(std::find(vtp.arrays.begin(), vtp.arrays.end(), name), vtp.arrays.end()) << name;
   }
   EXPECT_GT(withContacts, 0u);
