@@ -25,7 +25,16 @@
 // closed convex pieces, the floor a box), brought into its own flow the same way; the issue-24
 // target is its step time at most 1.5 times the point law's.
 //
-// Counters: steps_per_s; contacts_per_step (contact points after filter(h)), contact_pairs_per_step
+// Settle: the settle scenario (granulates dropped into an open box) with 100 and 1000
+// particles, at the end of the scenario's own run (the pile at rest, where a settle spends most
+// of its steps), with each law; brought there once (free fall in long steps, then the
+// scenario's steps: about a minute for 100, a quarter of an hour for 1000 on one core) and kept
+// like the hopper's with DELTA_BENCH_DEM_STATES.
+//   build/bench/delta_bench_dem --benchmark_filter='Settle/particles:100/'
+//
+// Counters: steps_per_s, particle_steps_per_s; contacts_per_step (contact points after
+// filter(h); the volume law: overlap regions), raw_contacts_per_step (triangle pairs within 2ε;
+// the volume law: intersection segments), contact_pairs_per_step
 // and obstacle_pairs_per_step (particle–obstacle pairs the broad phase passed to the narrow
 // phase); share_contact_detection, the part of the step time spent in contacts() and filter(h);
 // and, for the state timed, its simulated time, the steps that led there, and how many particles
@@ -38,9 +47,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -67,108 +76,163 @@ std::size_t fromEnvironment(const char* name, std::size_t fallback) {
   return text && *text ? static_cast<std::size_t>(std::strtoull(text, nullptr, 10)) : fallback;
 }
 
-/// A hopper world brought into the funnel, and how.
-struct FunnelWorld {
+/// A world brought to the state a benchmark times, and the steps that led there.
+struct PreparedWorld {
   dem::World world;
   std::size_t freeFallSteps = 0;
   std::size_t settlingSteps = 0;
-  double funnelTop = 0.0;  ///< the highest vertex of the funnel
 };
 
-/// The hopper with `count` particles brought into the funnel once per process (see the top).
-const FunnelWorld& funnelWorld(std::size_t count, dem::ParticleKind kind, dem::ContactModel model,
-                               std::size_t maxSettlingSteps) {
-  using Key = std::tuple<std::size_t, dem::ParticleKind, dem::ContactModel>;
-  static std::map<Key, FunnelWorld> cache;
-  const auto found = cache.find({count, kind, model});
+/// The world named `name`, made by `make` (which returns a PreparedWorld) once per process, or
+/// read from DELTA_BENCH_DEM_STATES/`name`.ckpt when it is there (and kept there when it is
+/// made).
+template <class Make>
+const PreparedWorld& preparedWorld(const std::string& name, const Make& make) {
+  static std::map<std::string, PreparedWorld> cache;
+  const auto found = cache.find(name);
   if (found != cache.end()) return found->second;
-  const std::size_t maxSteps = fromEnvironment("DELTA_BENCH_DEM_SETTLING_STEPS", maxSettlingSteps);
-  // A kept state: its file names what made it; its note, the steps that led there.
   std::filesystem::path kept;
   if (const char* states = std::getenv("DELTA_BENCH_DEM_STATES"); states && *states)
-    kept = std::filesystem::path(states) /
-           ("hopper-" + std::to_string(count) +
-            (kind == dem::ParticleKind::Sphere ? "-spheres" : "-granulates") +
-            (model == dem::ContactModel::volume ? "-volume" : "-point") + "-" +
-            std::to_string(maxSteps) + ".ckpt");
+    kept = std::filesystem::path(states) / (name + ".ckpt");
   if (!kept.empty() && std::filesystem::exists(kept)) {
     dem::Checkpoint checkpoint = dem::loadCheckpoint(kept);
-    FunnelWorld funnel{std::move(checkpoint.world), 0, 0, 0.0};
-    std::sscanf(checkpoint.note.c_str(), "%zu %zu", &funnel.freeFallSteps, &funnel.settlingSteps);
-    for (std::size_t o = 0; o + 1 < funnel.world.obstacles().size(); ++o)
-      funnel.funnelTop =
-          std::max(funnel.funnelTop, funnel.world.obstacles()[o].mesh.bounds().upper.z);
-    std::fprintf(stderr, "hopper(%zu): the state kept in %s\n", count, kept.c_str());
-    return cache.emplace(Key{count, kind, model}, std::move(funnel)).first->second;
+    PreparedWorld prepared{std::move(checkpoint.world), 0, 0};
+    std::sscanf(checkpoint.note.c_str(), "%zu %zu", &prepared.freeFallSteps,
+                &prepared.settlingSteps);
+    std::fprintf(stderr, "%s: the state kept in %s\n", name.c_str(), kept.c_str());
+    return cache.emplace(name, std::move(prepared)).first->second;
   }
-  dem::Scenario scenario = dem::hopper(count, 1, kind, model);
-  FunnelWorld funnel{std::move(scenario.world), 0, 0, 0.0};
-  funnel.freeFallSteps = delta::bench::fallFreely(funnel.world, kFreeFallStride);
-  const double target = kContactsPerParticle * static_cast<double>(count);
-  while (funnel.settlingSteps < maxSteps &&
-         static_cast<double>(funnel.world.statistics().contactPoints) < target) {
-    funnel.world.step();
-    if (++funnel.settlingSteps % 500 == 0) {
-      const dem::StepStatistics& statistics = funnel.world.statistics();
-      std::fprintf(stderr,
-                   "hopper(%zu) into the funnel: t = %.4f s, %zu contact points, %zu + %zu pairs "
-                   "tested, step %.3g s (contact detection %.3g s)\n",
-                   count, funnel.world.time(), statistics.contactPoints,
-                   statistics.particlePairsTested, statistics.obstaclePairsTested,
-                   statistics.totalSeconds, statistics.contactDetectionSeconds);
-    }
-  }
-  // The funnel's top: the highest vertex of its obstacles (all but the floor, the last).
-  for (std::size_t o = 0; o + 1 < funnel.world.obstacles().size(); ++o)
-    funnel.funnelTop =
-        std::max(funnel.funnelTop, funnel.world.obstacles()[o].mesh.bounds().upper.z);
+  PreparedWorld prepared = make();
   if (!kept.empty())
     dem::saveCheckpoint(
-        kept, funnel.world,
-        std::to_string(funnel.freeFallSteps) + " " + std::to_string(funnel.settlingSteps));
-  return cache.emplace(Key{count, kind, model}, std::move(funnel)).first->second;
+        kept, prepared.world,
+        std::to_string(prepared.freeFallSteps) + " " + std::to_string(prepared.settlingSteps));
+  return cache.emplace(name, std::move(prepared)).first->second;
+}
+
+/// Progress of a world being prepared, every 500 steps, on stderr.
+void reportPreparing(const std::string& name, const PreparedWorld& prepared) {
+  if (prepared.settlingSteps % 500 != 0) return;
+  const dem::StepStatistics& statistics = prepared.world.statistics();
+  std::fprintf(stderr,
+               "%s: step %zu, t = %.4f s, %zu contact points, %zu + %zu pairs tested, step %.3g s "
+               "(contact detection %.3g s)\n",
+               name.c_str(), prepared.settlingSteps, prepared.world.time(),
+               statistics.contactPoints, statistics.particlePairsTested,
+               statistics.obstaclePairsTested, statistics.totalSeconds,
+               statistics.contactDetectionSeconds);
+}
+
+std::string caseName(const char* scenario, std::size_t count, dem::ParticleKind kind,
+                     dem::ContactModel model) {
+  return std::string(scenario) + "-" + std::to_string(count) +
+         (kind == dem::ParticleKind::Sphere ? "-spheres" : "-granulates") +
+         (model == dem::ContactModel::volume ? "-volume" : "-point");
+}
+
+/// The hopper with `count` particles brought into the funnel (see the top).
+const PreparedWorld& funnelWorld(std::size_t count, dem::ParticleKind kind, dem::ContactModel model,
+                                 std::size_t maxSettlingSteps) {
+  const std::size_t maxSteps = fromEnvironment("DELTA_BENCH_DEM_SETTLING_STEPS", maxSettlingSteps);
+  const std::string name = caseName("hopper", count, kind, model) + "-" + std::to_string(maxSteps);
+  return preparedWorld(name, [&] {
+    PreparedWorld prepared{std::move(dem::hopper(count, 1, kind, model).world), 0, 0};
+    prepared.freeFallSteps = delta::bench::fallFreely(prepared.world, kFreeFallStride);
+    const double target = kContactsPerParticle * static_cast<double>(count);
+    while (prepared.settlingSteps < maxSteps &&
+           static_cast<double>(prepared.world.statistics().contactPoints) < target) {
+      prepared.world.step();
+      ++prepared.settlingSteps;
+      reportPreparing(name, prepared);
+    }
+    return prepared;
+  });
+}
+
+/// The settle scenario with `count` particles at the end of its own run: the pile at rest on
+/// the floor of the box (free fall in long steps first, as the hopper's).
+const PreparedWorld& settledWorld(std::size_t count, dem::ContactModel model) {
+  const std::string name = caseName("settle", count, dem::ParticleKind::Mesh, model);
+  return preparedWorld(name, [&] {
+    dem::Scenario scenario = dem::settle(count, 1, dem::ParticleKind::Mesh, model);
+    PreparedWorld prepared{std::move(scenario.world), 0, 0};
+    const double end = static_cast<double>(scenario.steps) * prepared.world.parameters().timeStep;
+    prepared.freeFallSteps = delta::bench::fallFreely(prepared.world, kFreeFallStride);
+    while (prepared.world.time() < end) {
+      prepared.world.step();
+      ++prepared.settlingSteps;
+      reportPreparing(name, prepared);
+    }
+    return prepared;
+  });
+}
+
+/// The highest vertex of the world's obstacles but the last (the floor): the funnel's top.
+double funnelTop(const dem::World& world) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t o = 0; o + 1 < world.obstacles().size(); ++o)
+    top = std::max(top, world.obstacles()[o].mesh.bounds().upper.z);
+  return top;
+}
+
+/// Times state.iterations() steps of a copy of `prepared` and reports the counters.
+void timeSteps(benchmark::State& state, const PreparedWorld& prepared) {
+  dem::World world = prepared.world;
+  const double startTime = world.time();
+  double contacts = 0.0, contactPairs = 0.0, obstaclePairs = 0.0, rawPoints = 0.0;
+  double stepSeconds = 0.0, detectionSeconds = 0.0;
+  for (auto _ : state) {
+    world.step();
+    const dem::StepStatistics& statistics = world.statistics();
+    contacts += static_cast<double>(statistics.contactPoints);
+    rawPoints += static_cast<double>(statistics.rawContactPoints);
+    contactPairs += static_cast<double>(statistics.pairsInContact);
+    obstaclePairs += static_cast<double>(statistics.obstaclePairsTested);
+    stepSeconds += statistics.totalSeconds;
+    detectionSeconds += statistics.contactDetectionSeconds;
+  }
+  std::size_t triangles = 0;
+  for (const dem::Particle& particle : world.particles())
+    if (!world.shapes()[particle.shape].isSphere())
+      triangles += world.shapes()[particle.shape].mesh().triangleCount();
+  const auto steps = static_cast<double>(state.iterations());
+  state.SetItemsProcessed(state.iterations());
+  state.counters["steps_per_s"] = benchmark::Counter(steps, benchmark::Counter::kIsRate);
+  state.counters["particle_steps_per_s"] = benchmark::Counter(
+      steps * static_cast<double>(world.particles().size()), benchmark::Counter::kIsRate);
+  state.counters["contacts_per_step"] = contacts / steps;
+  state.counters["raw_contacts_per_step"] = rawPoints / steps;
+  state.counters["contact_pairs_per_step"] = contactPairs / steps;
+  state.counters["obstacle_pairs_per_step"] = obstaclePairs / steps;
+  state.counters["share_contact_detection"] = detectionSeconds / stepSeconds;
+  state.counters["triangles"] = static_cast<double>(triangles);
+  state.counters["start_time_s"] = startTime;
+  state.counters["time_step_s"] = world.parameters().timeStep;
+  state.counters["free_fall_steps"] = static_cast<double>(prepared.freeFallSteps);
+  state.counters["settling_steps"] = static_cast<double>(prepared.settlingSteps);
 }
 
 void Hopper(benchmark::State& state) {
   const auto count = static_cast<std::size_t>(state.range(0));
   const auto kind = state.range(3) ? dem::ParticleKind::Sphere : dem::ParticleKind::Mesh;
   const auto model = state.range(4) ? dem::ContactModel::volume : dem::ContactModel::point;
-  const FunnelWorld& funnel =
+  const PreparedWorld& funnel =
       funnelWorld(count, kind, model, static_cast<std::size_t>(state.range(2)));
-  // (built before the threads are set)
-  const OmpThreads threads(static_cast<int>(state.range(1)));
-  dem::World world = funnel.world;
-  const double startTime = world.time();
-  double contacts = 0.0, contactPairs = 0.0, obstaclePairs = 0.0;
-  double stepSeconds = 0.0, detectionSeconds = 0.0;
-  for (auto _ : state) {
-    world.step();
-    const dem::StepStatistics& statistics = world.statistics();
-    contacts += static_cast<double>(statistics.contactPoints);
-    contactPairs += static_cast<double>(statistics.pairsInContact);
-    obstaclePairs += static_cast<double>(statistics.obstaclePairsTested);
-    stepSeconds += statistics.totalSeconds;
-    detectionSeconds += statistics.contactDetectionSeconds;
-  }
-  std::size_t inFunnel = 0, triangles = 0;
-  for (const dem::Particle& particle : funnel.world.particles()) {
-    inFunnel += particle.position.z < funnel.funnelTop;
-    if (!funnel.world.shapes()[particle.shape].isSphere())
-      triangles += funnel.world.shapes()[particle.shape].mesh().triangleCount();
-  }
-  const auto steps = static_cast<double>(state.iterations());
-  state.SetItemsProcessed(state.iterations());
-  state.counters["steps_per_s"] = benchmark::Counter(steps, benchmark::Counter::kIsRate);
-  state.counters["contacts_per_step"] = contacts / steps;
-  state.counters["contact_pairs_per_step"] = contactPairs / steps;
-  state.counters["obstacle_pairs_per_step"] = obstaclePairs / steps;
-  state.counters["share_contact_detection"] = detectionSeconds / stepSeconds;
-  state.counters["triangles"] = static_cast<double>(triangles);
+  const OmpThreads threads(static_cast<int>(state.range(1)));  // (built before the threads are set)
+  timeSteps(state, funnel);
+  const double top = funnelTop(funnel.world);
+  std::size_t inFunnel = 0;
+  for (const dem::Particle& particle : funnel.world.particles())
+    inFunnel += particle.position.z < top;
   state.counters["in_funnel"] = static_cast<double>(inFunnel);
-  state.counters["start_time_s"] = startTime;
-  state.counters["time_step_s"] = world.parameters().timeStep;
-  state.counters["free_fall_steps"] = static_cast<double>(funnel.freeFallSteps);
-  state.counters["settling_steps"] = static_cast<double>(funnel.settlingSteps);
+}
+
+void Settle(benchmark::State& state) {
+  const auto count = static_cast<std::size_t>(state.range(0));
+  const auto model = state.range(2) ? dem::ContactModel::volume : dem::ContactModel::point;
+  const PreparedWorld& settled = settledWorld(count, model);
+  const OmpThreads threads(static_cast<int>(state.range(1)));
+  timeSteps(state, settled);
 }
 
 }  // namespace
@@ -196,6 +260,14 @@ int main(int argc, char** argv) {
                        {hopper.volume}})
         ->ArgNames({"particles", "omp_threads", "max_settling_steps", "spheres", "volume"})
         ->Iterations(hopper.iterations)
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
+  // The settle scenario's pile at rest (issue 25's granulate figures), with each law.
+  for (const std::int64_t particles : {100, 1000})
+    benchmark::RegisterBenchmark("Settle", Settle)
+        ->ArgsProduct({{particles}, threads, {0, 1}})
+        ->ArgNames({"particles", "omp_threads", "volume"})
+        ->Iterations(particles == 100 ? 1000 : 100)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
