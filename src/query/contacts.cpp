@@ -80,14 +80,16 @@ bool tableFits(std::size_t leaves, std::size_t pairs) noexcept {
   return leaves <= 16 * pairs + 1024;
 }
 
-/// Sorts `pairs` by first leaf, then second, and returns where each first leaf's run starts (and
-/// the end): a counting sort where the table fits (measured: std::sort took a sixth of a contact
-/// query on refined_elephant).
-std::vector<std::size_t> groupByFirst(std::vector<detail::LeafPair>& pairs, std::size_t leaves) {
+/// Sorts `pairs` by first leaf, then second, and puts in `groups` where each first leaf's run
+/// starts (and the end): a counting sort where the table fits (measured: std::sort took a sixth
+/// of a contact query on refined_elephant). `start` and `grouped` are scratch.
+void groupByFirst(std::vector<detail::LeafPair>& pairs, std::size_t leaves,
+                  std::vector<std::size_t>& groups, std::vector<std::size_t>& start,
+                  std::vector<detail::LeafPair>& grouped) {
   const auto bySecond = [](const detail::LeafPair& x, const detail::LeafPair& y) {
     return x.second < y.second;
   };
-  std::vector<std::size_t> groups;
+  groups.clear();
   if (!tableFits(leaves, pairs.size())) {
     std::sort(pairs.begin(), pairs.end(), [](const detail::LeafPair& x, const detail::LeafPair& y) {
       return x.first != y.first ? x.first < y.first : x.second < y.second;
@@ -95,38 +97,43 @@ std::vector<std::size_t> groupByFirst(std::vector<detail::LeafPair>& pairs, std:
     for (std::size_t p = 0; p < pairs.size(); ++p)
       if (p == 0 || pairs[p].first != pairs[p - 1].first) groups.push_back(p);
   } else {
-    std::vector<std::size_t> start(leaves + 1, 0);
+    start.assign(leaves + 1, 0);
     for (const detail::LeafPair& pair : pairs)
       ++start[pair.first + 1];
     for (std::size_t leaf = 0; leaf < leaves; ++leaf)
       start[leaf + 1] += start[leaf];
-    std::vector<detail::LeafPair> grouped(pairs.size());
-    std::vector<std::size_t> at(start.begin(), start.end() - 1);
-    for (const detail::LeafPair& pair : pairs)
-      grouped[at[pair.first]++] = pair;
+    grouped.resize(pairs.size());
+    for (const detail::LeafPair& pair : pairs)  // start[leaf] ends at its run's end
+      grouped[start[pair.first]++] = pair;
     pairs.swap(grouped);
-    for (std::size_t leaf = 0; leaf < leaves; ++leaf)
-      if (start[leaf + 1] > start[leaf]) {
-        groups.push_back(start[leaf]);
-        std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(start[leaf]),
-                  pairs.begin() + static_cast<std::ptrdiff_t>(start[leaf + 1]), bySecond);
+    std::size_t from = 0;
+    for (std::size_t leaf = 0; leaf < leaves; ++leaf) {
+      const std::size_t to = start[leaf];
+      if (to > from) {
+        groups.push_back(from);
+        std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(from),
+                  pairs.begin() + static_cast<std::ptrdiff_t>(to), bySecond);
       }
+      from = to;
+    }
   }
   groups.push_back(pairs.size());
-  return groups;
 }
 
 /// The distinct second leaves of `pairs` (ascending) and each pair's rank among them.
 struct SecondLeaves {
   std::vector<std::uint32_t> leaves;
   std::vector<std::uint32_t> rankOfPair;
+  std::vector<std::uint32_t> rank;  ///< scratch: per leaf of the second tree
 };
 
-SecondLeaves secondLeavesOf(const std::vector<detail::LeafPair>& pairs, std::size_t leaves) {
-  SecondLeaves result;
+void secondLeavesOf(const std::vector<detail::LeafPair>& pairs, std::size_t leaves,
+                    SecondLeaves& result) {
+  result.leaves.clear();
   result.rankOfPair.resize(pairs.size());
   if (tableFits(leaves, pairs.size())) {
-    std::vector<std::uint32_t> rank(leaves, kNoPartner);
+    std::vector<std::uint32_t>& rank = result.rank;
+    rank.assign(leaves, kNoPartner);
     for (const detail::LeafPair& pair : pairs)
       rank[pair.second] = 0;
     for (std::uint32_t leaf = 0; leaf < leaves; ++leaf)
@@ -136,7 +143,7 @@ SecondLeaves secondLeavesOf(const std::vector<detail::LeafPair>& pairs, std::siz
       }
     for (std::size_t p = 0; p < pairs.size(); ++p)
       result.rankOfPair[p] = rank[pairs[p].second];
-    return result;
+    return;
   }
   for (const detail::LeafPair& pair : pairs)
     result.leaves.push_back(pair.second);
@@ -146,8 +153,42 @@ SecondLeaves secondLeavesOf(const std::vector<detail::LeafPair>& pairs, std::siz
     result.rankOfPair[p] = static_cast<std::uint32_t>(
         std::lower_bound(result.leaves.begin(), result.leaves.end(), pairs[p].second) -
         result.leaves.begin());
-  return result;
 }
+
+/// What a QueryMesh contact query keeps between its phases, per calling thread, with its
+/// capacity kept from one query to the next: a DEM step makes hundreds of small queries, and
+/// allocating these each time took a tenth of one.
+struct MeshPairScratch {
+  std::vector<detail::LeafPair> pairs, grouped;
+  std::vector<std::size_t> groups, start;
+  SecondLeaves named;
+  std::vector<Triangle> partnerTriangles;
+  std::vector<Aabb> partnerBoxes;
+  std::vector<detail::MovedOctet> partnerOctets;
+  std::vector<detail::SeparatingPlane> partnerPlanes;
+  std::vector<std::uint32_t> partnerIds;
+  std::vector<std::vector<ContactPoint>> perRun;  ///< inner vectors emptied, not freed
+
+  /// This thread's (a query never nests in a thread).
+  static MeshPairScratch& ofThread() {
+    thread_local MeshPairScratch scratch;
+    return scratch;
+  }
+};
+
+/// What a run of kGroupsPerBatch first leaves builds for the kernels, per thread that runs one.
+struct RunScratch {
+  kernels::PairResults results{kBlock};
+  std::vector<Triangle> firsts, seconds;
+  std::vector<std::uint32_t> firstIds, secondIds;
+  TriangleSoA firstBatch, secondBatch;
+  std::vector<std::uint32_t> partners;  ///< slots of a group's second triangles near its leaf
+
+  static RunScratch& ofThread() {
+    thread_local RunScratch scratch;
+    return scratch;
+  }
+};
 
 /// One unit of parallel work: a triangle of the first mesh against a block of the second.
 struct Task {
@@ -249,22 +290,32 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
   const double reach = 2.0 * epsilon;
-  std::vector<detail::LeafPair> pairs = detail::leafPairsWithin(a, b, secondTree, reach);
+  MeshPairScratch& scratch = MeshPairScratch::ofThread();
+  std::vector<detail::LeafPair>& pairs = scratch.pairs;
+  detail::leafPairsWithin(a, b, secondTree, reach, pairs);
 
   // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
   // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
-  const std::vector<std::size_t> groups = groupByFirst(pairs, a.levels[0].size());
+  std::vector<std::size_t>& groups = scratch.groups;
+  groupByFirst(pairs, a.levels[0].size(), groups, scratch.start, scratch.grouped);
   // Every second leaf the pairs name, carried into the first's frame once (a leaf meets several
   // first leaves): its triangles, their boxes (also side by side) and planes, and ids, at
   // 8·(its rank among them).
-  const SecondLeaves named = secondLeavesOf(pairs, b.levels[0].size());
+  const SecondLeaves& named = scratch.named;
+  secondLeavesOf(pairs, b.levels[0].size(), scratch.named);
   const std::vector<std::uint32_t>& secondLeaves = named.leaves;
   const std::size_t slots = secondLeaves.size() * detail::kFanout;
-  std::vector<Triangle> partnerTriangles(slots);
-  std::vector<Aabb> partnerBoxes(slots);
-  std::vector<detail::MovedOctet> partnerOctets(secondLeaves.size());
-  std::vector<detail::SeparatingPlane> partnerPlanes(slots);
-  std::vector<std::uint32_t> partnerIds(slots, kNoPartner);
+  std::vector<Triangle>& partnerTriangles = scratch.partnerTriangles;
+  std::vector<Aabb>& partnerBoxes = scratch.partnerBoxes;
+  std::vector<detail::MovedOctet>& partnerOctets = scratch.partnerOctets;
+  std::vector<detail::SeparatingPlane>& partnerPlanes = scratch.partnerPlanes;
+  std::vector<std::uint32_t>& partnerIds = scratch.partnerIds;
+  // Every slot is written below (an empty one past a last leaf's end as such).
+  partnerTriangles.resize(slots);
+  partnerBoxes.resize(slots);
+  partnerOctets.resize(secondLeaves.size());
+  partnerPlanes.resize(slots);
+  partnerIds.resize(slots);
   parallelFor(0, secondLeaves.size(), 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t j = begin; j < end; ++j) {
       const std::size_t from = std::size_t{secondLeaves[j]} * detail::kFanout;
@@ -276,6 +327,13 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
         partnerBoxes[slot] = other.bounds();
         partnerPlanes[slot] = detail::separatingPlane(other);
         partnerIds[slot] = b.order[k];
+      }
+      for (std::size_t slot = j * detail::kFanout + (to - from);  // past a last leaf's end: empty
+           slot < (j + 1) * detail::kFanout; ++slot) {
+        partnerTriangles[slot] = Triangle{};
+        partnerBoxes[slot] = Aabb{};
+        partnerPlanes[slot] = detail::SeparatingPlane{};
+        partnerIds[slot] = kNoPartner;
       }
       detail::MovedOctet& octet = partnerOctets[j];  // the same boxes, eight side by side
       for (std::size_t i = 0; i < detail::kFanout; ++i) {
@@ -295,16 +353,20 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   // number of threads.
   const std::size_t groupCount = groups.size() - 1;
   const std::size_t runs = (groupCount + kGroupsPerBatch - 1) / kGroupsPerBatch;
-  std::vector<std::vector<ContactPoint>> perRun(runs);
+  std::vector<std::vector<ContactPoint>>& perRun = scratch.perRun;
+  if (perRun.size() < runs) perRun.resize(runs);
   parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
-    kernels::PairResults results(kBlock);
-    std::vector<Triangle> firsts, seconds;
-    std::vector<std::uint32_t> firstIds, secondIds;
-    TriangleSoA firstBatch, secondBatch;
-    std::vector<std::uint32_t> partners;      // slots of the group's second triangles near its leaf
+    RunScratch& work = RunScratch::ofThread();
+    kernels::PairResults& results = work.results;
+    std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
+    std::vector<std::uint32_t>&firstIds = work.firstIds, &secondIds = work.secondIds;
+    TriangleSoA &firstBatch = work.firstBatch, &secondBatch = work.secondBatch;
+    std::vector<std::uint32_t>& partners = work.partners;
     Triangle leafTriangles[detail::kFanout];  // a first leaf's, made on first use (not zeroed
     detail::SeparatingPlane leafPlanes[detail::kFanout];  // per leaf: that was 3% of a query)
     for (std::size_t run = firstRun; run < endRun; ++run) {
+      std::vector<ContactPoint>& out = perRun[run];  // filled locally: a slot a run
+      out.clear();
       firsts.clear();
       seconds.clear();
       firstIds.clear();
@@ -340,9 +402,11 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
               leafPlanes[i] = detail::separatingPlane(leafTriangles[i]);
             }
             const Triangle& one = leafTriangles[i];
-            if (detail::separated(leafPlanes[i], partnerTriangles[slot],
-                                  partnerPlanes[slot].magnitude, reach) ||
-                detail::separated(partnerPlanes[slot], one, leafPlanes[i].magnitude, reach))
+            // Both tests, then one branch (each alone is a coin toss to the predictor).
+            if (static_cast<int>(detail::separated(leafPlanes[i], partnerTriangles[slot],
+                                                   partnerPlanes[slot].magnitude, reach)) |
+                static_cast<int>(
+                    detail::separated(partnerPlanes[slot], one, leafPlanes[i].magnitude, reach)))
               continue;
             firsts.push_back(one);
             seconds.push_back(partnerTriangles[slot]);
@@ -356,18 +420,20 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       secondBatch.assign(seconds);
       results.reserve(firsts.size());  // the kernels fill at most the capacity
       kernels::distances(solver, firstBatch, secondBatch, results);
-      std::vector<ContactPoint> out;  // filled locally: neighbouring slots share cache lines
       for (std::size_t k = 0; k < results.size(); ++k)
         if (results.distanceSquared(k) < reach * reach)
           out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
                                      results.intersect(k), results.converged(k), firstIds[k],
                                      secondIds[k]));
-      perRun[run] = std::move(out);
     }
   });
+  std::size_t total = 0;
+  for (std::size_t run = 0; run < runs; ++run)
+    total += perRun[run].size();
   std::vector<ContactPoint> found;
-  for (const std::vector<ContactPoint>& some : perRun)
-    found.insert(found.end(), some.begin(), some.end());
+  found.reserve(total);
+  for (std::size_t run = 0; run < runs; ++run)
+    found.insert(found.end(), perRun[run].begin(), perRun[run].end());
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });

@@ -248,7 +248,12 @@ inline bool separated(const SeparatingPlane& plane, const Triangle& t, double ma
   const double beyond = reach + 0x1p-30 * (plane.magnitude + plane.size + magnitude);
   const double a = dot(plane.normal, t.a - plane.origin), b = dot(plane.normal, t.b - plane.origin),
                c = dot(plane.normal, t.c - plane.origin);
-  return (a > beyond && b > beyond && c > beyond) || (a < -beyond && b < -beyond && c < -beyond);
+  // Without branches: which side each vertex lies on is a coin toss to the predictor.
+  const int above =
+      static_cast<int>(a > beyond) & static_cast<int>(b > beyond) & static_cast<int>(c > beyond);
+  const int below =
+      static_cast<int>(a < -beyond) & static_cast<int>(b < -beyond) & static_cast<int>(c < -beyond);
+  return (above | below) != 0;
 }
 
 /// Every pair of leaves, one of each tree, whose boxes are not `reach` apart along any axis, by a
