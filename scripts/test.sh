@@ -21,8 +21,8 @@ scripts/fuzz.sh 15
 
 echo "== ThreadSanitizer build (clang + LLVM OpenMP): the threaded tests (names contain Thread)"
 # Built with clang and LLVM's OpenMP runtime, which TSan understands (GCC's libgomp is not
-# instrumented: its barriers would read as races), so the library's OpenMP loops run on every
-# thread while user threads call it concurrently.
+# instrumented: its barriers would read as races; the tests run OpenMP regions around Δ's
+# calls), so the library's loops run on its thread pool while user threads call it concurrently.
 CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DDELTA_SANITIZE=thread -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \

@@ -133,7 +133,7 @@ std::vector<ParticleRecord> exchangeGhosts(std::span<const ParticleRecord> owned
 }
 
 int main(int argc, char** argv) try {
-  // Only the main thread calls MPI; Δ's OpenMP threads never do.
+  // Only the main thread calls MPI; Δ's threads never do.
   int provided = 0, rank = 0, size = 1;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   if (provided < MPI_THREAD_FUNNELED) MPI_Abort(MPI_COMM_WORLD, 1);

@@ -60,13 +60,15 @@ class CancelScope {
   const std::function<bool()>* enclosing_;
 };
 
-/// Whether the calling thread polls: it is in a CancelScope with a poll and not inside an OpenMP
-/// parallel region (where a library call runs serially on a worker, which never polls).
+/// Whether the calling thread polls: it is in a CancelScope with a poll and not inside a
+/// parallel loop (Δ's or an OpenMP region, where a library call runs serially on its thread,
+/// which never polls).
 ///
 /// Threading: about the calling thread only.
 inline bool cancellable() noexcept {
   const std::function<bool()>* poll = detail::currentCancelPoll;
-  return poll != nullptr && static_cast<bool>(*poll) && !omp_in_parallel();
+  return poll != nullptr && static_cast<bool>(*poll) && !detail::insideParallelLoop() &&
+         !omp_in_parallel();
 }
 
 /// Calls the poll of the calling thread's CancelScope (see there) when cancellable(); throws
@@ -102,9 +104,9 @@ void cancellableParallelFor(std::size_t first, std::size_t last, std::size_t gra
     }
     return;
   }
-  // Thread 0 of the loop's region is the calling thread (and so is a loop run serially).
+  // Thread 0 of the loop is the calling thread (and so is a loop run serially).
   parallelFor(first, last, grain, [&](std::size_t begin, std::size_t end) {
-    if (omp_get_thread_num() == 0 && requested()) throw Cancelled();
+    if (loopThreadIndex() == 0 && requested()) throw Cancelled();
     body(begin, end);
   });
 }

@@ -3,7 +3,6 @@
 #include <omp.h>
 
 #include <cstddef>
-#include <exception>
 
 namespace delta {
 
@@ -22,11 +21,39 @@ inline int threadCount() noexcept {
   return requested < kMaxThreads ? requested : kMaxThreads;
 }
 
-/// Calls `body(begin, end)` on disjoint chunks that cover [first, last), on threadCount() OpenMP
-/// threads with dynamic scheduling (chunks of `grain` indices), or serially on the calling thread
-/// when the range holds at most `grain` indices or the caller is already inside a parallel region
-/// (the DEM case: an outer parallel loop over particle pairs keeps each library call on its own
-/// thread). This is the only place Δ uses OpenMP pragmas; kernels never spawn threads.
+namespace detail {
+
+/// Calls `call(body, chunk)` for every chunk in [0, chunks) on `threads` threads: the caller and
+/// threads − 1 workers of Δ's pool. False, having called nothing, when the pool is running
+/// another caller's loop (then the caller runs its loop itself). A chunk that throws skips the
+/// ones not yet started; the first exception is rethrown here. See parallelFor.
+bool runOnPool(std::size_t chunks, int threads, void (*call)(const void* body, std::size_t chunk),
+               const void* body);
+/// Whether this thread is running a chunk of a parallel loop of Δ's.
+bool insideParallelLoop() noexcept;
+
+}  // namespace detail
+
+/// The calling thread's place among the threads of Δ's parallel loops: 0 for a loop's caller
+/// (and for any thread that is not one of Δ's workers), 1 … kMaxThreads − 1 for the workers.
+///
+/// Threading: about the calling thread only.
+int loopThreadIndex() noexcept;
+
+/// Calls `body(begin, end)` on disjoint chunks that cover [first, last), on threadCount()
+/// threads, each taking the next chunk (of `grain` indices) when it is done with one; serially on
+/// the calling thread when the range holds at most `grain` indices, when the caller is already
+/// inside a parallel loop (Δ's, or an OpenMP region: the DEM case, an outer parallel loop over
+/// particle pairs, keeps each library call on its own thread), or when another thread's loop
+/// holds the pool. This is the only place Δ runs threads; kernels never spawn any.
+///
+/// The threads are Δ's own pool (core/parallel.cpp), started on first use and kept: the caller
+/// and threadCount() − 1 workers. Waiting is passive where it pays: a worker with nothing to do
+/// spins briefly, then sleeps in the kernel (C++20 atomic wait), and the caller takes chunks
+/// itself until none is left, so no loop waits on a thread the operating system has put aside.
+/// (OpenMP's teams spin at every barrier: with another process busy on each core, a DEM step
+/// on two threads took longer than on one; see docs/performance.md.) Work never depends on the
+/// workers: after a fork, where they are gone, the caller runs every chunk.
 ///
 /// Chunks run in any order and on any thread: a body that writes only to slots owned by its
 /// chunk gives the same result for every thread count. If a body throws, the remaining chunks are
@@ -40,30 +67,19 @@ void parallelFor(std::size_t first, std::size_t last, std::size_t grain, const B
   if (grain == 0) grain = 1;
   const std::size_t chunks = (last - first + grain - 1) / grain;
   const int threads = threadCount();
-  if (chunks == 1 || omp_in_parallel() || threads == 1) {
+  if (chunks == 1 || threads == 1 || detail::insideParallelLoop() || omp_in_parallel()) {
     body(first, last);
     return;
   }
-  std::exception_ptr failure;
-  bool failed = false;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-    bool skip;
-#pragma omp atomic read
-    skip = failed;
-    if (skip) continue;
-    const std::size_t begin = first + chunk * grain;
-    const std::size_t end = begin + grain < last ? begin + grain : last;
-    try {
-      body(begin, end);
-    } catch (...) {
-#pragma omp critical(delta_parallel_for_failure)
-      if (!failure) failure = std::current_exception();
-#pragma omp atomic write
-      failed = true;
-    }
-  }
-  if (failure) std::rethrow_exception(failure);
+  const auto chunk = [&](std::size_t c) {
+    const std::size_t begin = first + c * grain;
+    body(begin, begin + grain < last ? begin + grain : last);
+  };
+  using Chunk = decltype(chunk);
+  if (!detail::runOnPool(
+          chunks, threads, [](const void* f, std::size_t c) { (*static_cast<const Chunk*>(f))(c); },
+          &chunk))
+    body(first, last);
 }
 
 }  // namespace delta

@@ -1,0 +1,160 @@
+#include "delta/core/parallel.h"
+
+#include <atomic>
+#include <cstdint>
+#include <exception>
+#include <mutex>
+#include <system_error>
+#include <thread>
+
+namespace delta::detail {
+namespace {
+
+thread_local bool tInsideLoop = false;
+thread_local int tThreadIndex = 0;  ///< loopThreadIndex()
+
+/// Marks this thread as running chunks while it lives.
+class InsideLoop {
+ public:
+  InsideLoop() noexcept { tInsideLoop = true; }
+  ~InsideLoop() { tInsideLoop = false; }
+  InsideLoop(const InsideLoop&) = delete;
+  InsideLoop& operator=(const InsideLoop&) = delete;
+};
+
+/// Δ's threads: workers started on first use and kept, asleep between loops, one loop at a time.
+///
+/// A loop is published by storing its fields, then opening it and advancing `generation_`
+/// (release), which wakes the workers. Each participant (the caller and the workers that join)
+/// takes chunks by fetch_add on `next_` and counts each one done in `done_`. The caller takes
+/// chunks until none is left, waits until every chunk is done, closes the loop, then waits until
+/// no worker is inside it (`active_`): a worker joins only between its increment and decrement
+/// of `active_` and only while the loop is open (both sequentially consistent, as the caller's
+/// closing and reading of `active_`), so once the caller sees `active_` at zero after closing, no
+/// worker touches the loop again and the next caller may rewrite its fields.
+class Pool {
+ public:
+  static Pool& instance() {
+    static Pool* pool = new Pool;  // never destroyed: its workers sleep until the process ends
+    return *pool;
+  }
+
+  bool run(std::size_t chunks, int threads, void (*call)(const void*, std::size_t),
+           const void* body) {
+    std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
+    if (!lock.owns_lock()) return false;
+    const std::uint64_t generation = generation_.load(std::memory_order_relaxed);
+    try {
+      for (; workers_ < threads - 1; ++workers_)
+        std::thread([this, index = workers_, generation] { work(index, generation); }).detach();
+    } catch (const std::system_error&) {
+      // No more threads to be had (a process or system limit): the loop runs on those there are.
+    }
+    threads_.store(threads, std::memory_order_relaxed);
+    chunks_.store(chunks, std::memory_order_relaxed);
+    call_.store(call, std::memory_order_relaxed);
+    body_.store(body, std::memory_order_relaxed);
+    next_.store(0, std::memory_order_relaxed);
+    done_.store(0, std::memory_order_relaxed);
+    failed_.store(false, std::memory_order_relaxed);
+    failure_ = nullptr;
+    open_.store(true);
+    generation_.fetch_add(1, std::memory_order_release);
+    generation_.notify_all();
+    {
+      const InsideLoop inside;
+      participate();
+    }
+    for (std::size_t done = done_.load(std::memory_order_acquire); done < chunks;
+         done = done_.load(std::memory_order_acquire))
+      done_.wait(done, std::memory_order_acquire);
+    // Sequentially consistent, as the workers' joining: either a worker's increment of active_
+    // comes first and this waits for it, or the worker then sees the loop closed.
+    open_.store(false);
+    for (int active = active_.load(); active != 0; active = active_.load())
+      active_.wait(active);
+    if (failure_) {
+      std::exception_ptr failure = failure_;
+      failure_ = nullptr;
+      lock.unlock();
+      std::rethrow_exception(failure);
+    }
+    return true;
+  }
+
+ private:
+  Pool() = default;
+
+  /// Takes chunks of the open loop until none is left.
+  void participate() {
+    const std::size_t chunks = chunks_.load(std::memory_order_relaxed);
+    const auto call = call_.load(std::memory_order_relaxed);
+    const void* body = body_.load(std::memory_order_relaxed);
+    for (std::size_t chunk = next_.fetch_add(1, std::memory_order_relaxed); chunk < chunks;
+         chunk = next_.fetch_add(1, std::memory_order_relaxed)) {
+      if (!failed_.load(std::memory_order_relaxed)) {
+        try {
+          call(body, chunk);
+        } catch (...) {
+          const std::lock_guard<std::mutex> guard(failureMutex_);
+          if (!failure_) failure_ = std::current_exception();
+          failed_.store(true, std::memory_order_relaxed);
+        }
+      }
+      if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done_.notify_all();
+    }
+  }
+
+  /// Worker `index`: sleeps until the generation moves past `seen`, then joins the loop if it is
+  /// open and wants this many workers.
+  void work(int index, std::uint64_t seen) {
+    tThreadIndex = index + 1;
+    while (true) {
+      generation_.wait(seen, std::memory_order_acquire);
+      seen = generation_.load(std::memory_order_acquire);
+      active_.fetch_add(1);
+      if (open_.load() && index < threads_.load(std::memory_order_relaxed) - 1) {
+        const InsideLoop inside;
+        participate();
+      }
+      if (active_.fetch_sub(1) == 1) active_.notify_all();
+    }
+  }
+
+  std::mutex busy_;  ///< held by the caller whose loop runs
+  int workers_ = 0;  ///< started (under busy_)
+  std::atomic<std::uint64_t> generation_{0};
+  std::atomic<bool> open_{false};
+  std::atomic<int> active_{0};  ///< workers between joining and leaving
+  // The loop: written by its caller before it opens, read by the participants.
+  std::atomic<int> threads_{0};
+  std::atomic<std::size_t> chunks_{0};
+  std::atomic<void (*)(const void*, std::size_t)> call_{nullptr};
+  std::atomic<const void*> body_{nullptr};
+  std::atomic<std::size_t> next_{0};
+  std::atomic<std::size_t> done_{0};
+  std::atomic<bool> failed_{false};
+  std::mutex failureMutex_;
+  std::exception_ptr failure_;  ///< under failureMutex_ while the loop runs
+};
+
+}  // namespace
+
+bool runOnPool(std::size_t chunks, int threads, void (*call)(const void*, std::size_t),
+               const void* body) {
+  return Pool::instance().run(chunks, threads, call, body);
+}
+
+bool insideParallelLoop() noexcept {
+  return tInsideLoop;
+}
+
+}  // namespace delta::detail
+
+namespace delta {
+
+int loopThreadIndex() noexcept {
+  return detail::tThreadIndex;
+}
+
+}  // namespace delta
