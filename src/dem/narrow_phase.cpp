@@ -117,7 +117,7 @@ PairContacts sphereMeshContacts(const Sphere& sphere, const QueryMesh& mesh, dou
   const Sphere inMeshFrame{mesh.moved() ? mesh.inversePose().apply(sphere.center) : sphere.center,
                            sphere.radius};
   const std::vector<ContactPoint> found =
-      contactdetection::sphereContacts(inMeshFrame, mesh.triangles(), epsilon);
+      contactdetection::sphereContacts(std::span<const Sphere>(&inMeshFrame, 1), mesh, epsilon);
   return finishSphereMeshContacts(found, mesh, filterDistance);
 }
 

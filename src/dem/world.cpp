@@ -310,9 +310,8 @@ Sphere World::boundingSphere(const Particle& particle) const noexcept {
 
 std::vector<std::span<const ContactPoint>> World::sphereObstacleContacts(
     const std::vector<Interaction>& pairs) {
-  // One sphereContacts call per obstacle over every sphere paired with it: the call boxes the
-  // obstacle's triangle blocks once, where a call per pair would box a funnel's thousand
-  // triangles for every sphere near its wall. Spheres go into the obstacle's prepared frame.
+  // One sphereContacts call per obstacle over every sphere paired with it, through the
+  // obstacle's tree. Spheres go into the obstacle's prepared frame.
   std::vector<std::span<const ContactPoint>> found(pairs.size());
   sphereObstacleFound_.resize(obstacles_.size());
   std::vector<std::size_t> pairOf;
@@ -331,8 +330,7 @@ std::vector<std::span<const ContactPoint>> World::sphereObstacleContacts(
       spheres.push_back(sphere);
     }
     if (spheres.empty()) continue;
-    sphereObstacleFound_[o] =
-        contactdetection::sphereContacts(spheres, obstacle.triangles(), law_.epsilon);
+    sphereObstacleFound_[o] = contactdetection::sphereContacts(spheres, obstacle, law_.epsilon);
     const std::vector<ContactPoint>& all = sphereObstacleFound_[o];
     for (std::size_t begin = 0; begin < all.size();) {  // sorted by sphere
       std::size_t end = begin;

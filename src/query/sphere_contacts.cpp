@@ -12,6 +12,9 @@
 #include "delta/core/parallel.h"
 #include "delta/kernels/sphere.h"
 #include "delta/mesh/coordinate_range.h"
+#include "delta/query/query_mesh.h"
+
+#include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -43,9 +46,13 @@ MeshBoxes boxesOf(const TriangleSoA& mesh) {
   return boxes;
 }
 
-void checkEpsilonAndMesh(double epsilon, const TriangleSoA& mesh) {
+void checkEpsilon(double epsilon) {
   if (!std::isfinite(epsilon) || !(epsilon > 0.0))
     throw Error("sphereContacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+}
+
+void checkEpsilonAndMesh(double epsilon, const TriangleSoA& mesh) {
+  checkEpsilon(epsilon);
   if (mesh.size() == 0) throw Error("sphereContacts: the mesh has no triangles");
   if (mesh.size() > std::numeric_limits<std::uint32_t>::max())
     throw Error("sphereContacts: the mesh has " + std::to_string(mesh.size()) +
@@ -88,6 +95,66 @@ void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh
   }
 }
 
+/// The contacts of one (validated) sphere with the triangles of a prepared mesh (its prepared
+/// frame), found through its tree: the nodes and then the triangles whose boxes come within
+/// reach of the sphere's box, with the same slack as above (the tree's boxes are grown by the
+/// mesh's own slack on top), so no triangle the kernel would report is skipped. In id order.
+void contactsOf(const Sphere& sphere, std::size_t index, const detail::QueryMeshData& data,
+                double scale, double epsilon, std::vector<ContactPoint>& out) {
+  const Vec3 extent{sphere.radius, sphere.radius, sphere.radius};
+  const Aabb box{sphere.center - extent, sphere.center + extent};
+  const double reach = 2.0 * epsilon;
+  const double gap = reach + kPruneUlps * (maxAbs(sphere.center) + sphere.radius + scale);
+  thread_local std::vector<std::pair<std::size_t, std::size_t>> stack;  // (level, node)
+  stack.clear();
+  stack.emplace_back(data.levels.size() - 1, 0);
+  const std::size_t first = out.size();
+  while (!stack.empty()) {
+    const auto [level, node] = stack.back();
+    stack.pop_back();
+    if (apart(box, data.levels[level][node], gap)) continue;
+    const std::size_t from = node * detail::kFanout;
+    if (level > 0) {
+      const std::size_t to = std::min(from + detail::kFanout, data.levels[level - 1].size());
+      for (std::size_t child = from; child < to; ++child)
+        stack.emplace_back(level - 1, child);
+      continue;
+    }
+    const std::size_t to = std::min(from + detail::kFanout, data.size());
+    for (std::size_t k = from; k < to; ++k) {
+      const Triangle triangle = data.triangle(k);
+      if (apart(box, triangle.bounds(), gap)) continue;
+      const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, triangle);
+      if (r.gap < reach)
+        out.push_back(sphereContactPoint(r, static_cast<std::uint32_t>(index), data.order[k]));
+    }
+  }
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+            [](const ContactPoint& x, const ContactPoint& y) { return x.second < y.second; });
+}
+
+/// The contacts of every sphere, each found by `contactsOf(sphere, index, out)`, in sphere order.
+template <class ContactsOf>
+std::vector<ContactPoint> everySphere(std::span<const Sphere> spheres,
+                                      const ContactsOf& contactsOf) {
+  // One list per chunk of kGrain spheres, filled in sphere order: chunk k starts at sphere
+  // k·kGrain (a serial run hands the whole range to chunk 0, still in order).
+  std::vector<std::vector<ContactPoint>> perChunk((spheres.size() + kGrain - 1) / kGrain);
+  parallelFor(0, spheres.size(), kGrain, [&](std::size_t begin, std::size_t end) {
+    std::vector<ContactPoint>& out = perChunk[begin / kGrain];
+    for (std::size_t i = begin; i < end; ++i)
+      contactsOf(i, out);
+  });
+  std::size_t count = 0;
+  for (const std::vector<ContactPoint>& some : perChunk)
+    count += some.size();
+  std::vector<ContactPoint> all;
+  all.reserve(count);
+  for (const std::vector<ContactPoint>& some : perChunk)
+    all.insert(all.end(), some.begin(), some.end());
+  return all;
+}
+
 }  // namespace
 
 std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA& mesh,
@@ -109,23 +176,25 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
     checkSphere(spheres[i], i);
   if (spheres.empty()) return {};
   const MeshBoxes boxes = boxesOf(mesh);
-
-  // One list per chunk of kGrain spheres, filled in sphere order: chunk k starts at sphere
-  // k·kGrain (a serial run hands the whole range to chunk 0, still in order).
-  std::vector<std::vector<ContactPoint>> perChunk((spheres.size() + kGrain - 1) / kGrain);
-  parallelFor(0, spheres.size(), kGrain, [&](std::size_t begin, std::size_t end) {
-    std::vector<ContactPoint>& out = perChunk[begin / kGrain];
-    for (std::size_t i = begin; i < end; ++i)
-      contactsOf(spheres[i], i, mesh, boxes, epsilon, out);
+  return everySphere(spheres, [&](std::size_t i, std::vector<ContactPoint>& out) {
+    contactsOf(spheres[i], i, mesh, boxes, epsilon, out);
   });
-  std::size_t count = 0;
-  for (const std::vector<ContactPoint>& some : perChunk)
-    count += some.size();
-  std::vector<ContactPoint> all;
-  all.reserve(count);
-  for (const std::vector<ContactPoint>& some : perChunk)
-    all.insert(all.end(), some.begin(), some.end());
-  return all;
+}
+
+std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const QueryMesh& mesh,
+                                         double epsilon) {
+  checkEpsilon(epsilon);  // a QueryMesh has triangles, 32-bit ids, coordinates in range
+  if (spheres.size() > std::numeric_limits<std::uint32_t>::max())
+    throw Error("sphereContacts: " + std::to_string(spheres.size()) +
+                " spheres, more than 32-bit ids reach");
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+    checkSphere(spheres[i], i);
+  if (spheres.empty()) return {};
+  const detail::QueryMeshData& data = mesh.data();
+  const double scale = std::fmax(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));
+  return everySphere(spheres, [&](std::size_t i, std::vector<ContactPoint>& out) {
+    contactsOf(spheres[i], i, data, scale, epsilon, out);
+  });
 }
 
 ContactPoint sphereContactPoint(const kernels::SphereContactResult& result, std::uint32_t first,

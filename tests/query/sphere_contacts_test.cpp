@@ -18,6 +18,7 @@
 #include "delta/kernels/point_triangle.h"
 #include "delta/kernels/sphere.h"
 #include "delta/mesh/primitives.h"
+#include "delta/query/query_mesh.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -163,6 +164,9 @@ TEST(SphereContacts, SameSetAsEveryTriangleByTheKernel) {
     const TriangleSoA mesh = flatten(scene.wall);
     const std::vector<ContactPoint> actual = sphereContacts(scene.spheres, mesh, scene.epsilon);
     expectSame(actual, expected, scene.name);
+    // Through a prepared mesh's tree: the very same contacts (the DEM's path).
+    expectSame(sphereContacts(scene.spheres, QueryMesh(scene.wall), scene.epsilon), expected,
+               scene.name + " through the tree");
     const double size = scene.wall.bounds().diagonal();
     for (const ContactPoint& c : actual)
       expectContract(c, scene.spheres[c.first], scene.wall.triangle(c.second), scene.epsilon, size,
@@ -262,6 +266,8 @@ TEST(SphereContacts, RoundingInThePruneNeverDropsAContact) {
   ASSERT_EQ(expected.size(), 1u);
   ASSERT_EQ(expected[0].distance, 0.25 - ulp / 4);
   expectSame(sphereContacts(sphere, flatten(floor), 0.125), expected, "rounded box");
+  expectSame(sphereContacts(std::span<const Sphere>(&sphere, 1), QueryMesh(floor), 0.125), expected,
+             "rounded box, through the tree");
 }
 
 TEST(SphereContacts, CentreOnTheWallSurfaceGetsTheFaceNormal) {

@@ -7,6 +7,7 @@
 #include "delta/core/sphere.h"
 #include "delta/kernels/sphere.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/query_mesh.h"
 
 namespace delta::contactdetection {
 
@@ -58,6 +59,19 @@ std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA
 /// Many spheres (a DEM particle set) against one mesh: the contacts of every sphere as above,
 /// `first` being its index in `spheres`, sorted by (sphere index, triangle id).
 std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const TriangleSoA& mesh,
+                                         double epsilon);
+
+/// The same contacts, in the same order, as sphereContacts(spheres, mesh.triangles(), ε): the
+/// spheres against the mesh where it was prepared (its pose is not applied: give the centres in
+/// that frame, as mesh.inversePose() takes them there), found through its tree instead of
+/// blocks of consecutive triangles, with each triangle's box tested before its kernel runs. A
+/// DEM step asks this for every sphere near a wall: a funnel's consecutive triangles run round
+/// it, so their blocks' boxes met most spheres and a sphere ran a hundred kernels or more.
+///
+/// Throws as the overload above (the mesh was checked when it was prepared).
+///
+/// Threading: as the overload above.
+std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const QueryMesh& mesh,
                                          double epsilon);
 
 /// A sphere kernel's answer (kernels::sphereSphere or sphereTriangle) as the ContactPoint
