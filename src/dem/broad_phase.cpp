@@ -47,6 +47,71 @@ void validate(std::span<const Sphere> spheres, double margin) {
                   " (must be finite, radius non-negative)");
 }
 
+/// The chunks' lists of pairs, in order.
+std::vector<CandidatePair> joined(std::vector<std::vector<CandidatePair>>& perChunk) {
+  std::size_t total = 0;
+  for (const std::vector<CandidatePair>& some : perChunk)
+    total += some.size();
+  std::vector<CandidatePair> pairs;
+  pairs.reserve(total);
+  for (const std::vector<CandidatePair>& some : perChunk)
+    pairs.insert(pairs.end(), some.begin(), some.end());
+  return pairs;
+}
+
+/// nearbyPairs on a dense grid of (last.x + 1)·(last.y + 1)·(last.z + 1) cells: the spheres
+/// sorted by cell (x fastest; within a cell by index), so the three cells of a row around a
+/// sphere's are one run; nine runs a sphere, no hashing.
+std::vector<CandidatePair> pairsOnGrid(std::span<const Sphere> spheres, double margin,
+                                       const std::vector<Cell>& cells, const Cell& last) {
+  const std::size_t count = spheres.size();
+  const auto nx = static_cast<std::size_t>(last.x) + 1, ny = static_cast<std::size_t>(last.y) + 1,
+             nz = static_cast<std::size_t>(last.z) + 1;
+  const auto indexOf = [&](std::size_t x, std::size_t y, std::size_t z) {
+    return (z * ny + y) * nx + x;
+  };
+  std::vector<std::uint32_t> cellStart(nx * ny * nz + 1, 0);
+  for (const Cell& cell : cells)
+    ++cellStart[indexOf(static_cast<std::size_t>(cell.x), static_cast<std::size_t>(cell.y),
+                        static_cast<std::size_t>(cell.z)) +
+                1];
+  for (std::size_t c = 1; c < cellStart.size(); ++c)
+    cellStart[c] += cellStart[c - 1];
+  std::vector<std::uint32_t> members(count);
+  {
+    std::vector<std::uint32_t> fill(cellStart.begin(), cellStart.end() - 1);
+    for (std::size_t i = 0; i < count; ++i)
+      members[fill[indexOf(
+          static_cast<std::size_t>(cells[i].x), static_cast<std::size_t>(cells[i].y),
+          static_cast<std::size_t>(cells[i].z))]++] = static_cast<std::uint32_t>(i);
+  }
+  std::vector<std::vector<CandidatePair>> perChunk((count + kSphereGrain - 1) / kSphereGrain);
+  parallelFor(0, count, kSphereGrain, [&](std::size_t begin, std::size_t end) {
+    std::vector<CandidatePair>& found = perChunk[begin / kSphereGrain];
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t before = found.size();
+      const Sphere& one = spheres[i];
+      const auto x = static_cast<std::size_t>(cells[i].x), y = static_cast<std::size_t>(cells[i].y),
+                 z = static_cast<std::size_t>(cells[i].z);
+      const std::size_t fromX = x == 0 ? 0 : x - 1, toX = std::min(x + 1, nx - 1);
+      for (std::size_t cz = z == 0 ? 0 : z - 1; cz <= std::min(z + 1, nz - 1); ++cz)
+        for (std::size_t cy = y == 0 ? 0 : y - 1; cy <= std::min(y + 1, ny - 1); ++cy) {
+          const std::uint32_t runEnd = cellStart[indexOf(toX, cy, cz) + 1];
+          for (std::uint32_t k = cellStart[indexOf(fromX, cy, cz)]; k < runEnd; ++k) {
+            const std::uint32_t j = members[k];
+            if (j <= i) continue;
+            const double reach = one.radius + spheres[j].radius + margin;
+            if (distanceSquared(one.center, spheres[j].center) < reach * reach)
+              found.push_back({static_cast<std::uint32_t>(i), j});
+          }
+        }
+      std::sort(found.begin() + static_cast<std::ptrdiff_t>(before), found.end(),
+                [](const CandidatePair& a, const CandidatePair& b) { return a.second < b.second; });
+    }
+  });
+  return joined(perChunk);
+}
+
 }  // namespace
 
 std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double margin) {
@@ -69,6 +134,15 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
     cells[i] = {static_cast<std::int64_t>(offset.x), static_cast<std::int64_t>(offset.y),
                 static_cast<std::int64_t>(offset.z)};
   }
+  // Packed spheres (a DEM pile or flow): a dense grid of cells where it holds at most a few
+  // cells a sphere, each row of three neighbouring cells one run of the sorted spheres.
+  Cell last{0, 0, 0};
+  for (const Cell& cell : cells)
+    last = {std::max(last.x, cell.x), std::max(last.y, cell.y), std::max(last.z, cell.z)};
+  const double gridCells = static_cast<double>(last.x + 1) * static_cast<double>(last.y + 1) *
+                           static_cast<double>(last.z + 1);
+  if (gridCells <= 8.0 * static_cast<double>(count) + 4096.0)
+    return pairsOnGrid(spheres, margin, cells, last);
   // Counting sort of the spheres by bucket; within a bucket they stay in index order.
   const std::uint64_t mask = std::bit_ceil(2 * count) - 1;
   std::vector<std::size_t> bucketStart(mask + 2, 0);
@@ -109,10 +183,7 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
     }
     perChunk[begin / kSphereGrain] = std::move(found);
   });
-  std::vector<CandidatePair> pairs;
-  for (const std::vector<CandidatePair>& some : perChunk)
-    pairs.insert(pairs.end(), some.begin(), some.end());
-  return pairs;
+  return joined(perChunk);
 }
 
 }  // namespace delta::dem
