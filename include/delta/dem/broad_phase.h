@@ -23,9 +23,12 @@ struct CandidatePair {
 /// thread count.
 ///
 /// A cell list rebuilt on every call: cells of edge 2·r_max + margin, so each sphere meets only
-/// the spheres of its own and the 26 neighbouring cells; cells are hashed into a table of about
-/// twice as many buckets as spheres and filled by a counting sort, so the work is O(n) for
-/// spheres of similar size in any packing and the memory O(n) however far apart they are.
+/// the spheres of its own and the 26 neighbouring cells. Where the spheres' box holds at most
+/// about eight cells a sphere (a pile, a flow), the cells are a dense grid and the spheres are
+/// sorted by cell, so that each row of three neighbouring cells is one run of them; otherwise
+/// cells are hashed into a table of about twice as many buckets as spheres and filled by a
+/// counting sort. Either way the work is O(n) for spheres of similar size in any packing and the
+/// memory O(n) however far apart they are.
 /// Spheres of very different sizes make the cells as large as the largest and the work grow
 /// toward O(n²) in crowded cells.
 ///
