@@ -44,8 +44,9 @@ int loopThreadIndex() noexcept;
 /// threads, each taking the next chunk (of `grain` indices) when it is done with one; serially on
 /// the calling thread when the range holds at most `grain` indices, when the caller is already
 /// inside a parallel loop (Δ's, or an OpenMP region: the DEM case, an outer parallel loop over
-/// particle pairs, keeps each library call on its own thread), or when another thread's loop
-/// holds the pool. This is the only place Δ runs threads; kernels never spawn any.
+/// particle pairs, keeps each library call on its own thread), or chunk by chunk on the calling
+/// thread when another thread's loop holds the pool. This is the only place Δ runs threads;
+/// kernels never spawn any.
 ///
 /// The threads are Δ's own pool (core/parallel.cpp), started on first use and kept: the caller
 /// and threadCount() − 1 workers. Waiting is passive where it pays: a worker with nothing to do
@@ -79,7 +80,8 @@ void parallelFor(std::size_t first, std::size_t last, std::size_t grain, const B
   if (!detail::runOnPool(
           chunks, threads, [](const void* f, std::size_t c) { (*static_cast<const Chunk*>(f))(c); },
           &chunk))
-    body(first, last);
+    for (std::size_t c = 0; c < chunks; ++c)  // chunk by chunk, as a loop on one thread would
+      chunk(c);
 }
 
 }  // namespace delta
