@@ -75,6 +75,14 @@ void checkSphere(const Sphere& sphere, std::size_t index) {
                                 ")");
 }
 
+void checkSpheres(std::span<const Sphere> spheres) {
+  if (spheres.size() > std::numeric_limits<std::uint32_t>::max())
+    throw Error("sphereContacts: " + std::to_string(spheres.size()) +
+                " spheres, more than 32-bit ids reach");
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+    checkSphere(spheres[i], i);
+}
+
 /// The contacts of one (validated) sphere with every triangle of `mesh`, in id order.
 void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh,
                 const MeshBoxes& boxes, double epsilon, std::vector<ContactPoint>& out) {
@@ -169,11 +177,7 @@ std::vector<ContactPoint> sphereContacts(const Sphere& sphere, const TriangleSoA
 std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const TriangleSoA& mesh,
                                          double epsilon) {
   checkEpsilonAndMesh(epsilon, mesh);
-  if (spheres.size() > std::numeric_limits<std::uint32_t>::max())
-    throw Error("sphereContacts: " + std::to_string(spheres.size()) +
-                " spheres, more than 32-bit ids reach");
-  for (std::size_t i = 0; i < spheres.size(); ++i)
-    checkSphere(spheres[i], i);
+  checkSpheres(spheres);
   if (spheres.empty()) return {};
   const MeshBoxes boxes = boxesOf(mesh);
   return everySphere(spheres, [&](std::size_t i, std::vector<ContactPoint>& out) {
@@ -184,11 +188,7 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
 std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const QueryMesh& mesh,
                                          double epsilon) {
   checkEpsilon(epsilon);  // a QueryMesh has triangles, 32-bit ids, coordinates in range
-  if (spheres.size() > std::numeric_limits<std::uint32_t>::max())
-    throw Error("sphereContacts: " + std::to_string(spheres.size()) +
-                " spheres, more than 32-bit ids reach");
-  for (std::size_t i = 0; i < spheres.size(); ++i)
-    checkSphere(spheres[i], i);
+  checkSpheres(spheres);
   if (spheres.empty()) return {};
   const detail::QueryMeshData& data = mesh.data();
   const double scale = std::fmax(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));
