@@ -150,16 +150,13 @@ void addContactCommand(CLI::App& app) {
   auto options = std::make_shared<ContactOptions>();
   CLI::App* contact = app.add_subcommand(
       "contact", "Contact points of two meshes closer than 2ε, or their minimum distance");
-  contact->add_option("MESH_A", options->meshA, meshSourceHelp())->required();
-  contact->add_option("MESH_B", options->meshB, "The second mesh (same forms as MESH_A)")
-      ->required();
+  addMeshPair(*contact, options->meshA, options->meshB, options->moveB);
   contact->add_option("--eps", options->epsilon,
                       "Contact distance ε: pairs closer than 2ε are contacts (without it: the "
                       "minimum distance and the closest triangle pair)");
   contact->add_option("--method", options->method, "Solver: hybrid (default), penalty, bruteforce");
   contact->add_option("--filter", options->filter,
                       "Keep a contact only if no deeper kept contact lies closer than H");
-  addSecondMeshMotion(*contact, options->moveB);
   contact->add_option("--out", options->out,
                       "Write the contact points: FILE.csv (one row each, sorted by triangle ids) "
                       "or FILE.vtp (ParaView)");

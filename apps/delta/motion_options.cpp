@@ -9,6 +9,7 @@
 #include "delta/core/error.h"
 
 #include "commands.h"
+#include "mesh_source.h"
 
 namespace delta::cli {
 
@@ -65,7 +66,10 @@ void SecondMeshMotion::apply(Mesh& b) const {
   if (!translate.empty()) b.translate(parseVector(translate, "--translate-b"));
 }
 
-void addSecondMeshMotion(CLI::App& command, SecondMeshMotion& motion) {
+void addMeshPair(CLI::App& command, std::string& meshA, std::string& meshB,
+                 SecondMeshMotion& motion) {
+  command.add_option("MESH_A", meshA, meshSourceHelp())->required();
+  command.add_option("MESH_B", meshB, "The second mesh (same forms as MESH_A)")->required();
   command.add_option("--translate-b", motion.translate, "Move B by X,Y,Z (after rotating)");
   command.add_option("--rotate-b", motion.rotate,
                      "Turn B about the centre of its box: axis AX,AY,AZ and DEGREES");

@@ -205,10 +205,7 @@ void addOverlapCommand(CLI::App& app) {
   auto options = std::make_shared<OverlapCliOptions>();
   CLI::App* overlap = app.add_subcommand(
       "overlap", "The volume two closed meshes share and the curves where their surfaces cross");
-  overlap->add_option("MESH_A", options->meshA, meshSourceHelp())->required();
-  overlap->add_option("MESH_B", options->meshB, "The second mesh (same forms as MESH_A)")
-      ->required();
-  addSecondMeshMotion(*overlap, options->moveB);
+  addMeshPair(*overlap, options->meshA, options->meshB, options->moveB);
   overlap->add_option("--out", options->out,
                       "Write the intersection curves as FILE.vtp (ParaView): one polyline a "
                       "curve, cell data curve, region, closed, length; point data triangle_a, "

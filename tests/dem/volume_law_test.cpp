@@ -124,18 +124,14 @@ TEST(DemVolumeLaw, ForceAndTorqueAreMinusTheGradientOfTheEnergy) {
   const double h = 1e-7;  // 1e-5 of the size: V is smooth there, and rounding stays small
   for (int axis = 0; axis < 3; ++axis) {
     Vec3 step;
-    (axis == 0 ? step.x : axis == 1 ? step.y : step.z) = h;
+    step[static_cast<std::size_t>(axis)] = h;
     QueryMesh moved = second;
     moved.setPose({pose.rotation, pose.translation + step});
     const double ahead = elasticEnergy(first, moved, kappa);
     moved.setPose({pose.rotation, pose.translation - step});
     const double behind = elasticEnergy(first, moved, kappa);
     const double force = -(ahead - behind) / (2.0 * h);
-    EXPECT_NEAR(force,
-                axis == 0   ? wrench.force.x
-                : axis == 1 ? wrench.force.y
-                            : wrench.force.z,
-                1e-5 * length(wrench.force))
+    EXPECT_NEAR(force, wrench.force[static_cast<std::size_t>(axis)], 1e-5 * length(wrench.force))
         << "axis " << axis;
     // A turn by ±h about the axis through the second body's centre.
     const double angle = h / 0.01;
@@ -148,10 +144,7 @@ TEST(DemVolumeLaw, ForceAndTorqueAreMinusTheGradientOfTheEnergy) {
         pose);
     const double turnedBehind = elasticEnergy(first, moved, kappa);
     const double torque = -(turnedAhead - turnedBehind) / (2.0 * angle);
-    EXPECT_NEAR(torque,
-                axis == 0   ? wrench.torque.x
-                : axis == 1 ? wrench.torque.y
-                            : wrench.torque.z,
+    EXPECT_NEAR(torque, wrench.torque[static_cast<std::size_t>(axis)],
                 1e-5 * length(wrench.torque) + 1e-6 * length(wrench.force) * 0.01)
         << "axis " << axis;
   }
