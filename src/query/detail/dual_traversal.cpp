@@ -135,14 +135,6 @@ MovedTree::MovedTree(const std::vector<std::vector<Aabb>>& levels,
       magnitude_(r, c) = std::abs(motion->rotation(r, c));
 }
 
-std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
-                                      const QueryMeshData& secondMesh, const MovedTree& second,
-                                      double reach) {
-  std::vector<LeafPair> pairs;
-  leafPairsWithin(firstMesh, secondMesh, second, reach, pairs);
-  return pairs;
-}
-
 void leafPairsWithin(const QueryMeshData& firstMesh, const QueryMeshData& secondMesh,
                      const MovedTree& second, double reach, std::vector<LeafPair>& pairs) {
   // Pairs are tested when they are found, so that the box that stays (the second one, moved,

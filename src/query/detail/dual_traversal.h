@@ -261,11 +261,8 @@ inline bool separated(const SeparatingPlane& plane, const Triangle& t, double ma
 /// seen from the first's frame. In no particular order; each pair once. (Its children's boxes
 /// taken from the octets, the second's moved eight at once, measured no faster: a moved box is
 /// needed per child either way.)
-std::vector<LeafPair> leafPairsWithin(const QueryMeshData& firstMesh,
-                                      const QueryMeshData& secondMesh, const MovedTree& second,
-                                      double reach);
-/// The same into `pairs` (emptied first, its capacity kept: a DEM step's many small queries
-/// spent a tenth of their descent growing a fresh vector).
+/// The pairs go into `pairs`, emptied first and its capacity kept (a DEM step makes hundreds of
+/// small queries, each of which grew a fresh vector).
 void leafPairsWithin(const QueryMeshData& firstMesh, const QueryMeshData& secondMesh,
                      const MovedTree& second, double reach, std::vector<LeafPair>& pairs);
 
