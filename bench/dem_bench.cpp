@@ -32,6 +32,16 @@
 // like the hopper's with DELTA_BENCH_DEM_STATES.
 //   build/bench/delta_bench_dem --benchmark_filter='Settle/particles:100/'
 //
+// HopperScale: the 1000-granulate hopper in its flow, tiled 1, 10 and 100 times side by side
+// (tiledHopper: the funnels one obstacle, the floors another): the time per particle-step and
+// the memory per particle from 1000 to 100,000 particles.
+//   build/bench/delta_bench_dem --benchmark_filter='HopperScale/tiles:100/'
+//
+// SpheresPeer: the settle scenario's pile of 100 or 1000 spheres at rest, stepped by Δ (peer:0)
+// and by LIGGGHTS 3.8 (peer:1; liggghts_peer.h, built where libliggghts-dev is found) with the
+// same law and parameters, one thread each; step_time is a step's wall time.
+//   build/bench/delta_bench_dem --benchmark_filter='SpheresPeer'
+//
 // Counters: steps_per_s, particle_steps_per_s; contacts_per_step (contact points after
 // filter(h); the volume law: overlap regions), raw_contacts_per_step (triangle pairs within 2ε;
 // the volume law: intersection segments), contact_pairs_per_step
@@ -43,12 +53,14 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,6 +68,9 @@
 #include "delta/delta.h"
 
 #include "hopper_free_fall.h"
+#ifdef DELTA_HAVE_LIGGGHTS
+#include "liggghts_peer.h"
+#endif
 #include "omp_threads.h"
 
 namespace {
@@ -151,10 +166,11 @@ const PreparedWorld& funnelWorld(std::size_t count, dem::ParticleKind kind, dem:
 
 /// The settle scenario with `count` particles at the end of its own run: the pile at rest on
 /// the floor of the box (free fall in long steps first, as the hopper's).
-const PreparedWorld& settledWorld(std::size_t count, dem::ContactModel model) {
-  const std::string name = caseName("settle", count, dem::ParticleKind::Mesh, model);
+const PreparedWorld& settledWorld(std::size_t count, dem::ParticleKind kind,
+                                  dem::ContactModel model) {
+  const std::string name = caseName("settle", count, kind, model);
   return preparedWorld(name, [&] {
-    dem::Scenario scenario = dem::settle(count, 1, dem::ParticleKind::Mesh, model);
+    dem::Scenario scenario = dem::settle(count, 1, kind, model);
     PreparedWorld prepared{std::move(scenario.world), 0, 0};
     const double end = static_cast<double>(scenario.steps) * prepared.world.parameters().timeStep;
     prepared.freeFallSteps = delta::bench::fallFreely(prepared.world, kFreeFallStride);
@@ -230,9 +246,150 @@ void Hopper(benchmark::State& state) {
 void Settle(benchmark::State& state) {
   const auto count = static_cast<std::size_t>(state.range(0));
   const auto model = state.range(2) ? dem::ContactModel::volume : dem::ContactModel::point;
-  const PreparedWorld& settled = settledWorld(count, model);
+  const PreparedWorld& settled = settledWorld(count, dem::ParticleKind::Mesh, model);
   const OmpThreads threads(static_cast<int>(state.range(1)));
   timeSteps(state, settled);
+}
+
+/// The resident memory of this process (/proc/self/statm), in bytes; 0 if unknown.
+double residentBytes() {
+  std::FILE* file = std::fopen("/proc/self/statm", "r");
+  if (!file) return 0.0;
+  unsigned long long size = 0, resident = 0;
+  const int read = std::fscanf(file, "%llu %llu", &size, &resident);
+  std::fclose(file);
+  return read == 2 ? static_cast<double>(resident) * 4096.0 : 0.0;
+}
+
+/// `hopper` repeated `tiles` times side by side on a square grid (a plate of `tiles` funnels
+/// over one floor): every obstacle's copies merged into one obstacle, so that there are as many
+/// obstacles as in one hopper, and every particle copied with its state (its tangential springs
+/// start again). Each tile is the same flow; the cost per particle-step should not grow.
+dem::World tiledHopper(const dem::World& hopper, std::size_t tiles) {
+  delta::Aabb bounds;
+  for (const dem::Obstacle& obstacle : hopper.obstacles())
+    bounds.extend(obstacle.mesh.bounds());
+  const double pitch =
+      1.05 * std::max(bounds.upper.x - bounds.lower.x, bounds.upper.y - bounds.lower.y);
+  const auto columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(tiles))));
+  const auto offset = [&](std::size_t tile) {
+    return delta::Vec3{pitch * static_cast<double>(tile % columns),
+                       pitch * static_cast<double>(tile / columns), 0.0};
+  };
+  dem::World tiled(hopper.parameters());
+  for (const dem::ParticleShape& shape : hopper.shapes())
+    tiled.addShape(shape);
+  for (const dem::Obstacle& obstacle : hopper.obstacles()) {
+    std::vector<delta::Vec3> vertices;
+    std::vector<delta::TriangleIndices> triangles;
+    for (std::size_t tile = 0; tile < tiles; ++tile) {
+      const auto first = static_cast<std::uint32_t>(vertices.size());
+      for (const delta::Vec3& vertex : obstacle.mesh.vertices())
+        vertices.push_back(vertex + offset(tile));
+      for (const delta::TriangleIndices& triangle : obstacle.mesh.triangles())
+        triangles.push_back({triangle[0] + first, triangle[1] + first, triangle[2] + first});
+    }
+    tiled.addObstacle(delta::Mesh(std::move(vertices), std::move(triangles)), obstacle.motion);
+  }
+  for (std::size_t tile = 0; tile < tiles; ++tile)
+    for (const dem::Particle& particle : hopper.particles())
+      tiled.addParticle(particle.shape, {particle.position + offset(tile), particle.orientation,
+                                         particle.velocity, particle.angularVelocity});
+  return tiled;
+}
+
+/// Scale: the 1000-granulate hopper brought into its flow (as Hopper's), tiled 1, 10 and 100
+/// times: 1000, 10,000 and 100,000 particles in the same flow. Counters: the time per
+/// particle-step, and the memory the tiled world adds per particle (the resident size after its
+/// first step less before it was made).
+void HopperScale(benchmark::State& state) {
+  const auto tiles = static_cast<std::size_t>(state.range(0));
+  const PreparedWorld& funnel =
+      funnelWorld(1000, dem::ParticleKind::Mesh, dem::ContactModel::point, 20000);
+  const double before = residentBytes();
+  dem::World world = tiledHopper(funnel.world, tiles);
+  const OmpThreads threads(static_cast<int>(state.range(1)));
+  world.step();
+  const double added = residentBytes() - before;
+  double contacts = 0.0;
+  for (auto _ : state) {
+    world.step();
+    contacts += static_cast<double>(world.statistics().contactPoints);
+  }
+  const auto steps = static_cast<double>(state.iterations());
+  const double particleSteps = steps * static_cast<double>(world.particles().size());
+  state.counters["particles"] = static_cast<double>(world.particles().size());
+  state.counters["particle_steps_per_s"] =
+      benchmark::Counter(particleSteps, benchmark::Counter::kIsRate);
+  state.counters["particle_step_time"] =
+      benchmark::Counter(particleSteps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["contacts_per_particle"] = contacts / particleSteps;
+  state.counters["bytes_per_particle"] = added / static_cast<double>(world.particles().size());
+}
+
+/// Sphere pairs, and spheres and the box's faces, whose surfaces are within 2ε (brute force):
+/// that Δ and its peer simulate the same pile.
+std::size_t touching(std::span<const delta::Vec3> centres, double radius, double epsilon,
+                     const delta::Aabb& box) {
+  std::size_t count = 0;
+  const double reach = radius + 2.0 * epsilon;
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    const delta::Vec3& a = centres[i];
+    for (std::size_t j = i + 1; j < centres.size(); ++j)
+      count += length(a - centres[j]) < 2.0 * radius + 2.0 * epsilon;
+    count += (a.z - box.lower.z < reach) + (a.x - box.lower.x < reach) +
+             (box.upper.x - a.x < reach) + (a.y - box.lower.y < reach) +
+             (box.upper.y - a.y < reach);
+  }
+  return count;
+}
+
+/// Δ's sphere variant of the settled pile against LIGGGHTS on the same spheres (peer = 1; see
+/// liggghts_peer.h for how the law is matched), one thread each, in batches of kBatch steps
+/// (LIGGGHTS' `run` costs about 2 µs a call besides its steps). Both first take kWarmUp steps
+/// (LIGGGHTS builds its tangential histories there), not timed.
+void SpheresPeer(benchmark::State& state) {
+  constexpr std::size_t kBatch = 100, kWarmUp = 200;
+  const auto count = static_cast<std::size_t>(state.range(0));
+  const PreparedWorld& settled =
+      settledWorld(count, dem::ParticleKind::Sphere, dem::ContactModel::point);
+  const OmpThreads threads(1);
+  dem::World world = settled.world;
+  const delta::Aabb box = world.obstacles().front().mesh.bounds();
+  const double radius = world.shapes()[world.particles().front().shape].boundingRadius();
+  const double epsilon = world.parameters().epsilon;
+  std::vector<delta::Vec3> centres;
+  if (state.range(1) == 0) {
+    for (std::size_t step = 0; step < kWarmUp; ++step)
+      world.step();
+    for (auto _ : state)
+      for (std::size_t step = 0; step < kBatch; ++step)
+        world.step();
+    for (const dem::Particle& particle : world.particles())
+      centres.push_back(particle.position);
+  } else {
+#ifdef DELTA_HAVE_LIGGGHTS
+    delta::bench::LiggghtsSpheres peer(world, box);
+    peer.run(kWarmUp);
+    for (auto _ : state)
+      peer.run(kBatch);
+    centres = peer.positions();
+#else
+    state.SkipWithError("built without LIGGGHTS (libliggghts-dev)");
+    return;
+#endif
+  }
+  const auto steps = static_cast<double>(state.iterations() * kBatch);
+  state.counters["steps_per_s"] = benchmark::Counter(steps, benchmark::Counter::kIsRate);
+  state.counters["particle_steps_per_s"] =
+      benchmark::Counter(steps * static_cast<double>(count), benchmark::Counter::kIsRate);
+  state.counters["step_time"] =
+      benchmark::Counter(steps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["touching"] = static_cast<double>(touching(centres, radius, epsilon, box));
+  double height = 0.0;
+  for (const delta::Vec3& centre : centres)
+    height += centre.z;
+  state.counters["mean_height"] = height / static_cast<double>(count);
 }
 
 }  // namespace
@@ -268,6 +425,24 @@ int main(int argc, char** argv) {
         ->ArgsProduct({{particles}, threads, {0, 1}})
         ->ArgNames({"particles", "omp_threads", "volume"})
         ->Iterations(particles == 100 ? 1000 : 100)
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
+  // The hopper tiled: 1000, 10,000 and 100,000 granulates.
+  for (const std::int64_t tiles : {1, 10, 100})
+    benchmark::RegisterBenchmark("HopperScale", HopperScale)
+        ->ArgsProduct({{tiles}, threads})
+        ->ArgNames({"tiles", "omp_threads"})
+        ->Iterations(tiles == 100  ? 3
+                     : tiles == 10 ? 10
+                                   : 50)
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond);
+  // Δ's spheres against LIGGGHTS (peer = 1) on the settled pile of spheres, one thread.
+  for (const std::int64_t particles : {100, 1000})
+    benchmark::RegisterBenchmark("SpheresPeer", SpheresPeer)
+        ->ArgsProduct({{particles}, {0, 1}})
+        ->ArgNames({"particles", "peer"})
+        ->Iterations(particles == 100 ? 200 : 50)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);

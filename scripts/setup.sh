@@ -13,6 +13,7 @@ packages=(
   libcgal-demo assimp-testmodels
   libfcl-dev  # FCL: the peer in bench/kernels_bench.cpp (found there only if installed)
   libembree-dev  # Embree 3: the points–mesh peer in bench/peers (found only if installed)
+  libliggghts-dev  # LIGGGHTS 3.8: the sphere DEM peer in bench/dem_bench.cpp (found only if installed)
   python3-dev python3-numpy python3-pytest pybind11-dev  # the Python module delta (python/)
   zlib1g-dev  # the VTK writers compress with zlib (src/io/vtk.cpp)
   python3-vtk9  # VTK's own readers open what Δ writes (python/tests/test_vtk_files.py)

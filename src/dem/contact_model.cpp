@@ -103,9 +103,19 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
                       const BodyMotion& second, double effectiveMass,
                       const TangentialSpring& previous, double timeStep, const ContactLaw& law) {
   PairForces result;
-  if (points.empty()) return result;
+  pairForces(points, first, second, effectiveMass, previous, timeStep, law, result);
+  return result;
+}
+
+void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
+                const BodyMotion& second, double effectiveMass, const TangentialSpring& previous,
+                double timeStep, const ContactLaw& law, PairForces& result) {
+  std::vector<PointForce> buffer = std::move(result.points);
+  result = PairForces{};
+  result.points = std::move(buffer);
+  result.points.assign(points.size(), PointForce{});
+  if (points.empty()) return;
   const double shell = 2.0 * law.epsilon;
-  result.points.resize(points.size());
   double depthSum = 0.0;
   std::size_t deepestIndex = 0, pressed = 0;
   Vec3 clearDirection;  // depth-weighted mean direction of the points that do not overlap
@@ -126,7 +136,7 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
     for (PointForce& out : result.points)
       if (out.point.overlap) out.point.direction = clearDirection;
   result.springEnergy = 0.5 * law.stiffness * result.deepest * result.deepest;
-  if (!(depthSum > 0.0)) return result;  // every point exactly on the shell: no force yet
+  if (!(depthSum > 0.0)) return;  // every point exactly on the shell: no force yet
 
   const double damping = 2.0 * law.dampingRatio * std::sqrt(law.stiffness * effectiveMass) *
                          onsetFactor(result.points, deepestIndex, first, second, timeStep);
@@ -148,7 +158,7 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
   meanDirection = normalized(meanDirection);
   if (!(law.friction > 0.0) || !(law.tangentialStiffness > 0.0) ||
       !(lengthSquared(meanDirection) > 0.5))
-    return result;
+    return;
   // The torsion spring's stiffness per k_t and arm: rᵢ the points' offsets in the tangent plane.
   double polarMoment = 0.0, meanArm = 0.0;
   for (PointForce& out : result.points) {
@@ -176,7 +186,6 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
     if (polarMoment > 0.0)
       out.force += cross(meanDirection, out.point.x - centre) * (weight * torque / polarMoment);
   }
-  return result;
 }
 
 PairForces volumePairForces(std::span<const contactdetection::OverlapRegion> regions,

@@ -80,20 +80,33 @@ bool dominated(const ContactPoint& contact, std::span<const ContactPoint> found,
 PairContacts sphereSphereContacts(const Sphere& first, const Sphere& second,
                                   double epsilon) noexcept {
   PairContacts result;
+  sphereSphereContacts(first, second, epsilon, result);
+  return result;
+}
+
+void sphereSphereContacts(const Sphere& first, const Sphere& second, double epsilon,
+                          PairContacts& result) {
+  result.points.clear();
+  result.trianglePairs = 0;
   const kernels::SphereContactResult r = kernels::sphereSphere(first, second);
-  if (!(r.gap < 2.0 * epsilon)) return result;
+  if (!(r.gap < 2.0 * epsilon)) return;
   result.points.push_back(contactdetection::sphereContactPoint(r, 0, 0));
   result.trianglePairs = 1;
-  return result;
 }
 
 PairContacts finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
                                       double filterDistance) {
   PairContacts result;
+  finishSphereMeshContacts(found, mesh, filterDistance, result);
+  return result;
+}
+
+void finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
+                              double filterDistance, PairContacts& result) {
+  std::vector<ContactPoint>& kept = result.points;
+  kept.clear();
   result.trianglePairs = found.size();
-  if (found.empty()) return result;
-  std::vector<ContactPoint> kept;
-  kept.reserve(found.size());
+  if (found.empty()) return;
   for (const ContactPoint& contact : found)
     if (found.size() == 1 || !dominated(contact, found, mesh.triangles())) {
       kept.push_back(contact);
@@ -108,8 +121,6 @@ PairContacts finishSphereMeshContacts(std::span<const ContactPoint> found, const
       contact.direction = pose.rotation.rotate(contact.direction);
     }
   }
-  result.points = std::move(kept);
-  return result;
 }
 
 PairContacts sphereMeshContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,

@@ -29,15 +29,6 @@ struct World::Interaction {
   std::uint64_t key;  ///< first id << 32 | second id (or obstacle): the order forces are summed in
 };
 
-/// What the narrow phase and the contact law found for one pair.
-struct World::PairOutcome {
-  std::vector<ContactPoint> points;  ///< after filter(h)
-  /// The volume law's: the overlap's regions (empty where the meshes do not overlap).
-  std::vector<contactdetection::OverlapRegion> regions;
-  std::size_t rawPoints = 0;
-  PairForces forces;
-};
-
 namespace {
 
 /// Pairs per parallel chunk in the narrow phase: a pair costs from a few µs (distant boxes) to
@@ -356,7 +347,8 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   start = Clock::now();
   const std::vector<std::span<const ContactPoint>> sphereObstacleFound =
       sphereObstacleContacts(pairs);
-  std::vector<PairOutcome> outcomes(pairs.size());
+  if (outcomes_.size() < pairs.size()) outcomes_.resize(pairs.size());
+  const std::span<PairOutcome> outcomes(outcomes_.data(), pairs.size());
   const double epsilon = law_.epsilon, filterDistance = parameters_.filterDistance;
   const bool volumeLaw = law_.model == ContactModel::volume;
   contactdetection::OverlapOptions overlapOptions;
@@ -364,28 +356,33 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p) {
       const Interaction& pair = pairs[p];
+      PairOutcome& outcome = outcomes[p];
+      outcome.regions.clear();
+      outcome.forces.points.clear();
       if (volumeLaw) {  // every shape and obstacle is a closed mesh (addShape, addObstacle)
         const QueryMesh& other =
             pair.withObstacle ? placedObstacles_[pair.second] : placed_[pair.second];
         contactdetection::Overlap found =
             contactdetection::overlap(placed_[pair.first], other, overlapOptions);
-        outcomes[p].rawPoints = found.segments;
-        outcomes[p].regions = std::move(found.regions);
+        outcome.contacts.points.clear();
+        outcome.rawPoints = found.segments;
+        outcome.regions = std::move(found.regions);
         continue;
       }
       const Particle& one = particles_[pair.first];
       const bool firstSphere = shapes_[one.shape].isSphere();
-      PairContacts found;
+      PairContacts& found = outcome.contacts;
       if (pair.withObstacle) {
         const QueryMesh& obstacle = placedObstacles_[pair.second];
-        found = firstSphere
-                    ? finishSphereMeshContacts(sphereObstacleFound[p], obstacle, filterDistance)
-                    : pairContacts(placed_[pair.first], obstacle, epsilon, filterDistance, true);
+        if (firstSphere)
+          finishSphereMeshContacts(sphereObstacleFound[p], obstacle, filterDistance, found);
+        else
+          found = pairContacts(placed_[pair.first], obstacle, epsilon, filterDistance, true);
       } else {
         const Particle& other = particles_[pair.second];
         const bool secondSphere = shapes_[other.shape].isSphere();
         if (firstSphere && secondSphere)
-          found = sphereSphereContacts(boundingSphere(one), boundingSphere(other), epsilon);
+          sphereSphereContacts(boundingSphere(one), boundingSphere(other), epsilon, found);
         else if (firstSphere)
           found = sphereMeshContacts(boundingSphere(one), placed_[pair.second], epsilon,
                                      filterDistance);
@@ -395,8 +392,7 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
         else
           found = pairContacts(placed_[pair.first], placed_[pair.second], epsilon, filterDistance);
       }
-      outcomes[p].rawPoints = found.trianglePairs;
-      outcomes[p].points = std::move(found.points);
+      outcome.rawPoints = found.trianglePairs;
     }
   });
   statistics_.contactDetectionSeconds = secondsSince(start);
@@ -421,7 +417,7 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   });
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p) {
-      if (outcomes[p].points.empty() && outcomes[p].regions.empty()) continue;
+      if (outcomes[p].contacts.points.empty() && outcomes[p].regions.empty()) continue;
       const Interaction& pair = pairs[p];
       const Particle& one = particles_[pair.first];
       const double mass = shapes_[one.shape].mass();
@@ -452,8 +448,8 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
                              spring ? *spring : TangentialSpring{}, dt, law_);
         continue;
       }
-      outcomes[p].forces = pairForces(outcomes[p].points, firstMotion, secondMotion, effectiveMass,
-                                      spring ? *spring : TangentialSpring{}, dt, law_);
+      pairForces(outcomes[p].contacts.points, firstMotion, secondMotion, effectiveMass,
+                 spring ? *spring : TangentialSpring{}, dt, law_, outcomes[p].forces);
     }
   });
 

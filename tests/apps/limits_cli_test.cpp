@@ -76,7 +76,7 @@ TEST(DeltaCliLimits, AHugeThreadCountIsCapped) {
   // OMP_NUM_THREADS=100000 segfaulted; --threads has always been checked.
   const CliRun distance =
       runDeltaUnder("OMP_NUM_THREADS=100000",
-                    "distance builtin:icosphere:3 --points builtin:uniform:100000 "
+                    "distance builtin:icosphere:3 --points builtin:uniform:20000 "
                     "--json");
   ASSERT_EQ(distance.exitCode, 0) << distance.err;
   const CliRun ib = runDeltaUnder("OMP_NUM_THREADS=100000", "ib builtin:icosphere:1 --json");
@@ -84,7 +84,7 @@ TEST(DeltaCliLimits, AHugeThreadCountIsCapped) {
   EXPECT_EQ(jsonNumber(ib.out, "threads"), kMaxThreads);
   expectOneLineError(runDelta("--threads 100000 info builtin:box"), "--threads");
   const CliRun most =
-      runDelta("--threads " + std::to_string(kMaxThreads) + " ib builtin:box --json");
+      runDelta("--threads " + std::to_string(kMaxThreads) + " ib builtin:box --levels 4 --json");
   ASSERT_EQ(most.exitCode, 0) << most.err;
   EXPECT_EQ(jsonNumber(most.out, "threads"), kMaxThreads);
 }
@@ -142,7 +142,7 @@ TEST(DeltaCliLimits, IbAndDemStepsShareOneRangeCheck) {
                      "--steps '-1' " + range + "1 to 1000000000000");
   expectOneLineError(runDelta("dem two-particles --steps 99999999999999999999"),
                      "--steps '99999999999999999999' " + range + "1 to 1000000000000");
-  const CliRun ib = runDelta("ib builtin:box --steps 2 --translate 0.01,0,0 --json");
+  const CliRun ib = runDelta("ib builtin:box --levels 4 --steps 2 --translate 0.01,0,0 --json");
   ASSERT_EQ(ib.exitCode, 0) << ib.err;
   EXPECT_EQ(jsonNumber(ib.out, "steps"), 2);
 }

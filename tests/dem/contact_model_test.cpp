@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -91,6 +92,45 @@ TEST(DemContactModel, OnePointAtRestIsALinearSpringOnTheDepth) {
   EXPECT_DOUBLE_EQ(forces.points[0].force.z, 1000.0 * 0.005);
   EXPECT_EQ(forces.points[0].force.x, 0.0);
   EXPECT_DOUBLE_EQ(forces.springEnergy, 0.5 * 1000.0 * 0.005 * 0.005);
+}
+
+/// Every field of two PairForces, bit for bit.
+void expectSameForces(const PairForces& a, const PairForces& b) {
+  ASSERT_EQ(a.points.size(), b.points.size());
+  for (std::size_t i = 0; i < a.points.size(); ++i) {
+    EXPECT_EQ(std::memcmp(&a.points[i].point.x, &b.points[i].point.x, sizeof(Vec3)), 0) << i;
+    EXPECT_EQ(std::memcmp(&a.points[i].force, &b.points[i].force, sizeof(Vec3)), 0) << i;
+    EXPECT_EQ(std::memcmp(&a.points[i].couple, &b.points[i].couple, sizeof(Vec3)), 0) << i;
+    EXPECT_EQ(a.points[i].depth, b.points[i].depth) << i;
+    EXPECT_EQ(a.points[i].volume, b.points[i].volume) << i;
+  }
+  EXPECT_EQ(std::memcmp(&a.spring.displacement, &b.spring.displacement, sizeof(Vec3)), 0);
+  EXPECT_EQ(a.spring.twist, b.spring.twist);
+  EXPECT_EQ(a.normalForce, b.normalForce);
+  EXPECT_EQ(a.deepest, b.deepest);
+  EXPECT_EQ(a.springEnergy, b.springEnergy);
+  EXPECT_EQ(a.sliding, b.sliding);
+}
+
+TEST(DemContactModel, AReusedResultGivesTheFreshResult) {
+  // A World keeps one PairForces a pair slot from step to step: what an earlier pair left in it
+  // (more points, a sliding spring, a twist) must not reach the next.
+  const ContactLaw contactLaw = law(0.5, 0.3);
+  BodyMotion sliding;
+  sliding.velocity = {2.0, 0.0, -0.5};
+  sliding.angularVelocity = {0.0, 0.0, 40.0};
+  const TangentialSpring stretched{{0.01, 0.0, 0.0}, 0.2};
+  const std::vector<ContactPoint> three = {pointAt({0, 0, 0}, 0.005), pointAt({1, 0, 0}, 0.015),
+                                           pointAt({0, 1, 0}, 0.01)};
+  const std::vector<ContactPoint> one = {pointAt({0.5, 0, 0}, 0.012)};
+  PairForces reused;
+  pairForces(three, sliding, {}, 1.0, stretched, 1e-3, contactLaw, reused);
+  expectSameForces(reused, pairForces(three, sliding, {}, 1.0, stretched, 1e-3, contactLaw));
+  ASSERT_TRUE(reused.sliding);
+  pairForces(one, {}, {}, 1.0, {}, 1e-3, contactLaw, reused);
+  expectSameForces(reused, pairForces(one, {}, {}, 1.0, {}, 1e-3, contactLaw));
+  pairForces({}, {}, {}, 1.0, {}, 1e-3, contactLaw, reused);
+  expectSameForces(reused, PairForces{});
 }
 
 TEST(DemContactModel, NeverAttractive) {

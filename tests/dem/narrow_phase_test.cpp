@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "delta/mesh/primitives.h"
+#include "delta/query/sphere_contacts.h"
 
 namespace delta::dem {
 namespace {
@@ -33,6 +34,41 @@ TEST(DemNarrowPhase, SphereSphereGapAndDepthFollowTheMeshConventions) {
   // At 2ε and beyond: none (strictly closer than 2ε, as for meshes).
   EXPECT_TRUE(sphereSphereContacts(first, {{2 * kRadius + 2.5 * kEpsilon, 0, 0}, kRadius}, kEpsilon)
                   .points.empty());
+}
+
+TEST(DemNarrowPhase, AReusedResultGivesTheFreshResult) {
+  // A World keeps one PairContacts a pair slot from step to step: what an earlier pair left in
+  // it (points, a count) must not reach the next.
+  const Sphere first{{0, 0, 0}, kRadius};
+  const Sphere touching{{2 * kRadius + 0.6 * kEpsilon, 0, 0}, kRadius};
+  const Sphere far{{2 * kRadius + 2.5 * kEpsilon, 0, 0}, kRadius};
+  PairContacts reused;
+  sphereSphereContacts(first, touching, kEpsilon, reused);
+  ASSERT_EQ(reused.points.size(), 1u);
+  EXPECT_EQ(reused.trianglePairs, 1u);
+  sphereSphereContacts(first, far, kEpsilon, reused);
+  EXPECT_TRUE(reused.points.empty());
+  EXPECT_EQ(reused.trianglePairs, 0u);
+  // A sphere over a floor's diagonal (two triangles found, one kept), then one far from it.
+  QueryMesh floor(primitives::quad(0.1, 0.1));
+  floor.transform({Quaternion::fromAxisAngle({0, 0, 1}, 0.3), {0.01, 0.0, 0.0}});
+  const double offset = 0.3 * kRadius / std::sqrt(2.0);
+  for (const Sphere& sphere : {Sphere{{offset, -offset, kRadius + 0.5 * kEpsilon}, kRadius},
+                               Sphere{{0.0, 0.0, 2.0 * kRadius}, kRadius}}) {
+    const PairContacts fresh = sphereMeshContacts(sphere, floor, kEpsilon, kFilter);
+    const Sphere inFrame{floor.inversePose().apply(sphere.center), sphere.radius};
+    const std::vector<ContactPoint> found =
+        contactdetection::sphereContacts(std::span<const Sphere>(&inFrame, 1), floor, kEpsilon);
+    finishSphereMeshContacts(found, floor, kFilter, reused);
+    EXPECT_EQ(reused.trianglePairs, fresh.trianglePairs);
+    ASSERT_EQ(reused.points.size(), fresh.points.size());
+    for (std::size_t i = 0; i < fresh.points.size(); ++i) {
+      EXPECT_EQ(reused.points[i].x, fresh.points[i].x);
+      EXPECT_EQ(reused.points[i].direction, fresh.points[i].direction);
+      EXPECT_EQ(reused.points[i].distance, fresh.points[i].distance);
+    }
+  }
+  EXPECT_TRUE(reused.points.empty());
 }
 
 TEST(DemNarrowPhase, SphereAboveAFloorDiagonalIsPushedStraightUp) {

@@ -14,6 +14,8 @@
 #include "delta/mesh/primitives.h"
 #include "delta/query/query_mesh.h"
 
+#include "kernels/triangle_pairs.h"
+
 namespace delta::contactdetection {
 namespace {
 
@@ -151,7 +153,14 @@ TEST(Contacts, SameOrderForAnyThreadCountAndFromManyThreads) {
 TEST(Contacts, PreparedMeshesGiveTheSameContactsWhateverTheTriangleOrder) {
   // elephant.off lists its triangles in no spatial order: blocks of 64 in file order span the
   // mesh. QueryMesh works in its tree order and maps the ids back.
-  const Mesh first = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
+  const Mesh elephant = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
+  // Under the sanitizers (where the hybrid kernel runs a hundred times slower) its first 1500
+  // triangles in file order, as scattered.
+  const std::size_t kept = testing::kSlowBuild ? 1500 : elephant.triangleCount();
+  const Mesh first(std::vector<Vec3>(elephant.vertices().begin(), elephant.vertices().end()),
+                   std::vector<TriangleIndices>(
+                       elephant.triangles().begin(),
+                       elephant.triangles().begin() + static_cast<std::ptrdiff_t>(kept)));
   Mesh second = first;
   second.rotate({0, 1, 0}, 0.4, first.bounds().center()).translate({0.05, 0.02, 0});
   const double epsilon = 0.002;

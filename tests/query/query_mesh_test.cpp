@@ -118,15 +118,14 @@ TEST(QueryMesh, MovedMeshesGiveTheMinimumDistanceOfTheMovedMeshes) {
       return RigidTransform::translationBy({shift, 0.1 * size, 0}) * placeA * turn;
     };
     const TriangleSoA first = flatten(Mesh(mesh).transform(placeA));
-    double low = 0.0, high = 2.0 * size;
-    for (int step = 0; step < 40; ++step) {
-      const double middle = 0.5 * (low + high);
-      const double at =
-          minimumDistance(first, flatten(Mesh(mesh).transform(placed(middle)))).distance;
-      (at < gap * size ? low : high) = middle;
-    }
     QueryMesh a = prepared, b = prepared;
     a.setPose(placeA);
+    double low = 0.0, high = 2.0 * size;
+    for (int step = 0; step < 24; ++step) {  // to 2^-23 of the size: "about" the gap
+      const double middle = 0.5 * (low + high);
+      b.setPose(placed(middle));
+      (minimumDistance(a, b).distance < gap * size ? low : high) = middle;
+    }
     b.setPose(placed(high));
     const MinimumDistance moved = minimumDistance(a, b);
     const MinimumDistance flat =

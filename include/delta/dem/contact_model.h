@@ -212,6 +212,14 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
                       const BodyMotion& second, double effectiveMass,
                       const TangentialSpring& previous, double timeStep, const ContactLaw& law);
 
+/// pairForces into `result`, the same values, its buffer of points reused: a World's loop over
+/// its pairs allocates nothing once a pair has seen as many points.
+///
+/// Threading: as pairForces; `result` is the caller's.
+void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
+                const BodyMotion& second, double effectiveMass, const TangentialSpring& previous,
+                double timeStep, const ContactLaw& law, PairForces& result);
+
 /// The volume law's κ = k / (π·r_min²)² for a pair whose smaller equivalent radius (of the sphere
 /// of the same volume) is `smallestRadius`. Not validated.
 ///

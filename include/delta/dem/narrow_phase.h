@@ -56,6 +56,11 @@ PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, doubl
 /// Threading: a pure function; may be called from any number of threads at once.
 PairContacts sphereSphereContacts(const Sphere& first, const Sphere& second,
                                   double epsilon) noexcept;
+/// The same, into `result`, its buffer reused (a World's pairs allocate nothing once warm).
+///
+/// Threading: as above; `result` is the caller's.
+void sphereSphereContacts(const Sphere& first, const Sphere& second, double epsilon,
+                          PairContacts& result);
 
 /// The narrow phase of a sphere (first) and a mesh (second, a particle or an obstacle), with
 /// contactdetection::sphereContacts (query/sphere_contacts.h) in the mesh's prepared frame:
@@ -97,5 +102,10 @@ PairContacts meshSphereContacts(const QueryMesh& mesh, const Sphere& sphere, dou
 /// Threading: as sphereMeshContacts.
 PairContacts finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
                                       double filterDistance);
+/// The same, into `result`, its buffer reused.
+///
+/// Threading: as sphereMeshContacts; `result` is the caller's.
+void finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
+                              double filterDistance, PairContacts& result);
 
 }  // namespace delta::dem

@@ -14,6 +14,7 @@
 #include "delta/core/sphere.h"
 #include "delta/core/vec3.h"
 #include "delta/dem/contact_model.h"
+#include "delta/dem/narrow_phase.h"
 #include "delta/dem/particle_shape.h"
 #include "delta/mesh/mesh.h"
 #include "delta/query/query_mesh.h"
@@ -316,7 +317,15 @@ class World {
 
  private:
   struct Interaction;
-  struct PairOutcome;
+  /// What the narrow phase and the contact law found for one pair; kept from step to step
+  /// (outcomes_) so that their buffers are reused.
+  struct PairOutcome {
+    PairContacts contacts;  ///< after filter(h)
+    /// The volume law's: the overlap's regions (empty where the meshes do not overlap).
+    std::vector<contactdetection::OverlapRegion> regions;
+    std::size_t rawPoints = 0;
+    PairForces forces;
+  };
   // A DistributedWorld keeps its process's part of a simulation in a World: the particles it
   // owns, then ghosts (copies of other processes' particles near its part), and steps it with an
   // Exchange between the phases.
@@ -381,6 +390,8 @@ class World {
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now
   /// Per obstacle, the sphere particles' contacts with it of this evaluation (scratch).
   std::vector<std::vector<ContactPoint>> sphereObstacleFound_;
+  /// Each pair's contacts and forces of this evaluation (scratch, kept for its buffers).
+  std::vector<PairOutcome> outcomes_;
   std::vector<Contact> contacts_;
   /// Tangential springs of touching pairs, keyed (first id << 32 | second id or obstacle),
   /// sorted.
