@@ -1,7 +1,8 @@
-// The exact point–triangle kernel's eight-lane copy (query/detail/exact_lanes.cpp) against the
-// scalar kernel, bit for bit, on random and adversarial triangles and points: slivers, needles,
-// zero-area and repeated-vertex triangles, points on vertices, edges and faces and just off them,
-// far points, coordinates far from the origin and tiny triangles.
+// The exact point–triangle kernel's eight-lane copies (query/detail/exact_lanes.cpp: AVX-512, and
+// AVX2 in two runs of four) against the scalar kernel, bit for bit, on random and adversarial
+// triangles and points: slivers, needles, zero-area and repeated-vertex triangles, points on
+// vertices, edges and faces and just off them, far points, coordinates far from the origin and tiny
+// triangles.
 #include "query/detail/exact_lanes.h"
 
 #include <gtest/gtest.h>
@@ -67,7 +68,11 @@ std::vector<Vec3> probes(std::mt19937_64& random, const std::vector<Triangle>& t
 
 /// The eight-lane kernel's squared distances against the scalar kernel's, for every run of up to
 /// eight triangles of the prepared mesh and every point.
-void expectSameBits(const std::vector<Triangle>& triangles, const std::vector<Vec3>& points) {
+using Exact8 = void (*)(const QueryMeshData&, const Vec3&, const std::uint32_t*, std::size_t,
+                        double*) noexcept;
+
+void expectSameBits(const std::vector<Triangle>& triangles, const std::vector<Vec3>& points,
+                    Exact8 exactDistancesSquared8) {
   std::vector<Vec3> vertices;
   std::vector<TriangleIndices> indices;
   for (const Triangle& t : triangles) {
@@ -101,17 +106,28 @@ void expectSameBits(const std::vector<Triangle>& triangles, const std::vector<Ve
   EXPECT_GT(compared, points.size() * triangles.size() / 2);
 }
 
-TEST(ExactLanes, EveryLaneIsTheScalarKernelBitForBit) {
-  if (kernels::supportedIsaAtMost(kernels::Isa::Avx512) != kernels::Isa::Avx512)
-    GTEST_SKIP() << "this CPU has no AVX-512";
+/// Every lane of `exact` against the scalar kernel on the awkward triangles and probes.
+void expectEveryLaneIsTheScalarKernel(Exact8 exact) {
   std::mt19937_64 random(41);
   for (const Vec3& centre :
        {Vec3{0, 0, 0}, Vec3{1e3, -2e3, 5e2}, Vec3{1e6, 3e6, -2e6}, Vec3{-4e9, 1e9, 7e9}})
     for (const double scale : {1.0, 1e-6, 1e3}) {
       SCOPED_TRACE("centre x " + std::to_string(centre.x) + ", scale " + std::to_string(scale));
       const std::vector<Triangle> triangles = awkwardTriangles(random, centre, scale);
-      expectSameBits(triangles, probes(random, triangles, centre, scale));
+      expectSameBits(triangles, probes(random, triangles, centre, scale), exact);
     }
+}
+
+TEST(ExactLanes, EveryLaneIsTheScalarKernelBitForBit) {
+  if (kernels::supportedIsaAtMost(kernels::Isa::Avx512) != kernels::Isa::Avx512)
+    GTEST_SKIP() << "this CPU has no AVX-512";
+  expectEveryLaneIsTheScalarKernel(&exactDistancesSquared8);
+}
+
+TEST(ExactLanes, EveryAvx2LaneIsTheScalarKernelBitForBit) {
+  if (kernels::supportedIsaAtMost(kernels::Isa::Avx2) != kernels::Isa::Avx2)
+    GTEST_SKIP() << "this CPU has no AVX2";
+  expectEveryLaneIsTheScalarKernel(&exactDistancesSquared8Avx2);
 }
 
 }  // namespace

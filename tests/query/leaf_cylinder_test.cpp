@@ -1,7 +1,7 @@
-// The leaves' cylinders (query_mesh_data.h's CylinderOctet, node_bounds.h's PlainBounds and
-// Avx512Bounds): a cylinder bound never exceeds the exact kernel's squared distance to any
-// triangle of its leaf, on real meshes and on adversarial ones (a tilted flat grid far from the
-// origin, a tiny sphere, slivers, zero-area and repeated-vertex triangles), for points on the
+// The leaves' cylinders (query_mesh_data.h's CylinderOctet, node_bounds.h's PlainBounds,
+// Avx512Bounds and Avx2Bounds): a cylinder bound never exceeds the exact kernel's squared distance
+// to any triangle of its leaf, on real meshes and on adversarial ones (a tilted flat grid far from
+// the origin, a tiny sphere, slivers, zero-area and repeated-vertex triangles), for points on the
 // triangles, just off them, straight above their interiors, far away; and it rejects most of the
 // leaves the boxes admit above a tilted patch (what it is for).
 #include <gtest/gtest.h>
@@ -129,6 +129,7 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
   EXPECT_GE(data.levels.size(), 2u) << name;
   if (data.levels.size() < 2) return;
   const bool avx512 = kernels::supportedIsaAtMost(kernels::Isa::Avx512) == kernels::Isa::Avx512;
+  const bool avx2 = kernels::supportedIsaAtMost(kernels::Isa::Avx2) == kernels::Isa::Avx2;
   std::mt19937_64 random(7);
   raised = 0;
   const std::size_t count = data.leafCylinders.size();
@@ -158,6 +159,16 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
           const double reach = std::sqrt(std::max(plain[slot], exact));
           ASSERT_NEAR(wide[slot], plain[slot], 1e-12 * (plain[slot] + exact) + shrink * reach)
               << name << ", leaf " << leaf;
+        }
+        if (avx2) {  // the AVX-512 operations in halves: the same bits as they give
+          double halves[kFanout], wide[kFanout];
+          Avx2Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, halves);
+          ASSERT_LE(halves[slot], exact)
+              << name << " (AVX2), leaf " << leaf << ", p = " << toString(p);
+          if (avx512) {
+            Avx512Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, wide);
+            ASSERT_EQ(halves[slot], wide[slot]) << name << ", leaf " << leaf;
+          }
         }
 #endif
       }

@@ -13,6 +13,11 @@ namespace delta::detail {
 /// agree). Callable only where the CPU has AVX-512 (F, DQ, VL) and FMA.
 void exactDistancesSquared8(const QueryMeshData& mesh, const Vec3& point,
                             const std::uint32_t* sorted, std::size_t count, double* out) noexcept;
+/// The same in two runs of four AVX2 lanes (the same bits). Callable only where the CPU has AVX2
+/// and FMA.
+void exactDistancesSquared8Avx2(const QueryMeshData& mesh, const Vec3& point,
+                                const std::uint32_t* sorted, std::size_t count,
+                                double* out) noexcept;
 #endif
 
 }  // namespace delta::detail

@@ -247,6 +247,15 @@ Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const V
 }
 
 #if defined(DELTA_X86_ISAS)
+// The AVX2 build of the descent (an AVX2 machine: Zen 2, ARCHER2's), with the same function-level
+// target as the AVX-512 one below. (The plain loops built for AVX2 stay scalar: GCC 12 does not
+// vectorise them.)
+[[gnu::target(DELTA_AVX2_TARGET)]] Nearest descendAvx2(const QueryMeshData& mesh,
+                                                       const Leaves& leaves, const Vec3& point,
+                                                       double limitSquared) noexcept {
+  return descend<Avx2Bounds>(mesh, leaves, point, limitSquared);
+}
+
 // A function-level target (not a translation unit built with -mavx512f): every inline function
 // it calls is inlined into it or stays a baseline out-of-line copy, so no AVX-512 code can reach
 // callers on other CPUs. (The answers do not depend on the ISA: the exact kernel is the library's
@@ -269,6 +278,10 @@ Descent descentFor(kernels::Isa isa) noexcept {
   const kernels::Isa supported = kernels::supportedIsaAtMost(isa);
   Descent descent{&descendBaseline, batchKernels(supported).pointTriangleBounds, nullptr};
 #if defined(DELTA_X86_ISAS)
+  if (supported == kernels::Isa::Avx2) {
+    descent.descend = &descendAvx2;
+    descent.exact = &exactDistancesSquared8Avx2;
+  }
   if (supported == kernels::Isa::Avx512) {
     descent.descend = &descendAvx512;
     descent.exact = &exactDistancesSquared8;

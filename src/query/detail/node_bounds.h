@@ -7,6 +7,7 @@
 // with it.
 
 #include <algorithm>
+#include <bit>
 #include <cstddef>
 
 #include "delta/core/vec3.h"
@@ -26,6 +27,8 @@
 #endif
 /// The function-level target of the AVX-512 builds (no AVX-512 code reaches other callers).
 #define DELTA_AVX512_TARGET "avx512f,avx512dq,avx512vl,avx2,fma"
+/// The function-level target of the AVX2 builds.
+#define DELTA_AVX2_TARGET "avx2,fma"
 #endif
 
 namespace delta::detail {
@@ -150,6 +153,113 @@ struct Avx512Bounds {
                                                    _mm512_set1_pd(prune), _CMP_LT_OQ);
     prune = std::min(prune, _mm512_mask_reduce_min_pd(below, above));  // +∞ where none
     return notAbove(_mm512_max_pd(_mm512_loadu_pd(lower), _mm512_setzero_pd()), prune, lower) &
+           present;
+  }
+};
+
+/// The same bounds on AVX2: each of Avx512Bounds' eight-lane operations as two registers of four
+/// lanes (lanes 0–3, then 4–7), the same operations in the same order, so the same bounds.
+struct Avx2Bounds {
+  /// Lanes H to H + 3 of `values`, widened.
+  template <std::size_t H>
+  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d widened(const float (&values)[kFanout]) {
+    return _mm256_cvtps_pd(_mm_load_ps(values + H));
+  }
+  template <std::size_t H>
+  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d boxes(const BoxOctet& boxes,
+                                                          const Vec3& point) {
+    const __m256d zero = _mm256_setzero_pd();
+    const __m256d px = _mm256_set1_pd(point.x), py = _mm256_set1_pd(point.y),
+                  pz = _mm256_set1_pd(point.z);
+    const __m256d dx = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(boxes.lowerX), px),
+                                                   _mm256_sub_pd(px, widened<H>(boxes.upperX))),
+                                     zero);
+    const __m256d dy = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(boxes.lowerY), py),
+                                                   _mm256_sub_pd(py, widened<H>(boxes.upperY))),
+                                     zero);
+    const __m256d dz = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(boxes.lowerZ), pz),
+                                                   _mm256_sub_pd(pz, widened<H>(boxes.upperZ))),
+                                     zero);
+    return _mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz)));
+  }
+  /// Stores both halves in `out`; the mask of the lanes not above `prune`.
+  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned notAbove(__m256d low, __m256d high,
+                                                              double prune,
+                                                              double (&out)[kFanout]) {
+    _mm256_storeu_pd(out, low);
+    _mm256_storeu_pd(out + 4, high);
+    const __m256d limit = _mm256_set1_pd(prune);
+    return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(low, limit, _CMP_LE_OQ))) |
+           static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(high, limit, _CMP_LE_OQ))) << 4;
+  }
+  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned children(const BoxOctet& octet,
+                                                              const Vec3& point, double prune,
+                                                              double (&out)[kFanout]) noexcept {
+    return notAbove(boxes<0>(octet, point), boxes<4>(octet, point), prune, out);
+  }
+  /// Avx512Bounds::leaves of lanes H to H + 3.
+  template <std::size_t H>
+  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d leafBounds(const BoxOctet& octet,
+                                                               const CylinderOctet& cylinders,
+                                                               const Vec3& point, double shrink) {
+    const __m256d box = boxes<H>(octet, point);
+    const __m256d half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(),
+                  by = _mm256_set1_pd(shrink);
+    const __m256d wx = _mm256_sub_pd(
+        _mm256_set1_pd(point.x),
+        _mm256_mul_pd(_mm256_add_pd(widened<H>(octet.lowerX), widened<H>(octet.upperX)), half));
+    const __m256d wy = _mm256_sub_pd(
+        _mm256_set1_pd(point.y),
+        _mm256_mul_pd(_mm256_add_pd(widened<H>(octet.lowerY), widened<H>(octet.upperY)), half));
+    const __m256d wz = _mm256_sub_pd(
+        _mm256_set1_pd(point.z),
+        _mm256_mul_pd(_mm256_add_pd(widened<H>(octet.lowerZ), widened<H>(octet.upperZ)), half));
+    const __m256d nx = widened<H>(cylinders.normalX), ny = widened<H>(cylinders.normalY),
+                  nz = widened<H>(cylinders.normalZ);
+    const __m256d inverse =
+        _mm256_div_pd(_mm256_set1_pd(1.0),
+                      _mm256_fmadd_pd(nx, nx, _mm256_fmadd_pd(ny, ny, _mm256_mul_pd(nz, nz))));
+    const __m256d h = _mm256_fmadd_pd(nx, wx, _mm256_fmadd_pd(ny, wy, _mm256_mul_pd(nz, wz)));
+    const __m256d along = _mm256_mul_pd(h, inverse);
+    const __m256d lx = _mm256_fnmadd_pd(nx, along, wx), ly = _mm256_fnmadd_pd(ny, along, wy),
+                  lz = _mm256_fnmadd_pd(nz, along, wz);
+    const __m256d lateral =
+        _mm256_sqrt_pd(_mm256_fmadd_pd(lx, lx, _mm256_fmadd_pd(ly, ly, _mm256_mul_pd(lz, lz))));
+    const __m256d across = _mm256_max_pd(
+        _mm256_sub_pd(_mm256_sub_pd(lateral, widened<H>(cylinders.radius)), by), zero);
+    const __m256d height =
+        _mm256_max_pd(_mm256_sub_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(cylinders.low), h),
+                                                  _mm256_sub_pd(h, widened<H>(cylinders.high))),
+                                    by),
+                      zero);
+    const __m256d cylinder =
+        _mm256_fmadd_pd(_mm256_mul_pd(height, height), inverse, _mm256_mul_pd(across, across));
+    return _mm256_max_pd(cylinder, box);  // the box where it is NaN
+  }
+  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned leaves(const BoxOctet& octet,
+                                                            const CylinderOctet& cylinders,
+                                                            const Vec3& point, double shrink,
+                                                            double prune,
+                                                            double (&out)[kFanout]) noexcept {
+    return notAbove(leafBounds<0>(octet, cylinders, point, shrink),
+                    leafBounds<4>(octet, cylinders, point, shrink), prune, out);
+  }
+  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned candidates(double (&lower)[kFanout],
+                                                                const double (&upper)[kFanout],
+                                                                unsigned present,
+                                                                double& prune) noexcept {
+    const __m256d limit = _mm256_set1_pd(prune);
+    unsigned below =
+        static_cast<unsigned>(
+            _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(upper), limit, _CMP_LT_OQ))) |
+        static_cast<unsigned>(
+            _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(upper + 4), limit, _CMP_LT_OQ)))
+            << 4;
+    for (below &= present; below != 0; below &= below - 1)
+      prune = std::min(prune, upper[std::countr_zero(below)]);
+    const __m256d zero = _mm256_setzero_pd();
+    return notAbove(_mm256_max_pd(_mm256_loadu_pd(lower), zero),
+                    _mm256_max_pd(_mm256_loadu_pd(lower + 4), zero), prune, lower) &
            present;
   }
 };
