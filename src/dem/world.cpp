@@ -304,7 +304,7 @@ Sphere World::boundingSphere(const Particle& particle) const noexcept {
 }
 
 std::vector<std::span<const ContactPoint>> World::sphereObstacleContacts(
-    const std::vector<Interaction>& pairs) {
+    std::span<const Interaction> pairs) {
   // One sphereContacts call per obstacle over every sphere paired with it, through the
   // obstacle's tree. Spheres go into the obstacle's prepared frame.
   std::vector<std::span<const ContactPoint>> found(pairs.size());
@@ -345,10 +345,23 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   statistics_.broadPhaseSeconds = secondsSince(start);
 
   start = Clock::now();
-  const std::vector<std::span<const ContactPoint>> sphereObstacleFound =
-      sphereObstacleContacts(pairs);
   if (outcomes_.size() < pairs.size()) outcomes_.resize(pairs.size());
   const std::span<PairOutcome> outcomes(outcomes_.data(), pairs.size());
+  detectContacts(pairs, outcomes);
+  statistics_.contactDetectionSeconds = secondsSince(start);
+
+  start = Clock::now();
+  applyContactLaw(pairs, outcomes, halfStepVelocities);
+  const std::vector<GhostForce> imported =
+      exchange ? exchangeGhostForces(pairs, outcomes, *exchange) : std::vector<GhostForce>{};
+  sumForces(pairs, outcomes, imported);
+  statistics_.forceSeconds = secondsSince(start) - statistics_.communicationSeconds;
+  forcesCurrent_ = true;
+}
+
+void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes) {
+  const std::vector<std::span<const ContactPoint>> sphereObstacleFound =
+      sphereObstacleContacts(pairs);
   const double epsilon = law_.epsilon, filterDistance = parameters_.filterDistance;
   const bool volumeLaw = law_.model == ContactModel::volume;
   contactdetection::OverlapOptions overlapOptions;
@@ -395,9 +408,11 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
       outcome.rawPoints = found.trianglePairs;
     }
   });
-  statistics_.contactDetectionSeconds = secondsSince(start);
+}
 
-  start = Clock::now();
+void World::applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
+                            bool halfStepVelocities) {
+  const bool volumeLaw = law_.model == ContactModel::volume;
   const double dt = parameters_.timeStep;
   // The dashpot and friction want the velocities at the time of the positions. Between the
   // kicks they are half a step behind: predict them with the previous forces (the first half
@@ -452,22 +467,29 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
                  spring ? *spring : TangentialSpring{}, dt, law_, outcomes[p].forces);
     }
   });
+}
 
+std::vector<World::GhostForce> World::exchangeGhostForces(std::span<const Interaction> pairs,
+                                                          std::span<const PairOutcome> outcomes,
+                                                          Exchange& exchange) {
   // Forces on ghosts go to their owners; theirs on this process's particles come back.
-  std::vector<GhostForce> imported;
-  if (exchange) {
-    std::vector<GhostForce> exported;
-    for (std::size_t p = 0; p < statistics_.particlePairsTested; ++p)
-      if (pairs[p].second >= owned_)
-        for (const PointForce& point : outcomes[p].forces.points)
-          exported.push_back(
-              {pairs[p].key, ids_[pairs[p].second], point.point.x, point.force, point.couple});
-    const Clock::time_point swap = Clock::now();
-    imported = exchange->swapGhostForces(std::move(exported));
-    statistics_.communicationSeconds += secondsSince(swap);
-    std::stable_sort(imported.begin(), imported.end(),
-                     [](const GhostForce& a, const GhostForce& b) { return a.key < b.key; });
-  }
+  std::vector<GhostForce> exported;
+  for (std::size_t p = 0; p < statistics_.particlePairsTested; ++p)
+    if (pairs[p].second >= owned_)
+      for (const PointForce& point : outcomes[p].forces.points)
+        exported.push_back(
+            {pairs[p].key, ids_[pairs[p].second], point.point.x, point.force, point.couple});
+  const Clock::time_point swap = Clock::now();
+  std::vector<GhostForce> imported = exchange.swapGhostForces(std::move(exported));
+  statistics_.communicationSeconds += secondsSince(swap);
+  std::stable_sort(imported.begin(), imported.end(),
+                   [](const GhostForce& a, const GhostForce& b) { return a.key < b.key; });
+  return imported;
+}
+
+void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOutcome> outcomes,
+                      std::span<const GhostForce> imported) {
+  const bool volumeLaw = law_.model == ContactModel::volume;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> indexOfId;  // owned: (id, index)
   if (!imported.empty()) {
     for (std::size_t i = 0; i < owned_; ++i)
@@ -544,8 +566,6 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
     }
   }
   importBefore(std::numeric_limits<std::uint64_t>::max());
-  statistics_.forceSeconds = secondsSince(start) - statistics_.communicationSeconds;
-  forcesCurrent_ = true;
 }
 
 void World::halfKick() {

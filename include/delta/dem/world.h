@@ -360,7 +360,24 @@ class World {
 
   /// One step (step()), with `exchange` between the phases when not null.
   void advance(Exchange* exchange);
+  /// The forces at the current state, in phases: findPairs (the broad phase), detectContacts,
+  /// applyContactLaw, exchangeGhostForces (with `exchange`), sumForces.
   void evaluateForces(bool halfStepVelocities, Exchange* exchange);
+  /// Each pair's contact points (the point law) or overlap regions (the volume law).
+  void detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes);
+  /// Each pair's forces from its contacts, with the velocities predicted to the positions' time
+  /// when `halfStepVelocities`.
+  void applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
+                       bool halfStepVelocities);
+  /// Sends the forces on ghosts to their owners; returns theirs on this process's particles,
+  /// sorted by pair.
+  std::vector<GhostForce> exchangeGhostForces(std::span<const Interaction> pairs,
+                                              std::span<const PairOutcome> outcomes,
+                                              Exchange& exchange);
+  /// Every particle's force and torque, summed pair by pair in the order of their ids (with the
+  /// imported ghost forces in their places), the contact records, springs and statistics.
+  void sumForces(std::span<const Interaction> pairs, std::span<const PairOutcome> outcomes,
+                 std::span<const GhostForce> imported);
   /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
   /// finite.
   void requireFiniteParticles(Exchange* exchange) const;
@@ -371,7 +388,7 @@ class World {
   /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
   /// other pairs), viewing sphereObstacleFound_.
   std::vector<std::span<const ContactPoint>> sphereObstacleContacts(
-      const std::vector<Interaction>& pairs);
+      std::span<const Interaction> pairs);
   Sphere boundingSphere(const Particle& particle) const noexcept;
   void halfKick();
   void drift();
