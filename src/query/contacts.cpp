@@ -183,6 +183,10 @@ struct RunScratch {
   std::vector<std::uint32_t> firstIds, secondIds;
   TriangleSoA firstBatch, secondBatch;
   std::vector<std::uint32_t> partners;  ///< slots of a group's second triangles near its leaf
+  // A first leaf's triangles and planes, each made on first use (not zeroed per leaf: that was
+  // 3% of a query).
+  Triangle leafTriangles[detail::kFanout];
+  detail::SeparatingPlane leafPlanes[detail::kFanout];
 
   static RunScratch& ofThread() {
     thread_local RunScratch scratch;
@@ -275,35 +279,14 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
   return all;
 }
 
-std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                                   kernels::Solver solver) {
-  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
-    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
-  // Both trees are descended together down to pairs of leaves within reach (boxes grown by the
-  // slack, so no pair the kernel would find is dropped); then each triangle of the first leaf
-  // against the second leaf's eight. Moved meshes meet in the first one's prepared frame: the
-  // second's boxes and, leaf by leaf, its triangles are carried there; nothing is rebuilt.
-  detail::checkPlacedPair(first, second, "contacts");
-  const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
-  const double reach = 2.0 * epsilon;
-  MeshPairScratch& scratch = MeshPairScratch::ofThread();
-  std::vector<detail::LeafPair>& pairs = scratch.pairs;
-  detail::leafPairsWithin(a, b, secondTree, reach, pairs);
+namespace {
 
-  // Grouped by the first leaf: each of its triangles then meets the triangles of all its second
-  // leaves in one kernel batch (the batched solvers want long batches, not eight pairs a call).
-  std::vector<std::size_t>& groups = scratch.groups;
-  groupByFirst(pairs, a.levels[0].size(), groups, scratch.start, scratch.grouped);
-  // Every second leaf the pairs name, carried into the first's frame once (a leaf meets several
-  // first leaves): its triangles, their boxes (also side by side) and planes, and ids, at
-  // 8·(its rank among them).
-  const SecondLeaves& named = scratch.named;
-  secondLeavesOf(pairs, b.levels[0].size(), scratch.named);
-  const std::vector<std::uint32_t>& secondLeaves = named.leaves;
+/// Phase 2 of contacts(QueryMesh, QueryMesh): every second leaf the leaf pairs name, carried into
+/// the first's frame once (a leaf meets several first leaves): its triangles, their boxes (also
+/// side by side) and planes, and ids, at 8·(its rank among them), in `scratch`'s partner arrays.
+void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMotion* motion,
+                        MeshPairScratch& scratch) {
+  const std::vector<std::uint32_t>& secondLeaves = scratch.named.leaves;
   const std::size_t slots = secondLeaves.size() * detail::kFanout;
   std::vector<Triangle>& partnerTriangles = scratch.partnerTriangles;
   std::vector<Aabb>& partnerBoxes = scratch.partnerBoxes;
@@ -322,7 +305,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       const std::size_t to = std::min(from + detail::kFanout, b.size());
       for (std::size_t k = from; k < to; ++k) {
         const std::size_t slot = j * detail::kFanout + (k - from);
-        const Triangle other = moved ? motion.apply(b.triangle(k)) : b.triangle(k);
+        const Triangle other = motion ? motion->apply(b.triangle(k)) : b.triangle(k);
         partnerTriangles[slot] = other;
         partnerBoxes[slot] = other.bounds();
         partnerPlanes[slot] = detail::separatingPlane(other);
@@ -345,88 +328,89 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       }
     }
   });
+}
 
-  // The candidate pairs of a run of kGroupsPerBatch first leaves go to the kernels in one batch
-  // of pairs: a first leaf has a few (nearly parallel surfaces: two), which would leave most of
-  // a batch's lanes idle and pay a call each. Runs are fixed by index, so the batches (and the
-  // bits of the hybrid solver, which can depend on a batch's other pairs) are the same for any
-  // number of threads.
+/// Phase 3: the contacts of run `run` (first leaves run·kGroupsPerBatch onward): per group, the
+/// partner leaves' eight triangle boxes at once against the first leaf's box, then each leaf
+/// triangle's box and the separating planes (a leaf triangle's made on its first use), the
+/// pairs left through the kernels in one batch, those within `reach` into `out` (unsorted: the
+/// caller sorts).
+void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPairScratch& scratch,
+                   double reach, kernels::Solver solver, RunScratch& work,
+                   std::vector<ContactPoint>& out) {
+  const std::vector<detail::LeafPair>& pairs = scratch.pairs;
+  const std::vector<std::size_t>& groups = scratch.groups;
   const std::size_t groupCount = groups.size() - 1;
-  const std::size_t runs = (groupCount + kGroupsPerBatch - 1) / kGroupsPerBatch;
-  std::vector<std::vector<ContactPoint>>& perRun = scratch.perRun;
-  if (perRun.size() < runs) perRun.resize(runs);
-  parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
-    RunScratch& work = RunScratch::ofThread();
-    kernels::PairResults& results = work.results;
-    std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
-    std::vector<std::uint32_t>&firstIds = work.firstIds, &secondIds = work.secondIds;
-    TriangleSoA &firstBatch = work.firstBatch, &secondBatch = work.secondBatch;
-    std::vector<std::uint32_t>& partners = work.partners;
-    Triangle leafTriangles[detail::kFanout];  // a first leaf's, made on first use (not zeroed
-    detail::SeparatingPlane leafPlanes[detail::kFanout];  // per leaf: that was 3% of a query)
-    for (std::size_t run = firstRun; run < endRun; ++run) {
-      std::vector<ContactPoint>& out = perRun[run];  // filled locally: a slot a run
-      out.clear();
-      firsts.clear();
-      seconds.clear();
-      firstIds.clear();
-      secondIds.clear();
-      for (std::size_t g = run * kGroupsPerBatch;
-           g < std::min(groupCount, (run + 1) * kGroupsPerBatch); ++g) {
-        const std::uint32_t firstLeaf = pairs[groups[g]].first;
-        const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
-        const Aabb firstLeafBox = a.levels[0][firstLeaf];
-        partners.clear();
-        for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
-          const std::size_t j = named.rankOfPair[p];
-          for (unsigned rest = detail::notApartMask(partnerOctets[j], firstLeafBox, reach);
-               rest != 0; rest &= rest - 1)
-            partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
-                               static_cast<std::uint32_t>(std::countr_zero(rest)));
-        }
-        // Per partner the leaf's eight triangle boxes at once (grown by the slack, so no pair
-        // is lost), then the planes, a leaf triangle's made on its first use. The contacts are
-        // sorted at the end: the batch's order does not matter.
-        if (partners.empty()) continue;
-        const std::size_t count = std::min(detail::kFanout, a.size() - firstBegin);
-        for (std::size_t i = 0; i < count; ++i)
-          leafTriangles[i] = a.triangle(firstBegin + i);
-        const detail::MovedOctet leafBoxes = detail::boxesOf(leafTriangles, count, a.slack);
-        unsigned made = 0;
-        for (const std::uint32_t slot : partners) {
-          for (unsigned rest = detail::notApartMask(leafBoxes, partnerBoxes[slot], reach);
-               rest != 0; rest &= rest - 1) {
-            const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-            if (!(made & 1u << i)) {
-              made |= 1u << i;
-              leafPlanes[i] = detail::separatingPlane(leafTriangles[i]);
-            }
-            const Triangle& one = leafTriangles[i];
-            // Both tests, then one branch (each alone is a coin toss to the predictor).
-            if (static_cast<int>(detail::separated(leafPlanes[i], partnerTriangles[slot],
-                                                   partnerPlanes[slot].magnitude, reach)) |
-                static_cast<int>(
-                    detail::separated(partnerPlanes[slot], one, leafPlanes[i].magnitude, reach)))
-              continue;
-            firsts.push_back(one);
-            seconds.push_back(partnerTriangles[slot]);
-            firstIds.push_back(a.order[firstBegin + i]);
-            secondIds.push_back(partnerIds[slot]);
-          }
-        }
-      }
-      if (firsts.empty()) continue;
-      firstBatch.assign(firsts);
-      secondBatch.assign(seconds);
-      results.reserve(firsts.size());  // the kernels fill at most the capacity
-      kernels::distances(solver, firstBatch, secondBatch, results);
-      for (std::size_t k = 0; k < results.size(); ++k)
-        if (results.distanceSquared(k) < reach * reach)
-          out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
-                                     results.intersect(k), results.converged(k), firstIds[k],
-                                     secondIds[k]));
+  std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
+  std::vector<std::uint32_t>&firstIds = work.firstIds, &secondIds = work.secondIds;
+  std::vector<std::uint32_t>& partners = work.partners;
+  Triangle(&leafTriangles)[detail::kFanout] = work.leafTriangles;
+  detail::SeparatingPlane(&leafPlanes)[detail::kFanout] = work.leafPlanes;
+  out.clear();
+  firsts.clear();
+  seconds.clear();
+  firstIds.clear();
+  secondIds.clear();
+  for (std::size_t g = run * kGroupsPerBatch; g < std::min(groupCount, (run + 1) * kGroupsPerBatch);
+       ++g) {
+    const std::uint32_t firstLeaf = pairs[groups[g]].first;
+    const std::size_t firstBegin = std::size_t{firstLeaf} * detail::kFanout;
+    const Aabb firstLeafBox = a.levels[0][firstLeaf];
+    partners.clear();
+    for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
+      const std::size_t j = scratch.named.rankOfPair[p];
+      for (unsigned rest = detail::notApartMask(scratch.partnerOctets[j], firstLeafBox, reach);
+           rest != 0; rest &= rest - 1)
+        partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
+                           static_cast<std::uint32_t>(std::countr_zero(rest)));
     }
-  });
+    // Per partner the leaf's eight triangle boxes at once (grown by the slack, so no pair is
+    // lost), then the planes, a leaf triangle's made on its first use. The contacts are sorted
+    // at the end: the batch's order does not matter.
+    if (partners.empty()) continue;
+    const std::size_t count = std::min(detail::kFanout, a.size() - firstBegin);
+    for (std::size_t i = 0; i < count; ++i)
+      leafTriangles[i] = a.triangle(firstBegin + i);
+    const detail::MovedOctet leafBoxes = detail::boxesOf(leafTriangles, count, a.slack);
+    unsigned made = 0;
+    for (const std::uint32_t slot : partners) {
+      for (unsigned rest = detail::notApartMask(leafBoxes, scratch.partnerBoxes[slot], reach);
+           rest != 0; rest &= rest - 1) {
+        const auto i = static_cast<std::size_t>(std::countr_zero(rest));
+        if (!(made & 1u << i)) {
+          made |= 1u << i;
+          leafPlanes[i] = detail::separatingPlane(leafTriangles[i]);
+        }
+        const Triangle& one = leafTriangles[i];
+        const Triangle& other = scratch.partnerTriangles[slot];
+        const detail::SeparatingPlane& otherPlane = scratch.partnerPlanes[slot];
+        // Both tests, then one branch (each alone is a coin toss to the predictor).
+        if (static_cast<int>(detail::separated(leafPlanes[i], other, otherPlane.magnitude, reach)) |
+            static_cast<int>(detail::separated(otherPlane, one, leafPlanes[i].magnitude, reach)))
+          continue;
+        firsts.push_back(one);
+        seconds.push_back(other);
+        firstIds.push_back(a.order[firstBegin + i]);
+        secondIds.push_back(scratch.partnerIds[slot]);
+      }
+    }
+  }
+  if (firsts.empty()) return;
+  work.firstBatch.assign(firsts);
+  work.secondBatch.assign(seconds);
+  kernels::PairResults& results = work.results;
+  results.reserve(firsts.size());  // the kernels fill at most the capacity
+  kernels::distances(solver, work.firstBatch, work.secondBatch, results);
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (results.distanceSquared(k) < reach * reach)
+      out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
+                                 results.intersect(k), results.converged(k), firstIds[k],
+                                 secondIds[k]));
+}
+
+/// Phase 4: every run's contacts in one list, sorted by (first, second) id.
+std::vector<ContactPoint> joinedAndSorted(const std::vector<std::vector<ContactPoint>>& perRun,
+                                          std::size_t runs) {
   std::size_t total = 0;
   for (std::size_t run = 0; run < runs; ++run)
     total += perRun[run].size();
@@ -437,30 +421,84 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
+  return found;
+}
 
-  if (first.closed() && second.closed()) {
-    // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
-    const double limit = 4.0 * epsilon * epsilon;
-    // A closed mesh that crosses itself is signed by its winding number (pseudonormals are
-    // wrong near the crossings). Made here, where they may throw, not in the parallel loop.
-    const bool aCrosses = a.selfIntersections().any(), bCrosses = b.selfIntersections().any();
-    aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
-    bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();
-    const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
-    const auto inside = [limit, &a, aCrosses, bCrosses](const detail::QueryMeshData& mesh,
-                                                        const Vec3& x) {
-      const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
-      if (!nearest.found()) return false;
-      if (!(&mesh == &a ? aCrosses : bCrosses)) return detail::insideAt(mesh, x, nearest);
-      return detail::distanceOf(mesh, x, nearest) > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
-    };
-    parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i)
-        if (!found[i].overlap)
-          found[i].overlap = inside(a, found[i].x) &&
-                             inside(b, moved ? firstToSecond.apply(found[i].x) : found[i].x);
-    });
-  }
+/// Phase 5, for two closed meshes: a contact whose triangles do not cross is marked overlapping
+/// where its x lies inside both (each mesh's nearest-triangle sign, or its winding number where
+/// it crosses itself). `found` in the first mesh's prepared frame.
+void markOverlaps(const QueryMesh& first, const QueryMesh& second,
+                  const RigidTransform& secondToFirst, double epsilon,
+                  std::vector<ContactPoint>& found) {
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
+  const double limit = 4.0 * epsilon * epsilon;
+  // A closed mesh that crosses itself is signed by its winding number (pseudonormals are wrong
+  // near the crossings). Made here, where they may throw, not in the parallel loop.
+  const bool aCrosses = a.selfIntersections().any(), bCrosses = b.selfIntersections().any();
+  aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
+  bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();
+  const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
+  const auto inside = [limit, &a, aCrosses, bCrosses](const detail::QueryMeshData& mesh,
+                                                      const Vec3& x) {
+    const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
+    if (!nearest.found()) return false;
+    if (!(&mesh == &a ? aCrosses : bCrosses)) return detail::insideAt(mesh, x, nearest);
+    return detail::distanceOf(mesh, x, nearest) > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
+  };
+  parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (!found[i].overlap)
+        found[i].overlap = inside(a, found[i].x) &&
+                           inside(b, moved ? firstToSecond.apply(found[i].x) : found[i].x);
+  });
+}
+
+}  // namespace
+
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   kernels::Solver solver) {
+  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
+    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  // Both trees are descended together down to pairs of leaves within reach (boxes grown by the
+  // slack, so no pair the kernel would find is dropped); then each triangle of the first leaf
+  // against the second leaf's eight. Moved meshes meet in the first one's prepared frame: the
+  // second's boxes and, leaf by leaf, its triangles are carried there; nothing is rebuilt.
+  detail::checkPlacedPair(first, second, "contacts");
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
+  const double reach = 2.0 * epsilon;
+  MeshPairScratch& scratch = MeshPairScratch::ofThread();
+
+  // 1. The leaf pairs within reach, grouped by the first leaf: each of its triangles then meets
+  // the triangles of all its second leaves in one kernel batch (the batched solvers want long
+  // batches, not eight pairs a call).
+  detail::leafPairsWithin(a, b, secondTree, reach, scratch.pairs);
+  groupByFirst(scratch.pairs, a.levels[0].size(), scratch.groups, scratch.start, scratch.grouped);
+  secondLeavesOf(scratch.pairs, b.levels[0].size(), scratch.named);
+  // 2. The second leaves they name, in the first's frame.
+  placePartnerLeaves(b, moved ? &motion : nullptr, scratch);
+
+  // 3. The candidate pairs of a run of kGroupsPerBatch first leaves go to the kernels in one
+  // batch of pairs: a first leaf has a few (nearly parallel surfaces: two), which would leave
+  // most of a batch's lanes idle and pay a call each. Runs are fixed by index, so the batches
+  // (and the bits of the hybrid solver, which can depend on a batch's other pairs) are the same
+  // for any number of threads.
+  const std::size_t runs = (scratch.groups.size() - 1 + kGroupsPerBatch - 1) / kGroupsPerBatch;
+  std::vector<std::vector<ContactPoint>>& perRun = scratch.perRun;
+  if (perRun.size() < runs) perRun.resize(runs);
+  parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
+    RunScratch& work = RunScratch::ofThread();
+    for (std::size_t run = firstRun; run < endRun; ++run)
+      contactsOfRun(run, a, scratch, reach, solver, work, perRun[run]);
+  });
+  // 4. Sorted by ids; 5. overlaps marked; 6. moved to where the first mesh is.
+  std::vector<ContactPoint> found = joinedAndSorted(perRun, runs);
+  if (first.closed() && second.closed()) markOverlaps(first, second, secondToFirst, epsilon, found);
   if (first.moved())
     for (ContactPoint& contact : found) {
       contact.x = first.pose().apply(contact.x);
