@@ -354,97 +354,107 @@ class LeafCache {
 
 }  // namespace
 
-MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
-                                kernels::Solver solver) {
-  // Best first over pairs of nodes of the two prepared trees: the pair with the nearest boxes is
-  // opened next, and the search ends when the nearest remaining boxes are farther than the best
-  // pair found (strictly: equal boxes may still hold a tie with smaller ids). Moved meshes meet in
-  // the first one's prepared frame; the second's boxes and, leaf by leaf, its triangles are
-  // carried there. Serial: the search is short and its answer must not depend on threads.
-  detail::checkPlacedPair(first, second, "minimumDistance");
-  const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
-  const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
-  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
+namespace {
 
+/// minimumDistance(QueryMesh, QueryMesh)'s search: best first over pairs of nodes of the two
+/// prepared trees, the pair with the nearest boxes opened next (the second tree's boxes moved
+/// into the first's prepared frame), until the nearest remaining boxes are farther than the best
+/// pair found (strictly: equal boxes may still hold a tie with smaller ids).
+class PreparedPairSearch {
+ public:
+  PreparedPairSearch(const detail::QueryMeshData& a, const detail::QueryMeshData& b,
+                     const detail::MovedTree& secondTree, const detail::MatrixMotion* motion,
+                     kernels::Solver solver)
+      : a_(a),
+        b_(b),
+        secondTree_(secondTree),
+        solver_(solver),
+        firstLeaves_(a, nullptr),
+        secondLeaves_(b, motion),
+        slabMargin_(a.slack + b.slack) {}
+
+  /// The nearest pair, in the first mesh's prepared frame.
+  MinimumDistance run() {
+    push(static_cast<std::uint32_t>(a_.levels.size() - 1), 0,
+         static_cast<std::uint32_t>(secondTree_.levelCount() - 1), 0);
+    while (!open_.empty()) {
+      const Entry entry = open_.top();
+      open_.pop();
+      if (entry.bound > bestSquared_) break;
+      // Boxes of curved patches facing each other across a small gap overlap; their slabs often
+      // do not (a third of refined_elephant's pairs end here, and the query takes 0.65 of the
+      // time).
+      const double gap = detail::slabGap(
+          a_.slabs[entry.firstLevel][entry.firstNode], a_.levels[entry.firstLevel][entry.firstNode],
+          secondTree_.moved(b_.slabs[entry.secondLevel][entry.secondNode]),
+          secondTree_.box(entry.secondLevel, entry.secondNode), slabMargin_);
+      if (gap > 0.0 && gap * gap > bestSquared_) continue;
+      if (entry.firstLevel > 0 && (entry.secondLevel == 0 || entry.firstLevel >= entry.secondLevel))
+        openFirst(entry);
+      else if (entry.secondLevel > 0)
+        openSecond(entry);
+      else
+        crossLeaves(entry);
+    }
+    best_.distance = std::sqrt(bestSquared_);
+    return best_;
+  }
+
+ private:
   struct Entry {
     double bound;
     std::uint32_t firstLevel, firstNode, secondLevel, secondNode;
     bool operator>(const Entry& other) const noexcept { return bound > other.bound; }
   };
-  MinimumDistance best;
-  double bestSquared = std::numeric_limits<double>::infinity();
-  bool found = false;
-  // A pair farther than the best found so far can never be opened (the best only falls): it is
-  // not queued at all.
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  const auto push = [&](std::uint32_t la, std::uint32_t na, std::uint32_t lb, std::uint32_t nb) {
-    const double bound = distanceSquared(a.levels[la][na], secondTree.box(lb, nb));
-    if (!(bound > bestSquared)) open.push({bound, la, na, lb, nb});
-  };
-  push(static_cast<std::uint32_t>(a.levels.size() - 1), 0,
-       static_cast<std::uint32_t>(secondTree.levelCount() - 1), 0);
 
-  kernels::PairResults results(detail::kFanout);
-  TriangleSoA batch;
-  // A leaf of either tree meets several of the other's: its triangles (the second's carried into
-  // the first's frame), boxes and planes are made once, on its first meeting.
-  LeafCache firstLeaves(a, nullptr), secondLeaves(b, moved ? &motion : nullptr);
-  Triangle candidates[detail::kFanout];
-  std::uint32_t ids[detail::kFanout];
+  /// Queues a pair of nodes unless farther than the best found so far (the best only falls: it
+  /// could never be opened).
+  void push(std::uint32_t la, std::uint32_t na, std::uint32_t lb, std::uint32_t nb) {
+    const double bound = distanceSquared(a_.levels[la][na], secondTree_.box(lb, nb));
+    if (!(bound > bestSquared_)) open_.push({bound, la, na, lb, nb});
+  }
+
   // A node opens into its eight children at once: their boxes from the trees' octets (the
   // second's moved eight at a time), each pair queued unless farther than the best. (Opening the
   // nearest child next without the queue measured slower: it runs ahead of pairs nearer still.)
-  const auto open8 = [&](const double(&bounds)[detail::kFanout], std::size_t count,
-                         const auto& entryOf) {
-    for (std::size_t c = 0; c < count; ++c)
-      if (!(bounds[c] > bestSquared)) open.push(entryOf(c));
-  };
-  const double slabMargin = a.slack + b.slack;
-  while (!open.empty()) {
-    const Entry entry = open.top();
-    open.pop();
-    if (entry.bound > bestSquared) break;
-    // Boxes of curved patches facing each other across a small gap overlap; their slabs often
-    // do not (a third of refined_elephant's pairs end here, and the query takes 0.65 of the time).
-    const double gap = detail::slabGap(
-        a.slabs[entry.firstLevel][entry.firstNode], a.levels[entry.firstLevel][entry.firstNode],
-        secondTree.moved(b.slabs[entry.secondLevel][entry.secondNode]),
-        secondTree.box(entry.secondLevel, entry.secondNode), slabMargin);
-    if (gap > 0.0 && gap * gap > bestSquared) continue;
+
+  /// The first node's children against the second node.
+  void openFirst(const Entry& entry) {
     double bounds[detail::kFanout];
-    if (entry.firstLevel > 0 && (entry.secondLevel == 0 || entry.firstLevel >= entry.secondLevel)) {
-      const std::uint32_t level = entry.firstLevel - 1;
-      detail::distancesSquared(a.childOctets[level][entry.firstNode],
-                               secondTree.box(entry.secondLevel, entry.secondNode), bounds);
-      const std::size_t begin = std::size_t{entry.firstNode} * detail::kFanout;
-      const std::size_t count = std::min(detail::kFanout, a.levels[level].size() - begin);
-      open8(bounds, count, [&](std::size_t c) {
-        return Entry{bounds[c], level, static_cast<std::uint32_t>(begin + c), entry.secondLevel,
-                     entry.secondNode};
-      });
-      continue;
-    }
-    if (entry.secondLevel > 0) {
-      const std::uint32_t level = entry.secondLevel - 1;
-      detail::distancesSquared(secondTree.moved(b.childOctets[level][entry.secondNode]),
-                               a.levels[entry.firstLevel][entry.firstNode], bounds);
-      const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
-      const std::size_t count = std::min(detail::kFanout, secondTree.nodeCount(level) - begin);
-      open8(bounds, count, [&](std::size_t c) {
-        return Entry{bounds[c], entry.firstLevel, entry.firstNode, level,
-                     static_cast<std::uint32_t>(begin + c)};
-      });
-      continue;
-    }
-    // Two leaves: each triangle of the first against those of the second's (at most) eight
-    // whose boxes (grown by the slack: rounding never drops a tie) are not farther than the best.
-    const LeafCache::Leaf other = secondLeaves.leaf(entry.secondNode);
-    const LeafCache::Leaf one = firstLeaves.leaf(entry.firstNode);
-    const Aabb secondBox = secondTree.box(0, entry.secondNode);
+    const std::uint32_t level = entry.firstLevel - 1;
+    detail::distancesSquared(a_.childOctets[level][entry.firstNode],
+                             secondTree_.box(entry.secondLevel, entry.secondNode), bounds);
+    const std::size_t begin = std::size_t{entry.firstNode} * detail::kFanout;
+    const std::size_t count = std::min(detail::kFanout, a_.levels[level].size() - begin);
+    for (std::size_t c = 0; c < count; ++c)
+      if (!(bounds[c] > bestSquared_))
+        open_.push({bounds[c], level, static_cast<std::uint32_t>(begin + c), entry.secondLevel,
+                    entry.secondNode});
+  }
+
+  /// The first node against the second node's children.
+  void openSecond(const Entry& entry) {
+    double bounds[detail::kFanout];
+    const std::uint32_t level = entry.secondLevel - 1;
+    detail::distancesSquared(secondTree_.moved(b_.childOctets[level][entry.secondNode]),
+                             a_.levels[entry.firstLevel][entry.firstNode], bounds);
+    const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
+    const std::size_t count = std::min(detail::kFanout, secondTree_.nodeCount(level) - begin);
+    for (std::size_t c = 0; c < count; ++c)
+      if (!(bounds[c] > bestSquared_))
+        open_.push({bounds[c], entry.firstLevel, entry.firstNode, level,
+                    static_cast<std::uint32_t>(begin + c)});
+  }
+
+  /// Two leaves: each triangle of the first against those of the second's (at most) eight whose
+  /// boxes (grown by the slack: rounding never drops a tie) are not farther than the best.
+  void crossLeaves(const Entry& entry) {
+    const LeafCache::Leaf other = secondLeaves_.leaf(entry.secondNode);
+    const LeafCache::Leaf one = firstLeaves_.leaf(entry.firstNode);
+    const Aabb secondBox = secondTree_.box(0, entry.secondNode);
     for (std::size_t i = 0; i < one.count; ++i) {
-      if (distanceSquared(one.boxes[i], secondBox) > bestSquared) continue;
-      const double reach = std::sqrt(bestSquared);  // +∞ before the first pair
+      if (distanceSquared(one.boxes[i], secondBox) > bestSquared_) continue;
+      const double reach = std::sqrt(bestSquared_);  // +∞ before the first pair
       std::size_t kept = 0;
       double gaps[detail::kFanout];  // the second's eight boxes at once
       detail::distancesSquared(*other.octet, one.boxes[i], gaps);
@@ -452,33 +462,68 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
       // best before the first pair (+∞), and their padding (zero triangles) would then be
       // measured as if they were triangles.
       const unsigned present = (1u << other.count) - 1;
-      for (unsigned near = detail::notAboveMask(gaps, bestSquared) & present; near != 0;
+      for (unsigned near = detail::notAboveMask(gaps, bestSquared_) & present; near != 0;
            near &= near - 1) {
         const auto k = static_cast<std::size_t>(std::countr_zero(near));
         if (!detail::separated(one.planes[i], other.triangles[k], other.planes[k].magnitude,
                                reach) &&
             !detail::separated(other.planes[k], one.triangles[i], one.planes[i].magnitude, reach)) {
-          candidates[kept] = other.triangles[k];
-          ids[kept++] = other.ids[k];
+          candidates_[kept] = other.triangles[k];
+          ids_[kept++] = other.ids[k];
         }
       }
       if (kept == 0) continue;
-      batch.assign(std::span(candidates, kept));
-      kernels::distances(solver, one.triangles[i], batch, 0, kept, results);
-      for (std::size_t k = 0; k < results.size(); ++k) {
-        const double d = results.distanceSquared(k);
-        const std::uint32_t ia = one.ids[i], ib = ids[k];
-        const bool better =
-            d < bestSquared || (d == bestSquared && found &&
-                                (ia < best.first || (ia == best.first && ib < best.second)));
-        if (!better) continue;
-        bestSquared = d;
-        found = true;
-        best = {0.0, ia, ib, results.p(k), results.q(k), results.intersect(k)};
-      }
+      batch_.assign(std::span(candidates_, kept));
+      kernels::distances(solver_, one.triangles[i], batch_, 0, kept, results_);
+      for (std::size_t k = 0; k < results_.size(); ++k)
+        offer(results_.distanceSquared(k), one.ids[i], ids_[k], k);
     }
   }
-  best.distance = std::sqrt(bestSquared);
+
+  /// The kernel's pair k (ids ia, ib at squared distance d) becomes the best if nearer, or as
+  /// near with smaller ids.
+  void offer(double d, std::uint32_t ia, std::uint32_t ib, std::size_t k) {
+    const bool better =
+        d < bestSquared_ || (d == bestSquared_ && found_ &&
+                             (ia < best_.first || (ia == best_.first && ib < best_.second)));
+    if (!better) return;
+    bestSquared_ = d;
+    found_ = true;
+    best_ = {0.0, ia, ib, results_.p(k), results_.q(k), results_.intersect(k)};
+  }
+
+  const detail::QueryMeshData& a_;
+  const detail::QueryMeshData& b_;
+  const detail::MovedTree& secondTree_;
+  const kernels::Solver solver_;
+  // A leaf of either tree meets several of the other's: its triangles (the second's carried into
+  // the first's frame), boxes and planes are made once, on its first meeting.
+  LeafCache firstLeaves_, secondLeaves_;
+  const double slabMargin_;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open_;
+  MinimumDistance best_;
+  double bestSquared_ = std::numeric_limits<double>::infinity();
+  bool found_ = false;
+  kernels::PairResults results_{detail::kFanout};
+  TriangleSoA batch_;
+  Triangle candidates_[detail::kFanout];
+  std::uint32_t ids_[detail::kFanout];
+};
+
+}  // namespace
+
+MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
+                                kernels::Solver solver) {
+  // Moved meshes meet in the first one's prepared frame; the second's boxes and, leaf by leaf,
+  // its triangles are carried there. Serial: the search is short and its answer must not depend
+  // on threads.
+  detail::checkPlacedPair(first, second, "minimumDistance");
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
+  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
+  MinimumDistance best =
+      PreparedPairSearch(a, b, secondTree, moved ? &motion : nullptr, solver).run();
   if (first.moved()) {
     best.p = first.pose().apply(best.p);
     best.q = first.pose().apply(best.q);
