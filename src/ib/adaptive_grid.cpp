@@ -240,14 +240,7 @@ void AdaptiveGrid::refine() {
   const auto start = std::chrono::steady_clock::now();
   statistics_ = {};
   const std::uint32_t now = static_cast<std::uint32_t>(poses_.size() - 1);
-  // How far each remembered distance may be off now (0 for this pose).
-  const double roundingScale = kRoundingAllowance * length(domain_.extent());
-  slackOfEpoch_.resize(poses_.size());
-  for (std::uint32_t epoch = 0; epoch < now; ++epoch)
-    slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
-                               (1.0 + kRoundingAllowance) +
-                           roundingScale;
-  slackOfEpoch_[now] = 0.0;
+  updateSlacks(now);
 
   std::vector<std::vector<Cell>> old = std::move(levels_);
   std::size_t oldCells = 0;
@@ -268,114 +261,27 @@ void AdaptiveGrid::refine() {
     fromOld.push_back(0);
   }
 
-  std::vector<std::uint8_t> decision;  // per cell: 0 keep a leaf, 1 refine, 2 in doubt
+  std::vector<std::uint8_t> decision;  // per cell: 0 keep a leaf, 1 refine
   double finestBand = -1.0;            // a build's estimate of its finest cells, once needed
   std::size_t carried = 0;
   for (int level = 0;; ++level) {
-    std::vector<Cell>& cells = levels_[level];
     query();  // the new vertices of this level
     if (level == options_.levels) {
-      for (Cell& cell : cells)
+      for (Cell& cell : levels_[level])
         cell.firstChild = Cell::kLeaf;
       break;
     }
-
-    // Refine where the smallest corner distance is below the threshold: certain from the bounds
-    // of remembered distances, or else from fresh ones.
-    const double threshold = options_.refineFactor * cellDiagonal(level);
-    decision.assign(cells.size(), 0);
-    ++pass_;
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (i % kCellsBetweenPolls == 0) pollCancellation();
-      double lowest = std::numeric_limits<double>::infinity();
-      double highest = std::numeric_limits<double>::infinity();
-      for (std::uint32_t v : cells[i].corners) {
-        const double d = std::abs(distance_[v]), slack = slackOfEpoch_[epoch_[v]];
-        lowest = std::min(lowest, d - slack);
-        highest = std::min(highest, d + slack);
-      }
-      if (highest < threshold) {
-        decision[i] = 1;
-      } else if (lowest < threshold) {
-        decision[i] = 2;
-        for (std::uint32_t v : cells[i].corners)
-          if (epoch_[v] != now) queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
-      }
-    }
-    query();
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (decision[i] != 2) continue;
-      double lowest = std::numeric_limits<double>::infinity();
-      for (std::uint32_t v : cells[i].corners)
-        lowest = std::min(lowest, std::abs(distance_[v]));
-      decision[i] = lowest < threshold ? 1 : 0;
-    }
-
+    decideRefinement(level, now, decision);
     if (old.empty()) {  // a build; a move, never stopped half-way, keeps about its cell count
-      if (finestBand < 0.0) {
-        // (4√3·F + 3)·A/h² finest cells, h the side of a finest cell: the band refined at level
-        // L − 1 is about 2·(F·√3·2h + 1.5h) wide, each of its cells split in 8 (measured on
-        // granulate:1 with F = 1: 9.86·A/h², where this gives 9.93).
-        const Vec3 cell = domain_.extent() / double(std::uint64_t{1} << options_.levels);
-        const double side = std::cbrt(cell.x * cell.y * cell.z);
-        finestBand = std::min((4.0 * std::sqrt(3.0) * options_.refineFactor + 3.0) *
-                                  surfaceArea(boundary_) / (side * side),
-                              std::pow(8.0, options_.levels));
-      }
+      if (finestBand < 0.0) finestBand = finestCellsEstimate();
       std::size_t cellsSoFar = 0;
       for (int coarser = 0; coarser <= level; ++coarser)
         cellsSoFar += levels_[coarser].size();
       requireRoomToRefine(static_cast<std::size_t>(std::count(decision.begin(), decision.end(), 1)),
                           level, options_.levels, cellsSoFar, finestBand);
     }
-
-    // The next level: the children of refined cells, carried over where they were refined before.
-    std::vector<Cell>& next = levels_[level + 1];
     nextFromOld.clear();
-    const std::uint32_t half = (resolution_ >> level) / 2;
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (i % kCellsBetweenPolls == 0) pollCancellation();
-      Cell& cell = cells[i];
-      if (decision[i] == 0) {
-        cell.firstChild = Cell::kLeaf;
-        continue;
-      }
-      const std::uint32_t before =
-          fromOld[i] == kNotOld ? Cell::kLeaf : old[level][fromOld[i]].firstChild;
-      cell.firstChild = static_cast<std::uint32_t>(next.size());
-      if (before != Cell::kLeaf) {
-        for (std::uint32_t c = 0; c < 8; ++c) {
-          next.push_back(old[level + 1][before + c]);
-          nextFromOld.push_back(before + c);
-        }
-        carried += 8;
-        continue;
-      }
-      // New children share the 3 × 3 × 3 lattice of vertices of their parent.
-      std::uint32_t lattice[27];
-      for (std::uint32_t k = 0; k < 3; ++k)
-        for (std::uint32_t j = 0; j < 3; ++j)
-          for (std::uint32_t a = 0; a < 3; ++a) {
-            const std::uint32_t at = a + 3 * j + 9 * k;
-            const bool corner = a != 1 && j != 1 && k != 1;
-            lattice[at] = corner ? cell.corners[a / 2 + 2 * (j / 2) + 4 * (k / 2)]
-                                 : vertexAt(cell.origin[0] + a * half, cell.origin[1] + j * half,
-                                            cell.origin[2] + k * half, &cell);
-          }
-      for (std::uint32_t c = 0; c < 8; ++c) {
-        Cell child;
-        child.level = static_cast<std::uint8_t>(level + 1);
-        const std::uint32_t cx = c & 1, cy = (c >> 1) & 1, cz = (c >> 2) & 1;
-        child.origin = {cell.origin[0] + cx * half, cell.origin[1] + cy * half,
-                        cell.origin[2] + cz * half};
-        for (std::uint32_t corner = 0; corner < 8; ++corner)
-          child.corners[corner] = lattice[(cx + (corner & 1)) + 3 * (cy + ((corner >> 1) & 1)) +
-                                          9 * (cz + ((corner >> 2) & 1))];
-        next.push_back(child);
-        nextFromOld.push_back(kNotOld);
-      }
-      statistics_.cellsCreated += 8;
-    }
+    carried += makeNextLevel(level, decision, old, fromOld, nextFromOld);
     std::swap(fromOld, nextFromOld);
   }
   if (old.empty()) {
@@ -385,6 +291,124 @@ void AdaptiveGrid::refine() {
   }
 
   compact();
+  refreshBand(now);
+  forgetUnusedPoses();
+  statistics_.seconds = secondsSince(start);
+}
+
+void AdaptiveGrid::updateSlacks(std::uint32_t now) {
+  // How far each remembered distance may be off now (0 for this pose).
+  const double roundingScale = kRoundingAllowance * length(domain_.extent());
+  slackOfEpoch_.resize(poses_.size());
+  for (std::uint32_t epoch = 0; epoch < now; ++epoch)
+    slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
+                               (1.0 + kRoundingAllowance) +
+                           roundingScale;
+  slackOfEpoch_[now] = 0.0;
+}
+
+void AdaptiveGrid::decideRefinement(int level, std::uint32_t now,
+                                    std::vector<std::uint8_t>& decision) {
+  // Refine where the smallest corner distance is below the threshold: certain from the bounds of
+  // remembered distances, or else (2: in doubt) from fresh ones.
+  const std::vector<Cell>& cells = levels_[level];
+  const double threshold = options_.refineFactor * cellDiagonal(level);
+  decision.assign(cells.size(), 0);
+  ++pass_;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (i % kCellsBetweenPolls == 0) pollCancellation();
+    double lowest = std::numeric_limits<double>::infinity();
+    double highest = std::numeric_limits<double>::infinity();
+    for (std::uint32_t v : cells[i].corners) {
+      const double d = std::abs(distance_[v]), slack = slackOfEpoch_[epoch_[v]];
+      lowest = std::min(lowest, d - slack);
+      highest = std::min(highest, d + slack);
+    }
+    if (highest < threshold) {
+      decision[i] = 1;
+    } else if (lowest < threshold) {
+      decision[i] = 2;
+      for (std::uint32_t v : cells[i].corners)
+        if (epoch_[v] != now) queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
+    }
+  }
+  query();
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (decision[i] != 2) continue;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (std::uint32_t v : cells[i].corners)
+      lowest = std::min(lowest, std::abs(distance_[v]));
+    decision[i] = lowest < threshold ? 1 : 0;
+  }
+}
+
+double AdaptiveGrid::finestCellsEstimate() const {
+  // (4√3·F + 3)·A/h² finest cells, h the side of a finest cell: the band refined at level L − 1
+  // is about 2·(F·√3·2h + 1.5h) wide, each of its cells split in 8 (measured on granulate:1
+  // with F = 1: 9.86·A/h², where this gives 9.93).
+  const Vec3 cell = domain_.extent() / double(std::uint64_t{1} << options_.levels);
+  const double side = std::cbrt(cell.x * cell.y * cell.z);
+  return std::min(
+      (4.0 * std::sqrt(3.0) * options_.refineFactor + 3.0) * surfaceArea(boundary_) / (side * side),
+      std::pow(8.0, options_.levels));
+}
+
+std::size_t AdaptiveGrid::makeNextLevel(int level, const std::vector<std::uint8_t>& decision,
+                                        const std::vector<std::vector<Cell>>& old,
+                                        const std::vector<std::uint32_t>& fromOld,
+                                        std::vector<std::uint32_t>& nextFromOld) {
+  // The children of refined cells, carried over where they were refined before.
+  std::vector<Cell>& cells = levels_[level];
+  std::vector<Cell>& next = levels_[level + 1];
+  std::size_t carried = 0;
+  const std::uint32_t half = (resolution_ >> level) / 2;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (i % kCellsBetweenPolls == 0) pollCancellation();
+    Cell& cell = cells[i];
+    if (decision[i] == 0) {
+      cell.firstChild = Cell::kLeaf;
+      continue;
+    }
+    const std::uint32_t before =
+        fromOld[i] == kNotOld ? Cell::kLeaf : old[level][fromOld[i]].firstChild;
+    cell.firstChild = static_cast<std::uint32_t>(next.size());
+    if (before != Cell::kLeaf) {
+      for (std::uint32_t c = 0; c < 8; ++c) {
+        next.push_back(old[level + 1][before + c]);
+        nextFromOld.push_back(before + c);
+      }
+      carried += 8;
+      continue;
+    }
+    // New children share the 3 × 3 × 3 lattice of vertices of their parent.
+    std::uint32_t lattice[27];
+    for (std::uint32_t k = 0; k < 3; ++k)
+      for (std::uint32_t j = 0; j < 3; ++j)
+        for (std::uint32_t a = 0; a < 3; ++a) {
+          const std::uint32_t at = a + 3 * j + 9 * k;
+          const bool corner = a != 1 && j != 1 && k != 1;
+          lattice[at] = corner ? cell.corners[a / 2 + 2 * (j / 2) + 4 * (k / 2)]
+                               : vertexAt(cell.origin[0] + a * half, cell.origin[1] + j * half,
+                                          cell.origin[2] + k * half, &cell);
+        }
+    for (std::uint32_t c = 0; c < 8; ++c) {
+      Cell child;
+      child.level = static_cast<std::uint8_t>(level + 1);
+      const std::uint32_t cx = c & 1, cy = (c >> 1) & 1, cz = (c >> 2) & 1;
+      child.origin = {cell.origin[0] + cx * half, cell.origin[1] + cy * half,
+                      cell.origin[2] + cz * half};
+      for (std::uint32_t corner = 0; corner < 8; ++corner)
+        child.corners[corner] = lattice[(cx + (corner & 1)) + 3 * (cy + ((corner >> 1) & 1)) +
+                                        9 * (cz + ((corner >> 2) & 1))];
+      next.push_back(child);
+      nextFromOld.push_back(kNotOld);
+    }
+    statistics_.cellsCreated += 8;
+  }
+  return carried;
+}
+
+void AdaptiveGrid::refreshBand(std::uint32_t now) {
   // The band: every vertex that may be within exactBand gets its exact distance.
   ++pass_;
   pollCancellation();
@@ -392,8 +416,6 @@ void AdaptiveGrid::refine() {
     if (epoch_[v] != now && std::abs(distance_[v]) - slackOfEpoch_[epoch_[v]] <= exactBand_)
       queue(v, std::abs(distance_[v]) + slackOfEpoch_[epoch_[v]]);
   query();
-  forgetUnusedPoses();
-  statistics_.seconds = secondsSince(start);
 }
 
 void AdaptiveGrid::forgetUnusedPoses() {

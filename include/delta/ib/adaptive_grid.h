@@ -184,6 +184,22 @@ class AdaptiveGrid {
   /// Makes the levels anew from the root, reusing the cells and distances that are still valid,
   /// then brings the band's distances up to date.
   void refine();
+  /// How far each remembered distance may be off at pose `now` (slackOfEpoch_).
+  void updateSlacks(std::uint32_t now);
+  /// Per cell of `level`: 1 to refine (its smallest corner distance below the threshold, from
+  /// the remembered bounds or, in doubt, fresh distances), 0 to keep a leaf.
+  void decideRefinement(int level, std::uint32_t now, std::vector<std::uint8_t>& decision);
+  /// A build's estimate of its finest cells (for the memory check before refining).
+  double finestCellsEstimate() const;
+  /// Level + 1: the children of the cells `decision` refines, carried over from `old` where they
+  /// were refined before (`fromOld`: each cell's index in old, or kNotOld; `nextFromOld` gets
+  /// the children's). Returns how many were carried.
+  std::size_t makeNextLevel(int level, const std::vector<std::uint8_t>& decision,
+                            const std::vector<std::vector<Cell>>& old,
+                            const std::vector<std::uint32_t>& fromOld,
+                            std::vector<std::uint32_t>& nextFromOld);
+  /// Brings every vertex that may be within the exact band up to date.
+  void refreshBand(std::uint32_t now);
   /// Queues vertex v for the next query() (once per pass), with an upper bound of its distance.
   void queue(std::uint32_t v, double upperBound);
   /// Computes the distance of the queued vertices, in one batch.
