@@ -586,191 +586,228 @@ std::string pairNote(double distance, std::uint32_t first, std::uint32_t second)
   return text;
 }
 
-void runMeshMeshWorkloads(const Mesh& mesh, const Options& options, MeshReport& report) {
-  const double diagonal = report.diagonal, tolerance = kAgreementFraction * diagonal;
-  const double triangles = 2.0 * static_cast<double>(mesh.triangleCount());
-  omp_set_num_threads(*std::max_element(options.threads.begin(), options.threads.end()));
+/// W4's scene: the mesh and its turned copy, moved to a small gap (W4a) and into a small
+/// overlap (W4b).
+struct MeshMeshScene {
+  const Mesh& mesh;
+  double diagonal, tolerance, triangles, epsilon;
+  RigidTransform gapMotion, overlapMotion;
+  Mesh gapCopy, overlapCopy;
+  std::string gapName = "W4a min distance", contactName = "W4b contacts";
+};
+
+/// Δ's W4 answers at the first thread count, which the other thread counts and the peers are
+/// compared with.
+struct MeshMeshReference {
+  cd::MinimumDistance minimum;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> contacts;      ///< (first, second) ids
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> intersecting;  ///< at distance 0
+  bool made = false;
+};
+
+MeshMeshScene meshMeshScene(const Mesh& mesh, double diagonal) {
   const double gapShift = shiftForGap(mesh, kGapFraction * diagonal, diagonal);
   const double overlapShift = gapShift - kOverlapFraction * diagonal;
   const RigidTransform gapMotion = copyMotion(mesh, gapShift);
   const RigidTransform overlapMotion = copyMotion(mesh, overlapShift);
-  const Mesh gapCopy = moved(mesh, gapMotion), overlapCopy = moved(mesh, overlapMotion);
-  const double epsilon = kMeshEpsilonFraction * diagonal;
-  const std::string gapName = "W4a min distance", contactName = "W4b contacts";
+  return {mesh,
+          diagonal,
+          kAgreementFraction * diagonal,
+          2.0 * static_cast<double>(mesh.triangleCount()),
+          kMeshEpsilonFraction * diagonal,
+          gapMotion,
+          overlapMotion,
+          moved(mesh, gapMotion),
+          moved(mesh, overlapMotion)};
+}
 
-  cd::MinimumDistance firstMinimum;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> firstContacts, intersecting;
-  std::vector<delta::ContactPoint> contacts;
-  bool haveFirst = false;
-  for (const int threads : options.threads) {
-    omp_set_num_threads(threads);
-    {  // W4a
-      // Built once and moved rigidly, as FCL's models are (the DEM case).
-      std::optional<QueryMesh> a, b;
-      const double build = secondsOf([&] {
-        a.emplace(mesh);
-        b.emplace(mesh);
-      });
-      b->transform(gapMotion);
-      cd::MinimumDistance minimum;
-      const QueryTime time = timeQuery([&] { minimum = cd::minimumDistance(*a, *b); });
-      Row row = makeRow(gapName, "Δ", threads);
-      row.buildSeconds = build;
-      row.querySeconds = time.seconds;
-      row.queryRuns = time.runs;
-      row.bytesPerTriangle = static_cast<double>(a->memoryBytes() + b->memoryBytes()) / triangles;
-      row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
-      row.note = pairNote(minimum.distance, minimum.first, minimum.second);
-      row.agreement = "reference";
-      if (haveFirst) {
-        row.agreed = minimum.distance == firstMinimum.distance;
-        row.agreement = row.agreed ? "reference (= first thread count)"
-                                   : "NO: differs from the first thread count";
-      } else {
-        firstMinimum = minimum;
-      }
-      report.rows.push_back(row);
-    }
-    {  // W4b
-      std::optional<QueryMesh> a, b;
-      const double build = secondsOf([&] {
-        a.emplace(mesh);
-        b.emplace(mesh);
-      });
-      b->transform(overlapMotion);
-      const QueryTime time = timeQuery([&] { contacts = cd::contacts(*a, *b, epsilon); });
-      std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
-      std::size_t overlapping = 0;
-      intersecting.clear();
-      for (const delta::ContactPoint& contact : contacts) {
-        all.emplace_back(contact.first, contact.second);
-        overlapping += contact.overlap ? 1 : 0;
-        if (contact.distance == 0.0) intersecting.emplace_back(contact.first, contact.second);
-      }
-      Row row = makeRow(contactName, "Δ", threads);
-      row.buildSeconds = build;
-      row.querySeconds = time.seconds;
-      row.queryRuns = time.runs;
-      row.bytesPerTriangle = static_cast<double>(a->memoryBytes() + b->memoryBytes()) / triangles;
-      row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
-      row.note = "contacts " + withCommas(contacts.size()) + ", overlapping " +
-                 withCommas(overlapping) + ", intersecting pairs " +
-                 withCommas(intersecting.size());
-      row.agreement = "reference";
-      if (haveFirst) {
-        row.agreed = all == firstContacts;
-        row.agreement = row.agreed ? "reference (= first thread count)"
-                                   : "NO: differs from the first thread count";
-      } else {
-        firstContacts = all;
-      }
-      report.rows.push_back(row);
-    }
-    haveFirst = true;
+/// A row of Δ's: its build, query and memory, and its agreement with the first thread count.
+Row deltaMeshMeshRow(const std::string& name, int threads, double build, const QueryTime& time,
+                     const QueryMesh& a, const QueryMesh& b, double triangles, bool sameAsFirst,
+                     bool first) {
+  Row row = makeRow(name, "Δ", threads);
+  row.buildSeconds = build;
+  row.querySeconds = time.seconds;
+  row.queryRuns = time.runs;
+  row.bytesPerTriangle = static_cast<double>(a.memoryBytes() + b.memoryBytes()) / triangles;
+  row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
+  row.agreement = "reference";
+  if (!first) {
+    row.agreed = sameAsFirst;
+    row.agreement =
+        row.agreed ? "reference (= first thread count)" : "NO: differs from the first thread count";
   }
+  return row;
+}
+
+/// W4a by Δ on `threads` threads: both meshes built once and the copy moved rigidly, as FCL's
+/// models are (the DEM case).
+Row deltaMinimumDistance(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
+  std::optional<QueryMesh> a, b;
+  const double build = secondsOf([&] {
+    a.emplace(scene.mesh);
+    b.emplace(scene.mesh);
+  });
+  b->transform(scene.gapMotion);
+  cd::MinimumDistance minimum;
+  const QueryTime time = timeQuery([&] { minimum = cd::minimumDistance(*a, *b); });
+  Row row = deltaMeshMeshRow(scene.gapName, threads, build, time, *a, *b, scene.triangles,
+                             reference.made && minimum.distance == reference.minimum.distance,
+                             !reference.made);
+  row.note = pairNote(minimum.distance, minimum.first, minimum.second);
+  if (!reference.made) reference.minimum = minimum;
+  return row;
+}
+
+/// W4b by Δ on `threads` threads.
+Row deltaContacts(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
+  std::optional<QueryMesh> a, b;
+  const double build = secondsOf([&] {
+    a.emplace(scene.mesh);
+    b.emplace(scene.mesh);
+  });
+  b->transform(scene.overlapMotion);
+  std::vector<delta::ContactPoint> contacts;
+  const QueryTime time = timeQuery([&] { contacts = cd::contacts(*a, *b, scene.epsilon); });
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> all, intersecting;
+  std::size_t overlapping = 0;
+  for (const delta::ContactPoint& contact : contacts) {
+    all.emplace_back(contact.first, contact.second);
+    overlapping += contact.overlap ? 1 : 0;
+    if (contact.distance == 0.0) intersecting.emplace_back(contact.first, contact.second);
+  }
+  Row row = deltaMeshMeshRow(scene.contactName, threads, build, time, *a, *b, scene.triangles,
+                             reference.made && all == reference.contacts, !reference.made);
+  row.note = "contacts " + withCommas(contacts.size()) + ", overlapping " +
+             withCommas(overlapping) + ", intersecting pairs " + withCommas(intersecting.size());
+  if (!reference.made) reference.contacts = std::move(all);
+  reference.intersecting = std::move(intersecting);
+  return row;
+}
 
 #if defined(DELTA_HAVE_FCL)
+/// W4a by FCL, against Δ's answer; a disagreement is settled on both pairs exactly.
+Row fclMinimumDistance(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
+                       const MeshMeshReference& reference, MeshReport& report) {
+  const cd::MinimumDistance& delta = reference.minimum;
+  bench::FclMeshPair::Distance answer;
+  const QueryTime time = timeQuery([&] { answer = fcl.minimumDistance(scene.gapMotion); });
+  Row row = makeRow(scene.gapName, "FCL", 1);
+  row.buildSeconds = build;
+  row.querySeconds = time.seconds;
+  row.queryRuns = time.runs;
+  row.bytesPerTriangle = static_cast<double>(fcl.memoryBytes()) / scene.triangles;
+  row.memoryMethod = "heap growth over the build, both models";
+  row.note = pairNote(answer.distance, answer.first, answer.second);
+  const double difference = std::abs(answer.distance - delta.distance);
+  row.agreed = difference <= scene.tolerance;
+  row.maxDifference = difference / scene.diagonal;
+  row.agreement = row.agreed ? "yes" : "NO";
+  if (!row.agreed) {
+    // Which pair is closer? Both pairs, exactly, on Δ's coordinates of the copy.
+    char text[512];
+    const Triangle fclFirst = scene.mesh.triangle(answer.first),
+                   fclSecond = scene.gapCopy.triangle(answer.second);
+    const Triangle deltaFirst = scene.mesh.triangle(delta.first),
+                   deltaSecond = scene.gapCopy.triangle(delta.second);
+#if defined(DELTA_HAVE_CGAL)
+    const double fclExact = bench::exactDistance(fclFirst, fclSecond),
+                 deltaExact = bench::exactDistance(deltaFirst, deltaSecond);
+#else
+    const double fclExact = kNaN, deltaExact = kNaN;
+    (void)fclFirst, (void)fclSecond, (void)deltaFirst, (void)deltaSecond;
+#endif
+    std::snprintf(text, sizeof text,
+                  "%s, FCL: Δ %.17g (pair %u, %u: exactly %.17g), FCL %.17g (pair %u, %u: "
+                  "exactly %.17g)",
+                  scene.gapName.c_str(), delta.distance, delta.first, delta.second, deltaExact,
+                  answer.distance, answer.first, answer.second, fclExact);
+    report.disputes.push_back(text);
+  }
+  return row;
+}
+
+/// W4b by FCL: its intersecting pairs against Δ's (contacts at distance 0); each disagreement
+/// (a few shown) settled exactly.
+Row fclContacts(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
+                const MeshMeshReference& reference, MeshReport& report) {
+  const auto& intersecting = reference.intersecting;
+  bench::FclMeshPair::Collision collision;
+  const QueryTime time =
+      timeQuery([&] { collision = fcl.collide(scene.overlapMotion, kFclMaxContacts); });
+  Row row = makeRow(scene.contactName, "FCL", 1);
+  row.buildSeconds = build;
+  row.querySeconds = time.seconds;
+  row.queryRuns = time.runs;
+  row.bytesPerTriangle = static_cast<double>(fcl.memoryBytes()) / scene.triangles;
+  row.memoryMethod = "heap growth over the build, both models";
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> onlyFcl, onlyDelta;
+  std::set_difference(collision.pairs.begin(), collision.pairs.end(), intersecting.begin(),
+                      intersecting.end(), std::back_inserter(onlyFcl));
+  std::set_difference(intersecting.begin(), intersecting.end(), collision.pairs.begin(),
+                      collision.pairs.end(), std::back_inserter(onlyDelta));
+  std::size_t fclOutsideContacts = 0;  // FCL pairs Δ does not even report closer than 2ε
+  for (const auto& pair : onlyFcl)
+    if (!std::binary_search(reference.contacts.begin(), reference.contacts.end(), pair))
+      ++fclOutsideContacts;
+  row.note = "contacts " + withCommas(collision.contacts) + ", intersecting pairs " +
+             withCommas(collision.pairs.size()) + " (only FCL " + withCommas(onlyFcl.size()) +
+             ", only Δ " + withCommas(onlyDelta.size()) + ")";
+  row.agreed = onlyFcl.empty() && onlyDelta.empty();
+  row.agreement =
+      row.agreed ? "yes" : "NO (" + withCommas(onlyFcl.size() + onlyDelta.size()) + " pairs)";
+  const auto settle = [&](const std::pair<std::uint32_t, std::uint32_t>& pair, bool fclSaysMeet) {
+    const Triangle first = scene.mesh.triangle(pair.first),
+                   second = scene.overlapCopy.triangle(pair.second);
+#if defined(DELTA_HAVE_CGAL)
+    const bool meet = bench::exactIntersect(first, second);
+    const double gap = bench::exactDistance(first, second);
+    const char* verdict = meet == fclSaysMeet ? "Δ is wrong" : "FCL is wrong";
+#else
+    const bool meet = fclSaysMeet;
+    const double gap = kNaN;
+    const char* verdict = "no exact oracle (built without CGAL)";
+    (void)first, (void)second;
+#endif
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "%s, FCL: pair (%u, %u) %s by FCL, %s by Δ; exact: %s, distance %.3g -> %s",
+                  scene.contactName.c_str(), pair.first, pair.second,
+                  fclSaysMeet ? "intersecting" : "not intersecting",
+                  fclSaysMeet ? "not intersecting" : "intersecting",
+                  meet ? "they meet" : "they do not meet", gap, verdict);
+    report.disputes.push_back(text);
+  };
+  for (std::size_t k = 0; k < onlyFcl.size() && k < kDisputesShown; ++k)
+    settle(onlyFcl[k], true);
+  for (std::size_t k = 0; k < onlyDelta.size() && k < kDisputesShown; ++k)
+    settle(onlyDelta[k], false);
+  if (fclOutsideContacts > 0)
+    row.note += ", " + withCommas(fclOutsideContacts) + " FCL pairs not among Δ's contacts";
+  return row;
+}
+#endif
+
+void runMeshMeshWorkloads(const Mesh& mesh, const Options& options, MeshReport& report) {
+  omp_set_num_threads(*std::max_element(options.threads.begin(), options.threads.end()));
+  const MeshMeshScene scene = meshMeshScene(mesh, report.diagonal);
+  MeshMeshReference reference;
+  for (const int threads : options.threads) {
+    omp_set_num_threads(threads);
+    report.rows.push_back(deltaMinimumDistance(scene, threads, reference));
+    report.rows.push_back(deltaContacts(scene, threads, reference));
+    reference.made = true;
+  }
+#if defined(DELTA_HAVE_FCL)
+  // FCL is single-threaded: its ratios are against Δ on one thread.
   omp_set_num_threads(1);
   std::unique_ptr<bench::FclMeshPair> fcl;
   const double build = secondsOf([&] { fcl = bench::makeFclPair(mesh, mesh); });
-  const double bytesPerTriangle = static_cast<double>(fcl->memoryBytes()) / triangles;
-  {  // W4a: the same minimum distance
-    bench::FclMeshPair::Distance answer;
-    const QueryTime time = timeQuery([&] { answer = fcl->minimumDistance(gapMotion); });
-    Row row = makeRow(gapName, "FCL", 1);
-    row.buildSeconds = build;
-    row.querySeconds = time.seconds;
-    row.queryRuns = time.runs;
-    row.bytesPerTriangle = bytesPerTriangle;
-    row.memoryMethod = "heap growth over the build, both models";
-    row.note = pairNote(answer.distance, answer.first, answer.second);
-    const double difference = std::abs(answer.distance - firstMinimum.distance);
-    row.agreed = difference <= tolerance;
-    row.maxDifference = difference / diagonal;
-    row.agreement = row.agreed ? "yes" : "NO";
-    if (!row.agreed) {
-      // Which pair is closer? Both pairs, exactly, on Δ's coordinates of the copy.
-      char text[512];
-      const Triangle fclFirst = mesh.triangle(answer.first),
-                     fclSecond = gapCopy.triangle(answer.second);
-      const Triangle deltaFirst = mesh.triangle(firstMinimum.first),
-                     deltaSecond = gapCopy.triangle(firstMinimum.second);
-#if defined(DELTA_HAVE_CGAL)
-      const double fclExact = bench::exactDistance(fclFirst, fclSecond),
-                   deltaExact = bench::exactDistance(deltaFirst, deltaSecond);
-#else
-      const double fclExact = kNaN, deltaExact = kNaN;
-      (void)fclFirst, (void)fclSecond, (void)deltaFirst, (void)deltaSecond;
-#endif
-      std::snprintf(text, sizeof text,
-                    "%s, FCL: Δ %.17g (pair %u, %u: exactly %.17g), FCL %.17g (pair %u, %u: "
-                    "exactly %.17g)",
-                    gapName.c_str(), firstMinimum.distance, firstMinimum.first, firstMinimum.second,
-                    deltaExact, answer.distance, answer.first, answer.second, fclExact);
-      report.disputes.push_back(text);
-    }
+  for (Row row : {fclMinimumDistance(scene, *fcl, build, reference, report),
+                  fclContacts(scene, *fcl, build, reference, report)}) {
     setRatios(row, report.rows);
     report.rows.push_back(row);
   }
-  {  // W4b: FCL's intersecting pairs against Δ's (contacts at distance 0)
-    bench::FclMeshPair::Collision collision;
-    const QueryTime time =
-        timeQuery([&] { collision = fcl->collide(overlapMotion, kFclMaxContacts); });
-    Row row = makeRow(contactName, "FCL", 1);
-    row.buildSeconds = build;
-    row.querySeconds = time.seconds;
-    row.queryRuns = time.runs;
-    row.bytesPerTriangle = bytesPerTriangle;
-    row.memoryMethod = "heap growth over the build, both models";
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> onlyFcl, onlyDelta;
-    std::set_difference(collision.pairs.begin(), collision.pairs.end(), intersecting.begin(),
-                        intersecting.end(), std::back_inserter(onlyFcl));
-    std::set_difference(intersecting.begin(), intersecting.end(), collision.pairs.begin(),
-                        collision.pairs.end(), std::back_inserter(onlyDelta));
-    std::size_t fclOutsideContacts = 0;  // FCL pairs Δ does not even report closer than 2ε
-    for (const auto& pair : onlyFcl)
-      if (!std::binary_search(firstContacts.begin(), firstContacts.end(), pair))
-        ++fclOutsideContacts;
-    row.note = "contacts " + withCommas(collision.contacts) + ", intersecting pairs " +
-               withCommas(collision.pairs.size()) + " (only FCL " + withCommas(onlyFcl.size()) +
-               ", only Δ " + withCommas(onlyDelta.size()) + ")";
-    row.agreed = onlyFcl.empty() && onlyDelta.empty();
-    row.agreement =
-        row.agreed ? "yes" : "NO (" + withCommas(onlyFcl.size() + onlyDelta.size()) + " pairs)";
-    const auto settle = [&](const std::pair<std::uint32_t, std::uint32_t>& pair, bool fclSaysMeet) {
-      const Triangle first = mesh.triangle(pair.first), second = overlapCopy.triangle(pair.second);
-#if defined(DELTA_HAVE_CGAL)
-      const bool meet = bench::exactIntersect(first, second);
-      const double gap = bench::exactDistance(first, second);
-      const char* verdict = meet == fclSaysMeet ? "Δ is wrong" : "FCL is wrong";
-#else
-      const bool meet = fclSaysMeet;
-      const double gap = kNaN;
-      const char* verdict = "no exact oracle (built without CGAL)";
-      (void)first, (void)second;
-#endif
-      char text[256];
-      std::snprintf(text, sizeof text,
-                    "%s, FCL: pair (%u, %u) %s by FCL, %s by Δ; exact: %s, distance %.3g -> %s",
-                    contactName.c_str(), pair.first, pair.second,
-                    fclSaysMeet ? "intersecting" : "not intersecting",
-                    fclSaysMeet ? "not intersecting" : "intersecting",
-                    meet ? "they meet" : "they do not meet", gap, verdict);
-      report.disputes.push_back(text);
-    };
-    for (std::size_t k = 0; k < onlyFcl.size() && k < kDisputesShown; ++k)
-      settle(onlyFcl[k], true);
-    for (std::size_t k = 0; k < onlyDelta.size() && k < kDisputesShown; ++k)
-      settle(onlyDelta[k], false);
-    if (fclOutsideContacts > 0)
-      row.note += ", " + withCommas(fclOutsideContacts) + " FCL pairs not among Δ's contacts";
-    // FCL's time against Δ's on one thread.
-    setRatios(row, report.rows);
-    report.rows.push_back(row);
-  }
-#else
-  (void)tolerance;
-  (void)triangles;
 #endif
 }
 
