@@ -86,15 +86,6 @@ inline double gapSquared(double lower, double upper, double otherLower,
   return gap * gap;
 }
 
-/// The squared distance from `p` to `box`, as aabb.h's distanceSquared but branch-free (the
-/// hot loop of every search here).
-inline double boxDistanceSquared(const Vec3& p, const Aabb& box) noexcept {
-  const double x = std::max(0.0, std::max(box.lower.x - p.x, p.x - box.upper.x));
-  const double y = std::max(0.0, std::max(box.lower.y - p.y, p.y - box.upper.y));
-  const double z = std::max(0.0, std::max(box.lower.z - p.z, p.z - box.upper.z));
-  return x * x + y * y + z * z;
-}
-
 struct BoxEntry {
   double boxDistanceSquared;  ///< from the query point to the triangle's box
   std::uint32_t id;
@@ -151,7 +142,7 @@ CachedNearest nearestAmong(const SpatialCacheState& state, const Vec3& p,
   }
   std::size_t first = 0;
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    entries[i] = {boxDistanceSquared(p, state.boxes[candidates[i]]), candidates[i]};
+    entries[i] = {distanceSquared(p, state.boxes[candidates[i]]), candidates[i]};
     if (entries[i].boxDistanceSquared < entries[first].boxDistanceSquared) first = i;
   }
   CachedNearest best = evaluate(state, p, entries[first].id);

@@ -48,16 +48,6 @@ double cutBetween(double below, double above) {
   return middle > below ? middle : above;
 }
 
-/// The lowest axis of the box's longest extent.
-int longestAxis(const Aabb& box) {
-  const Vec3 extent = box.extent();
-  int axis = 0;
-  for (int other = 1; other < 3; ++other)
-    if (extent[static_cast<std::size_t>(other)] > extent[static_cast<std::size_t>(axis)])
-      axis = other;
-  return axis;
-}
-
 /// The points the lower side of a node of `points` points and `parts` parts gets:
 /// points·⌊parts/2⌋/parts rounded to the nearest integer, halves down (less than `points` when
 /// there are any), computed without overflow.
@@ -65,10 +55,6 @@ std::uint64_t lowerTarget(std::uint64_t points, int parts) {
   const auto whole = static_cast<std::uint64_t>(parts), half = whole / 2;
   const std::uint64_t quotient = points / whole, remainder = points % whole;
   return quotient * half + (2 * remainder * half + whole - 1) / (2 * whole);
-}
-
-Aabb intersection(const Aabb& a, const Aabb& b) {
-  return {max(a.lower, b.lower), min(a.upper, b.upper)};
 }
 
 /// Whether the box, faces included, lies within `reach` of x: each axis's gap compared with
