@@ -28,6 +28,7 @@
 
 #include "delta/delta.h"
 
+#include "bench_main.h"
 #include "omp_threads.h"
 
 namespace {
@@ -180,8 +181,6 @@ void DemInner(benchmark::State& state) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("omp_num_procs", std::to_string(omp_get_num_procs()));
   benchmark::AddCustomContext("epsilon", std::to_string(kEpsilon));
   const std::vector<std::int64_t> sizes(std::begin(kTriangles), std::end(kTriangles));
@@ -197,9 +196,5 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark("ContactsConcentric", Contacts, Placement::Concentric));
   overSizesAndThreads(benchmark::RegisterBenchmark("DemOuter", DemOuter));
   overSizesAndThreads(benchmark::RegisterBenchmark("DemInner", DemInner));
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

@@ -67,6 +67,7 @@
 
 #include "delta/delta.h"
 
+#include "bench_main.h"
 #include "hopper_free_fall.h"
 #ifdef DELTA_HAVE_LIGGGHTS
 #include "liggghts_peer.h"
@@ -395,8 +396,6 @@ void SpheresPeer(benchmark::State& state) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("omp_num_procs", std::to_string(omp_get_num_procs()));
   const std::vector<std::int64_t> threads = threadCounts();
   // A fixed number of steps, so every thread count times the same steps (see the top).
@@ -445,9 +444,5 @@ int main(int argc, char** argv) {
         ->Iterations(particles == 100 ? 200 : 50)
         ->UseRealTime()
         ->Unit(benchmark::kMillisecond);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

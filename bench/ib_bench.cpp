@@ -26,6 +26,7 @@
 
 #include "delta/delta.h"
 
+#include "bench_main.h"
 #include "boundary_step.h"
 #include "omp_threads.h"
 
@@ -115,8 +116,6 @@ struct Family {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("omp_num_procs", std::to_string(omp_get_num_procs()));
   const std::vector<std::int64_t> threads = threadCounts();
   for (const char* mesh : {"armadillo", "fandisk"}) {
@@ -129,9 +128,5 @@ int main(int argc, char** argv) {
           ->UseRealTime()
           ->Unit(benchmark::kMillisecond);
   }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

@@ -18,6 +18,7 @@
 #include "delta/kernels/triangle_triangle.h"
 
 #include "../tests/kernels/triangle_pairs.h"
+#include "bench_main.h"
 
 #if defined(DELTA_HAVE_FCL)
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
@@ -147,8 +148,6 @@ void FclTriDist(benchmark::State& state) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("delta_default_isa",
                               delta::kernels::name(delta::kernels::defaultIsa()));
   benchmark::AddCustomContext("penalty_iterations",
@@ -170,9 +169,5 @@ int main(int argc, char** argv) {
                                    solver, isa)
           ->Unit(benchmark::kMicrosecond);
     }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

@@ -8,6 +8,8 @@
 
 #include "delta/delta.h"
 
+#include "bench_main.h"
+
 namespace {
 
 const std::string kElephant = std::string(DELTA_DATA_DIR) + "/meshes/refined_elephant.off";
@@ -67,11 +69,5 @@ BENCHMARK(LoadMillionTriangleStl)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

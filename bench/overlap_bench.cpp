@@ -29,7 +29,6 @@
 #include <vector>
 
 #include "delta/core/rotation.h"
-#include "delta/core/version.h"
 #include "delta/io/mesh_io.h"
 #include "delta/mesh/primitives.h"
 #include "delta/query/minimum_distance.h"
@@ -37,6 +36,7 @@
 #include "delta/query/query_mesh.h"
 #include "delta/query/self_intersections.h"
 
+#include "bench_main.h"
 #include "omp_threads.h"
 #ifdef DELTA_HAVE_CGAL
 #include "overlap_cgal.h"
@@ -248,14 +248,9 @@ const int registered = [] {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("delta_threads", "1");
 #ifdef DELTA_HAVE_CGAL
   benchmark::AddCustomContext("cgal_peer", "corefine_and_compute_intersection, Epick");
 #endif
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

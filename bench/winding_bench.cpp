@@ -24,7 +24,6 @@
 #include <vector>
 
 #include "delta/core/parallel.h"
-#include "delta/core/version.h"
 #include "delta/io/mesh_io.h"
 #include "delta/mesh/primitives.h"
 #include "delta/query/point_distance.h"
@@ -34,6 +33,7 @@
 // The pseudonormal sign itself (which the public queries refuse on a crossing mesh), for the
 // issue's reproduction only.
 #include "../src/query/detail/query_mesh_data.h"
+#include "bench_main.h"
 
 namespace {
 
@@ -201,11 +201,6 @@ const int registered = [] {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("delta_version", delta::version());
-  benchmark::AddCustomContext("delta_git_commit", delta::gitCommit());
   benchmark::AddCustomContext("delta_threads", std::to_string(delta::threadCount()));
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return delta::bench::runBenchmarks(argc, argv);
 }

@@ -621,54 +621,56 @@ MeshMeshScene meshMeshScene(const Mesh& mesh, double diagonal) {
           moved(mesh, overlapMotion)};
 }
 
-/// A row of Δ's: its build, query and memory, and its agreement with the first thread count.
-Row deltaMeshMeshRow(const std::string& name, int threads, double build, const QueryTime& time,
-                     const QueryMesh& a, const QueryMesh& b, double triangles, bool sameAsFirst,
-                     bool first) {
-  Row row = makeRow(name, "Δ", threads);
-  row.buildSeconds = build;
-  row.querySeconds = time.seconds;
-  row.queryRuns = time.runs;
-  row.bytesPerTriangle = static_cast<double>(a.memoryBytes() + b.memoryBytes()) / triangles;
-  row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
-  row.agreement = "reference";
-  if (!first) {
-    row.agreed = sameAsFirst;
-    row.agreement =
-        row.agreed ? "reference (= first thread count)" : "NO: differs from the first thread count";
-  }
-  return row;
-}
-
-/// W4a by Δ on `threads` threads: both meshes built once and the copy moved rigidly, as FCL's
-/// models are (the DEM case).
-Row deltaMinimumDistance(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
+/// A row of Δ's W4: both meshes prepared (timed) and the copy moved rigidly by `motion`, as
+/// FCL's models are (the DEM case), then `query(first, copy)` timed.
+template <class Query>
+Row deltaMeshMeshRow(const MeshMeshScene& scene, const std::string& name,
+                     const RigidTransform& motion, int threads, const Query& query) {
   std::optional<QueryMesh> a, b;
   const double build = secondsOf([&] {
     a.emplace(scene.mesh);
     b.emplace(scene.mesh);
   });
-  b->transform(scene.gapMotion);
+  b->transform(motion);
+  const QueryTime time = timeQuery([&] { query(*a, *b); });
+  Row row = makeRow(name, "Δ", threads);
+  row.buildSeconds = build;
+  row.querySeconds = time.seconds;
+  row.queryRuns = time.runs;
+  row.bytesPerTriangle = static_cast<double>(a->memoryBytes() + b->memoryBytes()) / scene.triangles;
+  row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
+  row.agreement = "reference";
+  return row;
+}
+
+/// A later thread count's row: whether it answered as the first did.
+void compareWithFirst(Row& row, bool same) {
+  row.agreed = same;
+  row.agreement =
+      same ? "reference (= first thread count)" : "NO: differs from the first thread count";
+}
+
+/// W4a by Δ on `threads` threads.
+Row deltaMinimumDistance(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
   cd::MinimumDistance minimum;
-  const QueryTime time = timeQuery([&] { minimum = cd::minimumDistance(*a, *b); });
-  Row row = deltaMeshMeshRow(scene.gapName, threads, build, time, *a, *b, scene.triangles,
-                             reference.made && minimum.distance == reference.minimum.distance,
-                             !reference.made);
+  Row row = deltaMeshMeshRow(
+      scene, scene.gapName, scene.gapMotion, threads,
+      [&](const QueryMesh& a, const QueryMesh& b) { minimum = cd::minimumDistance(a, b); });
   row.note = pairNote(minimum.distance, minimum.first, minimum.second);
-  if (!reference.made) reference.minimum = minimum;
+  if (reference.made)
+    compareWithFirst(row, minimum.distance == reference.minimum.distance);
+  else
+    reference.minimum = minimum;
   return row;
 }
 
 /// W4b by Δ on `threads` threads.
 Row deltaContacts(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
-  std::optional<QueryMesh> a, b;
-  const double build = secondsOf([&] {
-    a.emplace(scene.mesh);
-    b.emplace(scene.mesh);
-  });
-  b->transform(scene.overlapMotion);
   std::vector<delta::ContactPoint> contacts;
-  const QueryTime time = timeQuery([&] { contacts = cd::contacts(*a, *b, scene.epsilon); });
+  Row row = deltaMeshMeshRow(scene, scene.contactName, scene.overlapMotion, threads,
+                             [&](const QueryMesh& a, const QueryMesh& b) {
+                               contacts = cd::contacts(a, b, scene.epsilon);
+                             });
   std::vector<std::pair<std::uint32_t, std::uint32_t>> all, intersecting;
   std::size_t overlapping = 0;
   for (const delta::ContactPoint& contact : contacts) {
@@ -676,28 +678,36 @@ Row deltaContacts(const MeshMeshScene& scene, int threads, MeshMeshReference& re
     overlapping += contact.overlap ? 1 : 0;
     if (contact.distance == 0.0) intersecting.emplace_back(contact.first, contact.second);
   }
-  Row row = deltaMeshMeshRow(scene.contactName, threads, build, time, *a, *b, scene.triangles,
-                             reference.made && all == reference.contacts, !reference.made);
   row.note = "contacts " + withCommas(contacts.size()) + ", overlapping " +
              withCommas(overlapping) + ", intersecting pairs " + withCommas(intersecting.size());
-  if (!reference.made) reference.contacts = std::move(all);
+  if (reference.made)
+    compareWithFirst(row, all == reference.contacts);
+  else
+    reference.contacts = std::move(all);
   reference.intersecting = std::move(intersecting);
   return row;
 }
 
 #if defined(DELTA_HAVE_FCL)
-/// W4a by FCL, against Δ's answer; a disagreement is settled on both pairs exactly.
-Row fclMinimumDistance(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
-                       const MeshMeshReference& reference, MeshReport& report) {
-  const cd::MinimumDistance& delta = reference.minimum;
-  bench::FclMeshPair::Distance answer;
-  const QueryTime time = timeQuery([&] { answer = fcl.minimumDistance(scene.gapMotion); });
-  Row row = makeRow(scene.gapName, "FCL", 1);
+/// A row of FCL's (one thread: it has no parallel traversal): its build, query and memory.
+Row fclRow(const MeshMeshScene& scene, const std::string& name, const bench::FclMeshPair& fcl,
+           double build, const QueryTime& time) {
+  Row row = makeRow(name, "FCL", 1);
   row.buildSeconds = build;
   row.querySeconds = time.seconds;
   row.queryRuns = time.runs;
   row.bytesPerTriangle = static_cast<double>(fcl.memoryBytes()) / scene.triangles;
   row.memoryMethod = "heap growth over the build, both models";
+  return row;
+}
+
+/// W4a by FCL, against Δ's answer; a disagreement is settled on both pairs exactly.
+Row fclMinimumDistance(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
+                       const MeshMeshReference& reference, MeshReport& report) {
+  const cd::MinimumDistance& delta = reference.minimum;
+  bench::FclMeshPair::Distance answer;
+  Row row = fclRow(scene, scene.gapName, fcl, build,
+                   timeQuery([&] { answer = fcl.minimumDistance(scene.gapMotion); }));
   row.note = pairNote(answer.distance, answer.first, answer.second);
   const double difference = std::abs(answer.distance - delta.distance);
   row.agreed = difference <= scene.tolerance;
@@ -733,14 +743,9 @@ Row fclContacts(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double buil
                 const MeshMeshReference& reference, MeshReport& report) {
   const auto& intersecting = reference.intersecting;
   bench::FclMeshPair::Collision collision;
-  const QueryTime time =
-      timeQuery([&] { collision = fcl.collide(scene.overlapMotion, kFclMaxContacts); });
-  Row row = makeRow(scene.contactName, "FCL", 1);
-  row.buildSeconds = build;
-  row.querySeconds = time.seconds;
-  row.queryRuns = time.runs;
-  row.bytesPerTriangle = static_cast<double>(fcl.memoryBytes()) / scene.triangles;
-  row.memoryMethod = "heap growth over the build, both models";
+  Row row =
+      fclRow(scene, scene.contactName, fcl, build,
+             timeQuery([&] { collision = fcl.collide(scene.overlapMotion, kFclMaxContacts); }));
   std::vector<std::pair<std::uint32_t, std::uint32_t>> onlyFcl, onlyDelta;
   std::set_difference(collision.pairs.begin(), collision.pairs.end(), intersecting.begin(),
                       intersecting.end(), std::back_inserter(onlyFcl));
