@@ -51,9 +51,9 @@ delta::TriangleSoA flattenTriangles(const std::vector<Triangle>& triangles) {
 
 const PairSet& demPairs() {
   static const PairSet set = [] {
-    using delta::testing::PairFamily;
-    const auto near = delta::testing::makePairs(PairFamily::NearContact, kPairs, 2024);
-    const auto far = delta::testing::makePairs(PairFamily::Far, kPairs / 4, 2024);
+    using delta::test::PairFamily;
+    const auto near = delta::test::makePairs(PairFamily::NearContact, kPairs, 2024);
+    const auto far = delta::test::makePairs(PairFamily::Far, kPairs / 4, 2024);
     PairSet s;
     for (std::size_t i = 0; i < kPairs; ++i) {
       const auto& pair = i % 4 == 3 ? far[i / 4] : near[i];

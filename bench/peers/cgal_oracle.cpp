@@ -8,15 +8,15 @@
 namespace delta::bench {
 
 double exactDistance(const Vec3& p, const Triangle& triangle) {
-  return std::sqrt(testing::exactSquaredDistance(p, triangle));
+  return std::sqrt(test::exactSquaredDistance(p, triangle));
 }
 
 double exactDistance(const Triangle& first, const Triangle& second) {
-  return std::sqrt(testing::exactSquaredDistance(first, second));
+  return std::sqrt(test::exactSquaredDistance(first, second));
 }
 
 bool exactIntersect(const Triangle& first, const Triangle& second) {
-  return testing::exactIntersect(first, second);
+  return test::exactIntersect(first, second);
 }
 
 }  // namespace delta::bench

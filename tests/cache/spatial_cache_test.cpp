@@ -29,7 +29,7 @@
 namespace delta {
 namespace {
 
-using delta::testing::scaledCount;
+using delta::test::scaledCount;
 
 const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 

@@ -26,7 +26,7 @@ namespace {
 
 using contactdetection::Overlap;
 using contactdetection::OverlapOptions;
-using delta::testing::kSlowBuild;
+using delta::test::kSlowBuild;
 
 constexpr double kDensity = 2500.0;
 

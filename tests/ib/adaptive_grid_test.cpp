@@ -31,7 +31,7 @@ namespace {
 const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
 /// The brute-force checks visit every vertex, or every sixteenth in the (slower) sanitizer build.
-constexpr std::size_t kEveryVertex = testing::kSlowBuild ? 16 : 1;
+constexpr std::size_t kEveryVertex = test::kSlowBuild ? 16 : 1;
 
 /// The brute-force reference at a point: the exact minimum of closestPointOnTriangle over all
 /// triangles, signed by the generalized winding number.
@@ -202,7 +202,7 @@ TEST(AdaptiveGrid, InvalidValuesAreRefusedNotReplacedByDefaults) {
 
 TEST(AdaptiveGrid, BuildStopsWhenItsCancelScopeAsks) {
   const QueryMesh sphere(primitives::icosphere(4));
-  const GridOptions options{.levels = testing::kSlowBuild ? 6 : 7};
+  const GridOptions options{.levels = test::kSlowBuild ? 6 : 7};
   const AdaptiveGrid reference(sphere, options);
   // A scope that never stops: the same grid, polled several times, on this thread only.
   const pthread_t owner = pthread_self();
@@ -334,7 +334,7 @@ TEST(AdaptiveGrid, MovingBoundaryGivesTheGridOfItsNewPosition) {
       EXPECT_GT(statistics.cellsCreated + statistics.cellsRemoved, 0u);
       // A new grid to compare with after every step; under the sanitizers (where each costs
       // seconds) after the first and the last, which still sees the five updates in between.
-      if (!testing::kSlowBuild || t == 0 || t == 5) expectSameAsNewGrid(grid);
+      if (!test::kSlowBuild || t == 0 || t == 5) expectSameAsNewGrid(grid);
     }
     EXPECT_EQ(total.queries, queries);
     EXPECT_GE(total.seconds, total.querySeconds);

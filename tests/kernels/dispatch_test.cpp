@@ -19,13 +19,13 @@
 namespace delta::kernels {
 namespace {
 
-using testing::kAllFamilies;
-using testing::makeBatch;
-using testing::makePairs;
-using testing::name;
-using testing::PairBatch;
-using testing::pairSize;
-using testing::pasteable;
+using test::kAllFamilies;
+using test::makeBatch;
+using test::makePairs;
+using test::name;
+using test::PairBatch;
+using test::pairSize;
+using test::pasteable;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
@@ -80,7 +80,7 @@ TEST(KernelDispatch, EveryIsaPenaltyMatchesTheScalarReference) {
     std::size_t pairs = 0, flagDiffers = 0, bothConverged = 0;
     double worstUlps = 0.0;
     for (auto family : kAllFamilies) {
-      const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(2000), 31));
+      const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(2000), 31));
       PairResults reference(batch.size()), results(batch.size());
       penaltyDistances(batch.firstSoa, batch.secondSoa, reference, Isa::Scalar);
       penaltyDistances(batch.firstSoa, batch.secondSoa, results, isa);
@@ -123,7 +123,7 @@ TEST(KernelDispatch, EveryIsaHybridMatchesTheScalarReference) {
     if (isa == Isa::Scalar) continue;
     double worst = 0.0;
     for (auto family : kAllFamilies) {
-      const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(2000), 37));
+      const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(2000), 37));
       PairResults reference(batch.size()), results(batch.size());
       hybridDistances(batch.firstSoa, batch.secondSoa, reference, Isa::Scalar);
       hybridDistances(batch.firstSoa, batch.secondSoa, results, isa);
@@ -162,7 +162,7 @@ void expectMatchesBruteForce(const PairResults& results, std::size_t i, const Tr
 // Batches of 1, 7, 8, 9, 17 and 33 pairs (partial registers on every ISA): every pair is
 // computed, nothing beyond the last pair is written, and the statistics count real pairs only.
 TEST(KernelDispatch, BatchesOfAnySizeWriteExactlyTheirPairs) {
-  const auto pairs = makePairs(testing::PairFamily::NearContact, 40, 41);
+  const auto pairs = makePairs(test::PairFamily::NearContact, 40, 41);
   for (const std::size_t count : {1, 7, 8, 9, 17, 33}) {
     const PairBatch batch = makeBatch({pairs.begin(), pairs.begin() + count});
     for (Solver solver : {Solver::BruteForce, Solver::Penalty, Solver::Hybrid})
@@ -194,7 +194,7 @@ TEST(KernelDispatch, BatchesOfAnySizeWriteExactlyTheirPairs) {
 // One triangle against block[begin, end) for ranges starting anywhere, ending at the block's end
 // (the last register then reaches past the padded streams) or before it.
 TEST(KernelDispatch, OneAgainstAnyRangeOfABlock) {
-  const auto pairs = makePairs(testing::PairFamily::NearContact, 19, 43);
+  const auto pairs = makePairs(test::PairFamily::NearContact, 19, 43);
   const PairBatch batch = makeBatch(pairs);  // 19 triangles: padded to 24
   const Triangle& one = batch.first[3];
   for (Solver solver : {Solver::BruteForce, Solver::Penalty, Solver::Hybrid})
@@ -215,7 +215,7 @@ TEST(KernelDispatch, OneAgainstAnyRangeOfABlock) {
 }
 
 TEST(KernelDispatch, ResultsCapacityLimitsTheBatch) {
-  const PairBatch batch = makeBatch(makePairs(testing::PairFamily::Random, 20, 47));
+  const PairBatch batch = makeBatch(makePairs(test::PairFamily::Random, 20, 47));
   PairResults results(5);
   for (Solver solver : {Solver::BruteForce, Solver::Penalty, Solver::Hybrid}) {
     const BatchStatistics statistics = distances(solver, batch.firstSoa, batch.secondSoa, results);
@@ -231,8 +231,8 @@ TEST(KernelDispatch, ResultsCapacityLimitsTheBatch) {
 }
 
 TEST(KernelDispatch, UnequalBlocksPairUpToTheShorter) {
-  const PairBatch a = makeBatch(makePairs(testing::PairFamily::NearContact, 12, 53));
-  const PairBatch b = makeBatch(makePairs(testing::PairFamily::NearContact, 9, 59));
+  const PairBatch a = makeBatch(makePairs(test::PairFamily::NearContact, 12, 53));
+  const PairBatch b = makeBatch(makePairs(test::PairFamily::NearContact, 9, 59));
   PairResults results(16);
   EXPECT_EQ(hybridDistances(a.firstSoa, b.secondSoa, results).pairs, 9u);
   for (std::size_t i = 0; i < 9; ++i)

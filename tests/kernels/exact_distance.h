@@ -42,7 +42,7 @@
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 
-namespace delta::testing {
+namespace delta::test {
 
 /// The filtered oracle's distance d is within kCertifiedFraction × (size + d) of the exact
 /// distance; the tests' tolerance, 1e-12 × size, is 500 times coarser for near pairs (and 10 times
@@ -309,7 +309,7 @@ inline double cgalTriangleSquaredDistance(const Triangle& first, const Triangle&
   return CGAL::to_double(CGAL::squared_distance(triangle(first), triangle(second)));
 }
 
-}  // namespace delta::testing
+}  // namespace delta::test
 
 #if defined(__clang__)
 #pragma clang diagnostic pop

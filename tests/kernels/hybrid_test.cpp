@@ -27,14 +27,14 @@
 namespace delta::kernels {
 namespace {
 
-using testing::kAllFamilies;
-using testing::makeBatch;
-using testing::makePairs;
-using testing::name;
-using testing::PairBatch;
-using testing::PairFamily;
-using testing::pairSize;
-using testing::pasteable;
+using test::kAllFamilies;
+using test::makeBatch;
+using test::makePairs;
+using test::name;
+using test::PairBatch;
+using test::PairFamily;
+using test::pairSize;
+using test::pasteable;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 constexpr double kTolerance = 1e-12;  // the contract, relative to the pair's size
@@ -132,7 +132,7 @@ TEST(Hybrid, MatchesTheBruteForceOnEveryFamily) {
               "max |Δd|/L", "max |Δp|/L", "unique");
   for (auto family : kAllFamilies) {
     const FamilyReport r =
-        checkAgainstBruteForce(family, testing::scaledCount(8000), 79, defaultIsa());
+        checkAgainstBruteForce(family, test::scaledCount(8000), 79, defaultIsa());
     const double pairs = static_cast<double>(r.pairs);
     std::printf("%-20s %8zu %9.2f%% %9.2f%% %12.2e %12.2e %8zu\n", name(family), r.pairs,
                 100 * static_cast<double>(r.rechecked) / pairs,
@@ -154,25 +154,25 @@ TEST(Hybrid, EveryIsaMatchesTheBruteForce) {
   for (Isa isa : supportedIsas())
     for (auto family : kAllFamilies) {
       SCOPED_TRACE(name(isa));
-      checkAgainstBruteForce(family, testing::scaledCount(1000), 83, isa);
+      checkAgainstBruteForce(family, test::scaledCount(1000), 83, isa);
     }
 }
 
 TEST(Hybrid, MatchesTheExactOracle) {
   for (auto family : kAllFamilies) {
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(200), 89));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(200), 89));
     PairResults results(batch.size());
     hybridDistances(batch.firstSoa, batch.secondSoa, results);
     for (std::size_t i = 0; i < batch.size(); ++i) {
       const Triangle& a = batch.first[i];
       const Triangle& b = batch.second[i];
       const double size = pairSize(a, b);
-      const double exact = std::sqrt(testing::exactSquaredDistance(a, b));
+      const double exact = std::sqrt(test::exactSquaredDistance(a, b));
       EXPECT_NEAR(results.distance(i), exact, kTolerance * size)
           << name(family) << " pair " << i << "\n"
           << pasteable(a, b);
       // Touching counts as intersecting; a pair reported intersecting is within rounding of it.
-      if (testing::exactIntersect(a, b)) {
+      if (test::exactIntersect(a, b)) {
         EXPECT_TRUE(results.intersect(i)) << pasteable(a, b);
       }
       if (results.intersect(i)) {
@@ -184,7 +184,7 @@ TEST(Hybrid, MatchesTheExactOracle) {
 
 TEST(Hybrid, IntersectAgreesWithTrianglesIntersect) {
   for (auto family : kAllFamilies) {
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(2000), 97));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(2000), 97));
     PairResults results(batch.size());
     hybridDistances(batch.firstSoa, batch.secondSoa, results);
     for (std::size_t i = 0; i < batch.size(); ++i)
@@ -196,7 +196,7 @@ TEST(Hybrid, IntersectAgreesWithTrianglesIntersect) {
 
 TEST(Hybrid, SymmetricInTheOrderOfThePair) {
   for (auto family : kAllFamilies) {
-    const auto pairs = makePairs(family, testing::scaledCount(1000), 101);
+    const auto pairs = makePairs(family, test::scaledCount(1000), 101);
     std::vector<std::pair<Triangle, Triangle>> swapped;
     for (const auto& [a, b] : pairs)
       swapped.push_back({b, a});
@@ -219,7 +219,7 @@ TEST(Hybrid, SymmetricInTheOrderOfThePair) {
 TEST(Hybrid, IntersectingPairsAreConfirmedWithoutTheBruteForce) {
   // Edges piercing faces clearly: the first stage certifies them (p = q on both triangles).
   const PairBatch batch =
-      makeBatch(makePairs(PairFamily::EdgeThroughFace, testing::scaledCount(2000), 103));
+      makeBatch(makePairs(PairFamily::EdgeThroughFace, test::scaledCount(2000), 103));
   PairResults results(batch.size());
   const BatchStatistics statistics = hybridDistances(batch.firstSoa, batch.secondSoa, results);
   std::size_t intersecting = 0;
@@ -227,8 +227,8 @@ TEST(Hybrid, IntersectingPairsAreConfirmedWithoutTheBruteForce) {
     if (!results.intersect(i)) continue;
     ++intersecting;
     const double slack = 1e-12 * pairSize(batch.first[i], batch.second[i]);
-    EXPECT_LE(std::sqrt(testing::exactSquaredDistance(results.p(i), batch.first[i])), slack);
-    EXPECT_LE(std::sqrt(testing::exactSquaredDistance(results.p(i), batch.second[i])), slack);
+    EXPECT_LE(std::sqrt(test::exactSquaredDistance(results.p(i), batch.first[i])), slack);
+    EXPECT_LE(std::sqrt(test::exactSquaredDistance(results.p(i), batch.second[i])), slack);
   }
   EXPECT_GT(intersecting, batch.size() / 2);
   // The T-shaped tenth (an edge ending exactly on the face) touches: only those may fall back.
@@ -264,8 +264,8 @@ namespace {
 // The DEM case: user threads call the hybrid at once on shared, const triangle blocks (each with
 // its own results). Every thread gets the serial answer, bit for bit; run under TSan in CI.
 TEST(Hybrid, ManyThreadsShareTheBlocks) {
-  const testing::PairBatch batch =
-      testing::makeBatch(testing::makePairs(testing::PairFamily::NearContact, 999, 5));
+  const test::PairBatch batch =
+      test::makeBatch(test::makePairs(test::PairFamily::NearContact, 999, 5));
   PairResults serial(batch.size());
   hybridDistances(batch.firstSoa, batch.secondSoa, serial);
   std::vector<PairResults> results(4, PairResults(batch.size()));

@@ -11,7 +11,7 @@
 #include "delta/mesh/mesh.h"
 #include "delta/mesh/triangle_soa.h"
 
-namespace delta::testing {
+namespace delta::test {
 
 /// The triangles as a mesh of disjoint triangles (3 vertices each, in order), flattened.
 inline TriangleSoA flattenTriangles(const std::vector<Triangle>& triangles) {
@@ -44,4 +44,4 @@ inline PairBatch makeBatch(const std::vector<std::pair<Triangle, Triangle>>& pai
   return batch;
 }
 
-}  // namespace delta::testing
+}  // namespace delta::test

@@ -22,14 +22,14 @@
 namespace delta::kernels {
 namespace {
 
-using testing::kAllFamilies;
-using testing::makeBatch;
-using testing::makePairs;
-using testing::name;
-using testing::PairBatch;
-using testing::PairFamily;
-using testing::pairSize;
-using testing::pasteable;
+using test::kAllFamilies;
+using test::makeBatch;
+using test::makePairs;
+using test::name;
+using test::PairBatch;
+using test::PairFamily;
+using test::pairSize;
+using test::pasteable;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
@@ -40,13 +40,13 @@ double rounding(const PairResults& r, std::size_t i, double size) {
 
 /// Whether x lies on the solid triangle t, to `tolerance` (distance).
 bool onTriangle(const Vec3& x, const Triangle& t, double tolerance) {
-  return std::sqrt(testing::exactSquaredDistance(x, t)) <= tolerance;
+  return std::sqrt(test::exactSquaredDistance(x, t)) <= tolerance;
 }
 
 TEST(Penalty, ErrorBoundIsATrueBoundAndConvergedMeansWithinTolerance) {
   for (auto family : kAllFamilies) {
     SCOPED_TRACE(name(family));
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(3000), 61));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(3000), 61));
     PairResults results(batch.size());
     const BatchStatistics statistics = penaltyDistances(batch.firstSoa, batch.secondSoa, results);
     std::size_t unconverged = 0;
@@ -80,7 +80,7 @@ TEST(Penalty, ClosestPointsLieOnTheTriangles) {
   for (auto family : {PairFamily::Random, PairFamily::NearContact, PairFamily::Sliver,
                       PairFamily::ZeroArea, PairFamily::HugeOffset}) {
     SCOPED_TRACE(name(family));
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(300), 67));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(300), 67));
     PairResults results(batch.size());
     penaltyDistances(batch.firstSoa, batch.secondSoa, results);
     for (std::size_t i = 0; i < batch.size(); ++i) {
@@ -101,12 +101,11 @@ TEST(Penalty, ClosestPointsLieOnTheTriangles) {
 TEST(Penalty, BoundHoldsAgainstTheExactOracle) {
   for (auto family : kAllFamilies) {
     SCOPED_TRACE(name(family));
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(150), 71));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(150), 71));
     PairResults results(batch.size());
     penaltyDistances(batch.firstSoa, batch.secondSoa, results);
     for (std::size_t i = 0; i < batch.size(); ++i) {
-      const double exact =
-          std::sqrt(testing::exactSquaredDistance(batch.first[i], batch.second[i]));
+      const double exact = std::sqrt(test::exactSquaredDistance(batch.first[i], batch.second[i]));
       const double size = pairSize(batch.first[i], batch.second[i]);
       const double error = results.distance(i) - exact;
       EXPECT_GE(error, -rounding(results, i, size));
@@ -129,7 +128,7 @@ TEST(Penalty, ErrorDistributionPerFamily) {
   std::printf("%-20s %9s %9s %9s %9s %9s %9s\n", "family", "converged", "p50", "p90", "p99", "max",
               "max(conv)");
   for (auto family : kAllFamilies) {
-    const PairBatch batch = makeBatch(makePairs(family, testing::scaledCount(5000), 73));
+    const PairBatch batch = makeBatch(makePairs(family, test::scaledCount(5000), 73));
     PairResults results(batch.size());
     penaltyDistances(batch.firstSoa, batch.secondSoa, results);
     std::vector<double> errors;

@@ -96,14 +96,14 @@ void check(Isa isa, const std::vector<Triangle>& eight, const Vec3& p, Checked& 
 TEST(PointLanes, BoundsNeverExceedTheExactKernelOnEveryFamily) {
   for (Isa isa : supportedIsas()) {
     Checked checked;
-    for (const auto family : testing::kAllFamilies) {
-      testing::PairRandom random(23);
-      const auto pairs = testing::makePairs(family, testing::scaledCount(800), 5);
+    for (const auto family : test::kAllFamilies) {
+      test::PairRandom random(23);
+      const auto pairs = test::makePairs(family, test::scaledCount(800), 5);
       for (std::size_t first = 0; first + 8 <= pairs.size(); first += 8) {
         std::vector<Triangle> eight;
         for (std::size_t i = first; i < first + 8; ++i)
           eight.push_back(pairs[i].first);
-        const double size = testing::pairSize(pairs[first].first, pairs[first].second);
+        const double size = test::pairSize(pairs[first].first, pairs[first].second);
         // Vertices, the other triangle's vertices (touching, coplanar), points near and far.
         const Vec3 queries[] = {eight[0].a,
                                 (eight[1].b + eight[1].c) * 0.5,
@@ -114,7 +114,7 @@ TEST(PointLanes, BoundsNeverExceedTheExactKernelOnEveryFamily) {
                                 eight[4].a + random.inCube(0.01 * size),
                                 eight[5].b + random.inCube(30 * size)};
         for (const Vec3& p : queries)
-          check(isa, eight, p, checked, testing::name(family));
+          check(isa, eight, p, checked, test::name(family));
       }
     }
     std::printf(
@@ -161,7 +161,7 @@ TEST(PointLanes, SinglePrecisionVerticesWidenTheBounds) {
   // floats (a float there is off by up to 3·10⁻⁵), and points 0.1 to 3 from one of them: the
   // float triangles' squared distances are off by up to 2·d·δ, several times the margin, and only
   // the widening by δ keeps the bounds on their sides. (With δ = 0 this fails.)
-  testing::PairRandom random(59);
+  test::PairRandom random(59);
   for (Isa isa : supportedIsas()) {
     Checked checked;
     for (int round = 0; round < 300; ++round) {
@@ -201,7 +201,7 @@ TEST(PointLanes, NeedlesInAnyDirectionStayBelow) {
   // normals carry rounding of ε/sin α ≈ 2e-5 in direction, and points above their faces: a
   // bound from that normal would be off by far more than any margin, which is why such lanes
   // get only their boxes' bound.
-  testing::PairRandom random(41);
+  test::PairRandom random(41);
   for (Isa isa : supportedIsas()) {
     Checked checked;
     for (int round = 0; round < 200; ++round) {

@@ -105,12 +105,12 @@ TEST(PointTriangle, PointTriangleIsAPoint) {
 TEST(PointTriangle, SliverFaceIsExact) {
   // Height 1e-10 of the length: a plain cross product tilts this face by 1e-6 rad.
   const Triangle needle{{0.1, 0.2, 0.3}, {1.1, 0.7, -0.4}, {0.6, 0.45 + 1e-10, -0.05}};
-  testing::PairRandom random(3);
+  test::PairRandom random(3);
   for (int i = 0; i < 2000; ++i) {
     const double u = random.uniform(), v = random.uniform() * (1 - u);
     const Vec3 p = fromBarycentrics(needle, u, v) + random.unitVector() * random.uniform(0, 1e-3);
     const PointTriangleResult r = closestPointOnTriangle(p, needle);
-    const double exact = std::sqrt(testing::exactSquaredDistance(p, needle));
+    const double exact = std::sqrt(test::exactSquaredDistance(p, needle));
     ASSERT_NEAR(std::sqrt(r.distanceSquared), exact, 1e-15) << pasteablePoint(p, needle);
   }
 }
@@ -127,12 +127,12 @@ TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
 /// The vertices and centroid of B, and random points around A, against the exact distance, on
 /// every family; the closest point must lie on the triangle and match its barycentrics.
 TEST(PointTriangle, MatchesExactDistanceOnEveryFamily) {
-  testing::PairRandom random(17);
-  for (const auto family : testing::kAllFamilies) {
+  test::PairRandom random(17);
+  for (const auto family : test::kAllFamilies) {
     double worst = 0.0;
     int failures = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 9)) {
-      const double size = testing::pairSize(a, b);
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(1000), 9)) {
+      const double size = test::pairSize(a, b);
       const Vec3 queries[] = {b.a,
                               b.b,
                               b.c,
@@ -149,11 +149,11 @@ TEST(PointTriangle, MatchesExactDistanceOnEveryFamily) {
         ASSERT_TRUE(std::isfinite(r.distanceSquared) && isFinite(r.closest) && std::isfinite(r.u) &&
                     std::isfinite(r.v))
             << pasteablePoint(p, a);
-        const double exact = std::sqrt(testing::exactSquaredDistance(p, a));
+        const double exact = std::sqrt(test::exactSquaredDistance(p, a));
         const double error = std::fabs(std::sqrt(r.distanceSquared) - exact) / size;
         worst = std::max(worst, error);
         const double rounding = 4 * kEpsilon * std::max(maxAbs(p), maxAbs(r.closest));
-        const double off = std::sqrt(testing::exactSquaredDistance(r.closest, a));
+        const double off = std::sqrt(test::exactSquaredDistance(r.closest, a));
         const double consistency = std::fabs(distance(p, r.closest) - std::sqrt(r.distanceSquared));
         const double reconstruction = distance(fromBarycentrics(a, r.u, r.v), r.closest);
         const bool ok = error <= 1e-12 && off <= 1e-12 * size + rounding &&
@@ -161,14 +161,14 @@ TEST(PointTriangle, MatchesExactDistanceOnEveryFamily) {
                         r.u + r.v <= 1 + 4 * kEpsilon &&
                         (!wellShaped || reconstruction <= 1e-12 * size + rounding);
         if (!ok && failures++ < 3)
-          ADD_FAILURE() << testing::name(family) << ": error " << error << ", off " << off
+          ADD_FAILURE() << test::name(family) << ": error " << error << ", off " << off
                         << ", |p-closest| vs d " << consistency << ", u " << r.u << ", v " << r.v
                         << ", reconstruction " << reconstruction << " for\n"
                         << pasteablePoint(p, a);
       }
     }
     std::printf("[ stats    ] %-20s point-triangle: max |d - exact| / size = %.3g\n",
-                testing::name(family), worst);
+                test::name(family), worst);
   }
 }
 

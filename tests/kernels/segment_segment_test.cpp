@@ -13,8 +13,8 @@
 namespace delta::kernels {
 namespace {
 
-using testing::exactSquaredDistance;
-using testing::PairRandom;
+using test::exactSquaredDistance;
+using test::PairRandom;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
@@ -131,7 +131,7 @@ TEST(SegmentSegment, NearParallelSegmentsAreAccurate) {
   for (int i = 0; i < 20000; ++i) {
     const Vec3 p0 = random.inCube(1), d1 = random.unitVector() * random.uniform(0.1, 1);
     const double angle = std::pow(10.0, -random.uniform(0, 16));
-    const Vec3 d2 = (d1 + testing::detail::orthogonal(normalized(d1)) * (length(d1) * angle)) *
+    const Vec3 d2 = (d1 + test::detail::orthogonal(normalized(d1)) * (length(d1) * angle)) *
                     (random.below(2) == 0 ? random.uniform(0.2, 2) : -random.uniform(0.2, 2));
     const Vec3 q0 = p0 + d1 * random.uniform(-1.5, 1.5) + random.inCube(1e-3 * random.uniform());
     const Vec3 p1 = p0 + d1, q1 = q0 + d2;
@@ -150,17 +150,17 @@ TEST(SegmentSegment, NearParallelSegmentsAreAccurate) {
 
 /// Every edge pair of every family's triangle pairs, against the exact distance.
 TEST(SegmentSegment, EdgesOfEveryFamilyMatchExactDistance) {
-  for (const auto family : testing::kAllFamilies) {
+  for (const auto family : test::kAllFamilies) {
     double worst = 0.0;
     int failures = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(600), 5)) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(600), 5)) {
       const Vec3 va[3] = {a.a, a.b, a.c}, vb[3] = {b.a, b.b, b.c};
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
           const Vec3 &p0 = va[i], &p1 = va[(i + 1) % 3], &q0 = vb[j], &q1 = vb[(j + 1) % 3];
           const auto r = closestPointsOnSegments(p0, p1, q0, q1);
           ASSERT_TRUE(std::isfinite(r.distanceSquared) && isFinite(r.p) && isFinite(r.q));
-          const double size = testing::pairSize(a, b);
+          const double size = test::pairSize(a, b);
           const double exact = std::sqrt(exactSquaredDistance(p0, p1, q0, q1));
           const double error = std::fabs(std::sqrt(r.distanceSquared) - exact) / size;
           worst = std::max(worst, error);
@@ -173,7 +173,7 @@ TEST(SegmentSegment, EdgesOfEveryFamilyMatchExactDistance) {
                           onP <= 1e-12 * size + rounding && onQ <= 1e-12 * size + rounding &&
                           consistency <= 1e-12 * size + 2 * rounding;
           if (!ok && failures++ < 3)
-            ADD_FAILURE() << testing::name(family) << ": error " << error << ", s " << r.s << ", t "
+            ADD_FAILURE() << test::name(family) << ": error " << error << ", s " << r.s << ", t "
                           << r.t << ", off p " << onP << ", off q " << onQ << ", |p-q| vs d "
                           << consistency << " for\n"
                           << pasteableSegments(p0, p1, q0, q1);
@@ -181,16 +181,16 @@ TEST(SegmentSegment, EdgesOfEveryFamilyMatchExactDistance) {
       }
     }
     std::printf("[ stats    ] %-20s edge pairs: max |d - exact| / size = %.3g\n",
-                testing::name(family), worst);
+                test::name(family), worst);
   }
 }
 
 TEST(SegmentSegment, SymmetricInItsArguments) {
-  for (const auto& [a, b] : testing::makePairs(testing::PairFamily::ParallelEdges, 2000, 3)) {
+  for (const auto& [a, b] : test::makePairs(test::PairFamily::ParallelEdges, 2000, 3)) {
     const auto r = closestPointsOnSegments(a.a, a.b, b.a, b.b);
     const auto swapped = closestPointsOnSegments(b.a, b.b, a.a, a.b);
     EXPECT_NEAR(std::sqrt(r.distanceSquared), std::sqrt(swapped.distanceSquared),
-                1e-12 * testing::pairSize(a, b))
+                1e-12 * test::pairSize(a, b))
         << pasteableSegments(a.a, a.b, b.a, b.b);
   }
 }

@@ -120,18 +120,18 @@ TEST(SphereContact, ZeroAreaTriangles) {
 /// Sphere–triangle gap is the point–triangle distance minus the radius, on every family
 /// (centres at the other triangle's vertices), never NaN, and p lies on the sphere.
 TEST(SphereContact, SphereTriangleMatchesExactDistanceOnEveryFamily) {
-  for (const auto family : testing::kAllFamilies) {
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(300), 13)) {
-      const double size = testing::pairSize(a, b);
+  for (const auto family : test::kAllFamilies) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(300), 13)) {
+      const double size = test::pairSize(a, b);
       for (const Vec3& centre : {b.a, b.b, b.c}) {
         const Sphere sphere{centre, 0.1 * size};
         const auto r = sphereTriangle(sphere, a);
-        ASSERT_TRUE(finite(r)) << testing::pasteable(a, b);
-        const double exact = std::sqrt(testing::exactSquaredDistance(centre, a));
+        ASSERT_TRUE(finite(r)) << test::pasteable(a, b);
+        const double exact = std::sqrt(test::exactSquaredDistance(centre, a));
         const double rounding = 4 * std::numeric_limits<double>::epsilon() * maxAbs(centre);
         EXPECT_NEAR(r.gap, exact - sphere.radius, 1e-12 * size + rounding)
-            << testing::name(family) << "\n"
-            << testing::pasteable(a, b);
+            << test::name(family) << "\n"
+            << test::pasteable(a, b);
         EXPECT_NEAR(length(r.normal), 1.0, 1e-14);
         EXPECT_NEAR(distance(r.p, centre), sphere.radius, 1e-12 * size + rounding);
         EXPECT_EQ(r.overlap, r.gap < 0);

@@ -24,7 +24,7 @@
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 
-namespace delta::testing {
+namespace delta::test {
 
 enum class PairFamily {
   Random,               ///< vertices uniform in two overlapping cubes: about one in nine intersect
@@ -496,4 +496,4 @@ inline std::vector<std::pair<Triangle, Triangle>> makePairs(PairFamily family, s
   return pairs;
 }
 
-}  // namespace delta::testing
+}  // namespace delta::test

@@ -17,12 +17,12 @@
 namespace delta::kernels {
 namespace {
 
-using testing::exactIntersect;
-using testing::exactSquaredDistance;
-using testing::name;
-using testing::PairFamily;
-using testing::pairSize;
-using testing::pasteable;
+using test::exactIntersect;
+using test::exactSquaredDistance;
+using test::name;
+using test::PairFamily;
+using test::pairSize;
+using test::pasteable;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 /// The accuracy every result is held to, relative to the pair's size (its longest edge).
@@ -273,10 +273,10 @@ void printStats(const char* what, const FamilyStats& s, std::size_t count) {
 }
 
 TEST(TriangleDistance, MatchesExactOracleOnEveryFamily) {
-  const std::size_t count = testing::scaledCount(3000);
-  for (const PairFamily family : testing::kAllFamilies) {
+  const std::size_t count = test::scaledCount(3000);
+  for (const PairFamily family : test::kAllFamilies) {
     FamilyStats stats;
-    for (const auto& [a, b] : testing::makePairs(family, count, 2024))
+    for (const auto& [a, b] : test::makePairs(family, count, 2024))
       checkAgainstOracle(a, b, name(family), stats);
     printStats(name(family), stats, count);
   }
@@ -286,31 +286,30 @@ TEST(TriangleDistance, MatchesExactOracleOnEveryFamily) {
 /// 15 candidates against CGAL's own triangle–triangle distance (non-degenerate pairs: both are
 /// exact values rounded once, so they must be the same double).
 TEST(TriangleDistance, ExactOracleAgreesWithRationalArithmeticAndCgal) {
-  for (const PairFamily family : testing::kAllFamilies) {
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(100), 555)) {
-      const double rational = testing::exactSquaredDistanceRational(a, b);
+  for (const PairFamily family : test::kAllFamilies) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(100), 555)) {
+      const double rational = test::exactSquaredDistanceRational(a, b);
       const double filtered = exactSquaredDistance(a, b);
       const double d = std::sqrt(rational);
       EXPECT_LE(std::fabs(std::sqrt(filtered) - d),
-                1.01 * testing::kCertifiedFraction * (pairSize(a, b) + d))
+                1.01 * test::kCertifiedFraction * (pairSize(a, b) + d))
           << name(family) << "\n"
           << pasteable(a, b);
       // and its point–triangle and segment–segment parts
       const double pointRational =
-          CGAL::to_double(testing::exact_detail::pointTriangle<testing::exact_detail::Rational>(
-              b.a, a, testing::exact_detail::degenerate(a)));
+          CGAL::to_double(test::exact_detail::pointTriangle<test::exact_detail::Rational>(
+              b.a, a, test::exact_detail::degenerate(a)));
       EXPECT_LE(std::fabs(std::sqrt(exactSquaredDistance(b.a, a)) - std::sqrt(pointRational)),
-                1.01 * testing::kCertifiedFraction * (pairSize(a, b) + std::sqrt(pointRational)));
-      const double edgeRational =
-          CGAL::to_double(testing::exact_detail::segmentSegment<testing::exact_detail::Rational>(
-              a.a, a.b, b.b, b.c));
+                1.01 * test::kCertifiedFraction * (pairSize(a, b) + std::sqrt(pointRational)));
+      const double edgeRational = CGAL::to_double(
+          test::exact_detail::segmentSegment<test::exact_detail::Rational>(a.a, a.b, b.b, b.c));
       EXPECT_LE(
           std::fabs(std::sqrt(exactSquaredDistance(a.a, a.b, b.b, b.c)) - std::sqrt(edgeRational)),
-          1.01 * testing::kCertifiedFraction * (pairSize(a, b) + std::sqrt(edgeRational)));
+          1.01 * test::kCertifiedFraction * (pairSize(a, b) + std::sqrt(edgeRational)));
       const double thin = 1e-3 * pairSize(a, b) * pairSize(a, b);
       if (a.area() > thin && b.area() > thin) {
-        EXPECT_EQ(rational, testing::cgalTriangleSquaredDistance(a, b)) << name(family) << "\n"
-                                                                        << pasteable(a, b);
+        EXPECT_EQ(rational, test::cgalTriangleSquaredDistance(a, b)) << name(family) << "\n"
+                                                                     << pasteable(a, b);
       }
     }
   }
@@ -319,15 +318,14 @@ TEST(TriangleDistance, ExactOracleAgreesWithRationalArithmeticAndCgal) {
 /// 10^5 random pairs in CI (5·10^4 Random + 5·10^4 NearContact). Set DELTA_LONG_ORACLE=N to run N
 /// of each instead, e.g. DELTA_LONG_ORACLE=5000000 for 10^7 pairs (about 3 minutes).
 TEST(TriangleDistance, RandomPairsMatchExactOracle) {
-  std::size_t count = testing::scaledCount(50000);
+  std::size_t count = test::scaledCount(50000);
   if (const char* requested = std::getenv("DELTA_LONG_ORACLE"))
     count = static_cast<std::size_t>(std::strtoull(requested, nullptr, 10));
   constexpr std::size_t kBatch = 100000;  // generated in batches: 10^7 pairs need no 1 GB vector
   for (const PairFamily family : {PairFamily::Random, PairFamily::NearContact}) {
     FamilyStats stats;
     for (std::size_t done = 0, batch = 0; done < count; done += kBatch, ++batch) {
-      for (const auto& [a, b] :
-           testing::makePairs(family, std::min(kBatch, count - done), 77 + batch))
+      for (const auto& [a, b] : test::makePairs(family, std::min(kBatch, count - done), 77 + batch))
         checkAgainstOracle(a, b, name(family), stats);
     }
     printStats(name(family), stats, count);
@@ -352,9 +350,9 @@ void expectSameDistance(const TriangleDistanceResult& r, const TriangleDistanceR
 }
 
 TEST(TriangleDistance, SymmetricInItsArguments) {
-  for (const PairFamily family : testing::kAllFamilies) {
+  for (const PairFamily family : test::kAllFamilies) {
     int failures = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(2000), 31)) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(2000), 31)) {
       const auto r = triangleDistanceBruteForce(a, b);
       const auto swapped = triangleDistanceBruteForce(b, a);
       expectSameDistance(r, swapped, a, b, 0.0, failures);
@@ -364,9 +362,9 @@ TEST(TriangleDistance, SymmetricInItsArguments) {
 }
 
 TEST(TriangleDistance, InvariantUnderVertexOrderAndOrientation) {
-  for (const PairFamily family : testing::kAllFamilies) {
+  for (const PairFamily family : test::kAllFamilies) {
     int failures = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 41)) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(1000), 41)) {
       const auto r = triangleDistanceBruteForce(a, b);
       const Triangle rotatedA{a.b, a.c, a.a}, rotatedB{b.c, b.a, b.b};
       const Triangle flippedA{a.a, a.c, a.b}, flippedB{b.b, b.a, b.c};
@@ -379,10 +377,10 @@ TEST(TriangleDistance, InvariantUnderVertexOrderAndOrientation) {
 }
 
 TEST(TriangleDistance, InvariantUnderRigidMotion) {
-  testing::PairRandom random(5);
-  for (const PairFamily family : testing::kAllFamilies) {
+  test::PairRandom random(5);
+  for (const PairFamily family : test::kAllFamilies) {
     int failures = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(1000), 43)) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(1000), 43)) {
       const double size = pairSize(a, b);
       const Quaternion q = Quaternion::fromAxisAngle(random.unitVector(), random.uniform(0, 6.3));
       const Vec3 shift = random.inCube(10 * size);
@@ -435,9 +433,9 @@ TEST(TriangleIntersect, SeparatedPiercingTouchingAndCoplanar) {
 }
 
 TEST(TriangleIntersect, AgreesWithExactDoIntersect) {
-  for (const PairFamily family : testing::kAllFamilies) {
+  for (const PairFamily family : test::kAllFamilies) {
     int touching = 0, total = 0;
-    for (const auto& [a, b] : testing::makePairs(family, testing::scaledCount(3000), 99)) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(3000), 99)) {
       const bool flag = trianglesIntersect(a, b);
       ++total;
       if (flag == exactIntersect(a, b)) continue;

@@ -25,7 +25,7 @@
 namespace delta::detail {
 namespace {
 
-using testing::unit;
+using test::unit;
 
 const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
@@ -139,7 +139,7 @@ TEST(BoundGrid, NeverAboveTheDistanceOnPrimitives) {
   for (const Mesh& mesh : {primitives::icosphere(3), primitives::box({2.0, 1.0, 0.5}),
                            primitives::granulate(7, {1.0, 0.6, 0.3}, 80)}) {
     SCOPED_TRACE(std::to_string(mesh.triangleCount()) + " triangles");
-    expectSafeAndUseful(flatten(mesh), testing::scaledCount(2000), 11);
+    expectSafeAndUseful(flatten(mesh), test::scaledCount(2000), 11);
   }
 }
 
@@ -201,7 +201,7 @@ TEST(BoundGrid, NeverAboveTheDistanceJustOffTheSurface) {
     const double diagonal = mesh.bounds().diagonal();
     std::vector<Vec3> points;
     // Every triangle in an optimised build, every fourth under the sanitizers.
-    for (std::size_t t = 0; t < triangles.size(); t += testing::kSlowBuild ? 4 : 1) {
+    for (std::size_t t = 0; t < triangles.size(); t += test::kSlowBuild ? 4 : 1) {
       const Triangle triangle = triangles.triangle(t);
       const Vec3 normal = normalized(triangle.areaVector());
       for (const Vec3& on : {triangle.a, (triangle.a + triangle.b) * 0.5, triangle.centroid()})

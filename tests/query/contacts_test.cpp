@@ -156,7 +156,7 @@ TEST(Contacts, PreparedMeshesGiveTheSameContactsWhateverTheTriangleOrder) {
   const Mesh elephant = io::load(std::string(DELTA_DATA_DIR) + "/meshes/elephant.off");
   // Under the sanitizers (where the hybrid kernel runs a hundred times slower) its first 1500
   // triangles in file order, as scattered.
-  const std::size_t kept = testing::kSlowBuild ? 1500 : elephant.triangleCount();
+  const std::size_t kept = test::kSlowBuild ? 1500 : elephant.triangleCount();
   const Mesh first(std::vector<Vec3>(elephant.vertices().begin(), elephant.vertices().end()),
                    std::vector<TriangleIndices>(
                        elephant.triangles().begin(),

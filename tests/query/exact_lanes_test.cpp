@@ -49,12 +49,12 @@ std::vector<Vec3> probes(std::mt19937_64& random, const std::vector<Triangle>& t
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::vector<Vec3> points;
   // A quarter of the points under the sanitizers (where the test otherwise takes 14 s).
-  const int count = testing::kSlowBuild ? 16 : 64;
+  const int count = test::kSlowBuild ? 16 : 64;
   for (int i = 0; i < count; ++i) {
     points.push_back(centre + Vec3{unit(random), unit(random), unit(random)} * (2.0 * scale));
     points.push_back(centre + Vec3{unit(random), unit(random), unit(random)} * (300.0 * scale));
   }
-  for (std::size_t t = 0; t < triangles.size(); t += testing::kSlowBuild ? 20 : 5) {
+  for (std::size_t t = 0; t < triangles.size(); t += test::kSlowBuild ? 20 : 5) {
     const Triangle& x = triangles[t];
     const Vec3 normal = x.areaVector();
     const double length = std::sqrt(lengthSquared(normal));

@@ -89,7 +89,7 @@ TEST(FarCoordinates, MeshesBeyondSinglePrecisionAnswerOnEveryIsa) {
     Mesh mesh = primitives::granulate(9, {1e40, 2e40, 3e40});
     mesh.translate({offset, -offset, 0.5 * offset});
     const QueryMesh query(mesh);
-    for (const Vec3& point : testing::probes(mesh, 100, 11)) {
+    for (const Vec3& point : test::probes(mesh, 100, 11)) {
       double best = std::numeric_limits<double>::infinity();
       std::uint32_t id = kNoTriangle;
       for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {

@@ -178,7 +178,7 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
 
 TEST(LeafCylinder, BoundNeverExceedsTheLeafsTriangles) {
   const std::filesystem::path meshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
-  const std::size_t nodes = testing::kSlowBuild ? 40 : 200;
+  const std::size_t nodes = test::kSlowBuild ? 40 : 200;
   std::size_t raised = 0;
   expectBelowTheLeaves(io::load(meshes / "fandisk.off"), "fandisk", nodes, raised);
   EXPECT_GT(raised, 100u);

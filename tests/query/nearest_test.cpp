@@ -26,7 +26,7 @@ namespace {
 void expectEveryIsaLikeAllTriangles(const Mesh& mesh, const char* name,
                                     std::vector<Vec3> points = {}) {
   const QueryMesh query(mesh);
-  if (points.empty()) points = testing::probes(mesh, testing::scaledCount(300), 3);
+  if (points.empty()) points = test::probes(mesh, test::scaledCount(300), 3);
   for (kernels::Isa isa : kernels::supportedIsas()) {
     for (const Vec3& p : points) {
       double expected = std::numeric_limits<double>::infinity();

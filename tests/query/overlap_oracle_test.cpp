@@ -373,7 +373,7 @@ TEST(OverlapOracle, RandomPoses) {
     }
   }
   std::mt19937_64 random(24);
-  const std::size_t cases = testing::scaledCount(128);
+  const std::size_t cases = test::scaledCount(128);
   for (std::size_t c = 0; c < cases; ++c) {
     const std::size_t i = random() % all.size(), j = random() % all.size();
     const Vec3 offset = c % 4 == 3 ? Vec3{1e6, -1e6, 1e6} : Vec3{};
@@ -393,7 +393,7 @@ TEST(OverlapOracle, RandomPoses) {
 /// radius further in: thin lens-shaped overlaps, L the small extent of the box they share.
 TEST(OverlapOracle, ShallowGranulateContacts) {
   std::mt19937_64 random(7);
-  const std::size_t pairs = testing::scaledCount(16);
+  const std::size_t pairs = test::scaledCount(16);
   for (std::size_t k = 0; k < pairs; ++k) {
     const std::uint64_t firstSeed = 2 * k + 11, secondSeed = 2 * k + 12;
     const QueryMesh a(primitives::granulate(firstSeed));
@@ -529,7 +529,7 @@ TEST(OverlapOracle, DegenerateScenes) {
   const Vec3 far{1e6, -1e6, 1e6};
   for (const Scene& scene : degenerateScenes()) {
     for (int placement = 0; placement < 3; ++placement) {
-      if (placement == 1 && testing::kSlowBuild) continue;
+      if (placement == 1 && test::kSlowBuild) continue;
       const Vec3 meshOffset = placement == 2 ? far : Vec3{};
       const Mesh first = moved(scene.a, [&](Mesh& m) { m.translate(meshOffset); });
       const Mesh second = moved(scene.b, [&](Mesh& m) { m.translate(meshOffset); });

@@ -23,8 +23,8 @@
 namespace delta::contactdetection {
 namespace {
 
-using testing::probes;
-using testing::unit;
+using test::probes;
+using test::unit;
 
 const std::filesystem::path kMeshes = std::filesystem::path(DELTA_DATA_DIR) / "meshes";
 
@@ -185,7 +185,7 @@ TEST(PointDistance, WithinEpsilonAgreesWithTheFullQuery) {
   moved.transform(
       RigidTransform::rotationAbout(Quaternion::fromAxisAngle({3, 1, 2}, 0.7), {0.5, -0.2, 0.1}));
   for (const QueryMesh& query : {QueryMesh(mesh), moved}) {
-    std::vector<Vec3> points = probes(mesh, testing::scaledCount(6000), 5);
+    std::vector<Vec3> points = probes(mesh, test::scaledCount(6000), 5);
     for (Vec3& p : points)
       p = query.pose().apply(p);
     const double epsilon = 0.01 * mesh.bounds().diagonal();

@@ -11,7 +11,7 @@
 #include "delta/core/vec3.h"
 #include "delta/mesh/mesh.h"
 
-namespace delta::testing {
+namespace delta::test {
 
 /// Uniform in [0, 1) from the generator's raw bits (the same on every platform).
 inline double unit(std::mt19937_64& random) {
@@ -49,4 +49,4 @@ inline std::vector<Vec3> probes(const Mesh& mesh, std::size_t count, std::uint64
   return points;
 }
 
-}  // namespace delta::testing
+}  // namespace delta::test

@@ -26,7 +26,7 @@ namespace {
 
 std::vector<Vec3> pointsAround(const Aabb& box, std::size_t count, std::uint64_t seed) {
   std::mt19937_64 random(seed);
-  return testing::uniformAround(box, count, 0.2, random);
+  return test::uniformAround(box, count, 0.2, random);
 }
 
 const RigidTransform kFirstMotion{Quaternion::fromAxisAngle({1, 2, 3}, 0.9), {1e3, -20, 7}};
@@ -109,10 +109,10 @@ TEST(QueryMesh, MovedMeshesGiveTheMinimumDistanceOfTheMovedMeshes) {
   std::mt19937_64 random(17);
   for (double gap : {1e-3, 2e-2, 0.3}) {
     const RigidTransform placeA{
-        Quaternion::fromAxisAngle({testing::unit(random), 1, 0.5}, 3.0 * testing::unit(random)),
+        Quaternion::fromAxisAngle({test::unit(random), 1, 0.5}, 3.0 * test::unit(random)),
         {40, -3, 8}};
     const RigidTransform turn{
-        Quaternion::fromAxisAngle({1, testing::unit(random), -1}, 2.0 * testing::unit(random)), {}};
+        Quaternion::fromAxisAngle({1, test::unit(random), -1}, 2.0 * test::unit(random)), {}};
     // The second copy moved along x until its gap to the first is about `gap` (bisection).
     const auto placed = [&](double shift) {
       return RigidTransform::translationBy({shift, 0.1 * size, 0}) * placeA * turn;

@@ -299,7 +299,7 @@ TEST(RealMeshContacts, SameResultsForOneAndTwoThreads) {
     const TriangleSoA first = flatten(scene.first), second = flatten(scene.second);
     for (kernels::Solver solver : kExactSolvers) {
       // the brute force on overlapping meshes is slow under the sanitizers (the hybrid is not)
-      if (delta::testing::kSlowBuild && solver == kernels::Solver::BruteForce &&
+      if (delta::test::kSlowBuild && solver == kernels::Solver::BruteForce &&
           scene.name.find("deep") != std::string::npos)
         continue;
       const std::string label = scene.name + ", " + kernels::name(solver);

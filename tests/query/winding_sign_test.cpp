@@ -59,14 +59,14 @@ std::vector<Vec3> nearAndFar(const Mesh& mesh, std::size_t near, double reach, s
   std::vector<Vec3> points;
   for (std::size_t i = 0; i < near; ++i) {
     const Triangle t = mesh.triangle(random() % mesh.triangleCount());
-    double u = testing::unit(random), v = testing::unit(random);
+    double u = test::unit(random), v = test::unit(random);
     if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
     const Vec3 onSurface = t.a + (t.b - t.a) * u + (t.c - t.a) * v;
-    const Vec3 direction = normalized(Vec3{testing::unit(random) - 0.5, testing::unit(random) - 0.5,
-                                           testing::unit(random) - 0.5});
-    points.push_back(onSurface + direction * (reach * testing::unit(random)));
+    const Vec3 direction = normalized(
+        Vec3{test::unit(random) - 0.5, test::unit(random) - 0.5, test::unit(random) - 0.5});
+    points.push_back(onSurface + direction * (reach * test::unit(random)));
   }
-  const std::vector<Vec3> uniform = testing::uniformAround(mesh.bounds(), far, 0.5, random);
+  const std::vector<Vec3> uniform = test::uniformAround(mesh.bounds(), far, 0.5, random);
   points.insert(points.end(), uniform.begin(), uniform.end());
   return points;
 }
@@ -106,7 +106,7 @@ TEST(WindingSign, OpenSphereWithACutHoleAgreesWithTheExactWindingNumber) {
   const Mesh open = cutHole(sphere, 0, 0.3);
   ASSERT_FALSE(QueryMesh(open).closed());
   std::vector<Vec3> points =
-      nearAndFar(open, testing::scaledCount(3000), 0.05, testing::scaledCount(1000), 1);
+      nearAndFar(open, test::scaledCount(3000), 0.05, test::scaledCount(1000), 1);
   // along the hole's axis, through its middle, where w passes ½
   const Vec3 axis = normalized(sphere.triangle(0).centroid());
   for (int i = -20; i <= 20; ++i)
@@ -145,9 +145,8 @@ TEST(WindingSign, RealMeshesAgreeWithTheExactWindingNumber) {
     if (!fs::exists(kMeshes / c.file)) GTEST_SKIP() << kMeshes / c.file << " is missing";
     Mesh mesh = io::load(kMeshes / c.file);
     if (c.cut) mesh = cutHole(mesh, 100, 0.05 * mesh.bounds().diagonal());
-    const std::vector<Vec3> points =
-        nearAndFar(mesh, testing::scaledCount(1500), 0.01 * mesh.bounds().diagonal(),
-                   testing::scaledCount(300), 3);
+    const std::vector<Vec3> points = nearAndFar(
+        mesh, test::scaledCount(1500), 0.01 * mesh.bounds().diagonal(), test::scaledCount(300), 3);
     expectExactSigns(mesh, points, 1.0);
   }
 }
@@ -178,7 +177,7 @@ TEST(WindingSign, ClosedMeshesAgreeWithPseudonormalsOnRandomAndAdversarialPoints
     if (fs::exists(kMeshes / file)) meshes.push_back(io::load(kMeshes / file));
   for (const Mesh& mesh : meshes) {
     // uniform, and on and ±1e-6 of the diagonal off vertices, edge midpoints and centroids
-    std::vector<Vec3> points = testing::probes(mesh, testing::scaledCount(2000), 4);
+    std::vector<Vec3> points = test::probes(mesh, test::scaledCount(2000), 4);
     const double size = mesh.bounds().diagonal();
     const Vec3 centre = mesh.bounds().center();
     for (const double far : {10.0, 1e6, 1e15})
@@ -188,9 +187,9 @@ TEST(WindingSign, ClosedMeshesAgreeWithPseudonormalsOnRandomAndAdversarialPoints
     std::mt19937_64 random(5);
     for (std::size_t i = 0; i < 500; ++i) {
       const Vec3 v = mesh.vertices()[random() % mesh.vertexCount()];
-      points.push_back(v + Vec3{testing::unit(random) - 0.5, testing::unit(random) - 0.5,
-                                testing::unit(random) - 0.5} *
-                               (1e-9 * size));
+      points.push_back(
+          v + Vec3{test::unit(random) - 0.5, test::unit(random) - 0.5, test::unit(random) - 0.5} *
+                  (1e-9 * size));
     }
     expectPseudonormalSigns(QueryMesh(mesh), points);
   }
@@ -208,8 +207,8 @@ TEST(WindingSign, TheHierarchyAgreesWithPseudonormalsOnClosedMeshes) {
   for (const Mesh& mesh : meshes) {
     const QueryMesh query(mesh);
     const double size = mesh.bounds().diagonal();
-    std::vector<Vec3> points = testing::probes(mesh, testing::scaledCount(3000), 9);
-    const std::vector<Vec3> near = nearAndFar(mesh, testing::scaledCount(3000), 1e-3 * size, 0, 10);
+    std::vector<Vec3> points = test::probes(mesh, test::scaledCount(3000), 9);
+    const std::vector<Vec3> near = nearAndFar(mesh, test::scaledCount(3000), 1e-3 * size, 0, 10);
     points.insert(points.end(), near.begin(), near.end());
     PointQuery pseudonormal;
     pseudonormal.signedDistance = true;
