@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/dem/contact_model.h"
 #include "delta/io/detail/file_read.h"
 
 #include "motion_options.h"
@@ -94,7 +95,7 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
     if (text.empty()) throw Error(origin + " must name a mesh file or builtin:");
     settings.particleMesh = text;
   } else if (key == "contact_model") {
-    if (text != "point" && text != "volume")
+    if (!dem::parseContactModel(text))
       throw Error(origin + " '" + text + "' is neither point nor volume");
     settings.contactModel = text;
   } else if (key == "particle_radius") {

@@ -42,11 +42,11 @@ struct DistanceOptions {
 constexpr std::size_t kBatch = std::size_t{1} << 16;
 
 bool windingSign(const DistanceOptions& options) {
-  return options.sign == "winding";
+  return contactdetection::parseSign(options.sign) == contactdetection::Sign::winding;
 }
 
 void validate(const DistanceOptions& options) {
-  if (!options.sign.empty() && options.sign != "pseudonormal" && options.sign != "winding")
+  if (!options.sign.empty() && !contactdetection::parseSign(options.sign))
     throw Error("--sign '" + options.sign + "': choose pseudonormal or winding");
   if (options.epsilon && !(std::isfinite(*options.epsilon) && *options.epsilon > 0.0))
     throw Error("--eps " + toString(*options.epsilon) + " must be finite and positive");

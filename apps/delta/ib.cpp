@@ -35,7 +35,7 @@ struct IbOptions {
   double refineFactor = ib::GridOptions{}.refineFactor;
   std::optional<double> padding;
   bool unsignedDistance = false;
-  std::string sign = "pseudonormal";  ///< --sign
+  std::string sign = contactdetection::signName(contactdetection::Sign::pseudonormal);  ///< --sign
   std::optional<double> exactBand;
   std::string steps = "0";
   std::string rotate, translate;
@@ -85,7 +85,8 @@ ib::GridOptions gridOptions(const IbOptions& options) {
   grid.levels = options.levels;
   grid.refineFactor = options.refineFactor;
   grid.signedDistance = !options.unsignedDistance;
-  if (options.sign == "winding") grid.sign = contactdetection::Sign::winding;
+  grid.sign =
+      contactdetection::parseSign(options.sign).value_or(contactdetection::Sign::pseudonormal);
   if (options.padding) grid.padding = *options.padding;
   if (options.exactBand) grid.exactBand = *options.exactBand;
   return grid;
@@ -162,8 +163,7 @@ void printJson(const ib::AdaptiveGrid& grid, const IbSummary& run) {
   json.beginObject()
       .value("triangles", grid.boundary().size())
       .value("signed", grid.options().signedDistance)
-      .value("sign",
-             grid.options().sign == contactdetection::Sign::winding ? "winding" : "pseudonormal")
+      .value("sign", contactdetection::signName(grid.options().sign))
       .value("levels", grid.levels())
       .value("cells", grid.leafCount())
       .beginArray("cells_per_level");
@@ -306,7 +306,8 @@ void addIbCommand(CLI::App& app) {
                  "How signed distances decide inside: pseudonormal (default; a closed mesh that "
                  "does not cross itself) or winding (the generalized winding number > 1/2: open "
                  "and self-intersecting meshes too)")
-      ->check(CLI::IsMember({"pseudonormal", "winding"}));
+      ->check(CLI::IsMember({contactdetection::signName(contactdetection::Sign::pseudonormal),
+                             contactdetection::signName(contactdetection::Sign::winding)}));
   ib->add_option("--exact-band", options->exactBand,
                  "After a move, distances up to B are exact, further ones within a stated bound "
                  "(default: the diagonal of a finest cell; 0: only what refinement needs; inf: all "

@@ -1,6 +1,8 @@
 #include "records.h"
 
 #include <cstddef>
+#include <optional>
+#include <string>
 #include <type_traits>
 
 #include "delta/core/contact_point.h"
@@ -67,8 +69,8 @@ py::dtype distanceDtype() {
 }
 
 contactdetection::Sign signNamed(const std::string& name) {
-  if (name == "pseudonormal") return contactdetection::Sign::pseudonormal;
-  if (name == "winding") return contactdetection::Sign::winding;
+  if (const std::optional<contactdetection::Sign> sign = contactdetection::parseSign(name))
+    return *sign;
   throw py::value_error("sign must be \"pseudonormal\" or \"winding\", not \"" + name + "\"");
 }
 

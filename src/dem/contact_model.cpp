@@ -259,9 +259,14 @@ const char* contactModelName(ContactModel model) noexcept {
   return model == ContactModel::volume ? "volume" : "point";
 }
 
+std::optional<ContactModel> parseContactModel(std::string_view text) noexcept {
+  for (const ContactModel model : {ContactModel::point, ContactModel::volume})
+    if (text == contactModelName(model)) return model;
+  return std::nullopt;
+}
+
 ContactModel contactModelNamed(const std::string& name) {
-  if (name == "point") return ContactModel::point;
-  if (name == "volume") return ContactModel::volume;
+  if (const std::optional<ContactModel> model = parseContactModel(name)) return *model;
   throw Error("dem: contact model '" + name + "' is neither point nor volume");
 }
 

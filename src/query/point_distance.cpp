@@ -382,4 +382,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
   return found;
 }
 
+const char* signName(Sign sign) noexcept {
+  return sign == Sign::winding ? "winding" : "pseudonormal";
+}
+
+std::optional<Sign> parseSign(std::string_view text) noexcept {
+  for (const Sign sign : {Sign::pseudonormal, Sign::winding})
+    if (text == signName(sign)) return sign;
+  return std::nullopt;
+}
+
 }  // namespace delta::contactdetection

@@ -387,6 +387,10 @@ TEST(DemVolumeLaw, WorldsRefuseWhatTheLawCannotUse) {
   EXPECT_EQ(contactModelNamed("volume"), ContactModel::volume);
   EXPECT_STREQ(contactModelName(ContactModel::point), "point");
   EXPECT_THROW(contactModelNamed("points"), Error);
+  for (const ContactModel model : {ContactModel::point, ContactModel::volume})
+    EXPECT_EQ(parseContactModel(contactModelName(model)), model);
+  EXPECT_FALSE(parseContactModel("Volume"));
+  EXPECT_FALSE(parseContactModel(""));
 }
 
 TEST(DemVolumeLaw, TheScenariosSolidWallsAreClosedConvexPiecesBehindTheOpenOnes) {

@@ -57,6 +57,15 @@ void expectSameAsAllTriangles(const Mesh& mesh, const std::vector<Vec3>& points,
   }
 }
 
+TEST(PointDistance, SignNamesRoundTrip) {
+  EXPECT_STREQ(signName(Sign::pseudonormal), "pseudonormal");
+  EXPECT_STREQ(signName(Sign::winding), "winding");
+  for (const Sign sign : {Sign::pseudonormal, Sign::winding})
+    EXPECT_EQ(parseSign(signName(sign)), sign);
+  EXPECT_FALSE(parseSign("Winding"));
+  EXPECT_FALSE(parseSign(""));
+}
+
 TEST(PointDistance, SameAsEveryTriangleOnPrimitives) {
   Mesh far = primitives::granulate(5, {1, 0.5, 0.2});
   far.translate({1e6, -1e6, 3e5});

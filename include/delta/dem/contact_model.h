@@ -1,8 +1,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "delta/core/contact_point.h"
@@ -135,6 +137,11 @@ enum class ContactModel : std::uint8_t {
 ///
 /// Threading: a pure function.
 const char* contactModelName(ContactModel model) noexcept;
+
+/// The ContactModel contactModelName() names `text`; nullopt for anything else.
+///
+/// Threading: a pure function.
+std::optional<ContactModel> parseContactModel(std::string_view text) noexcept;
 
 /// The ContactModel named `name` ("point" or "volume"); throws delta::Error naming it otherwise.
 ///

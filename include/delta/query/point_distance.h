@@ -2,7 +2,9 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "delta/core/contact_point.h"
@@ -53,6 +55,16 @@ enum class Sign {
   /// solid angles are not: that is what runs there, at the pseudonormal's cost.
   winding,
 };
+
+/// "pseudonormal" or "winding".
+///
+/// Threading: a pure function.
+const char* signName(Sign sign) noexcept;
+
+/// The Sign signName() names `text`; nullopt for anything else.
+///
+/// Threading: a pure function.
+std::optional<Sign> parseSign(std::string_view text) noexcept;
 
 /// What a points–mesh query asks.
 ///
