@@ -47,18 +47,6 @@ void validate(std::span<const Sphere> spheres, double margin) {
                   " (must be finite, radius non-negative)");
 }
 
-/// The chunks' lists of pairs, in order.
-std::vector<CandidatePair> joined(std::vector<std::vector<CandidatePair>>& perChunk) {
-  std::size_t total = 0;
-  for (const std::vector<CandidatePair>& some : perChunk)
-    total += some.size();
-  std::vector<CandidatePair> pairs;
-  pairs.reserve(total);
-  for (const std::vector<CandidatePair>& some : perChunk)
-    pairs.insert(pairs.end(), some.begin(), some.end());
-  return pairs;
-}
-
 /// nearbyPairs on a dense grid of (last.x + 1)·(last.y + 1)·(last.z + 1) cells: the spheres
 /// sorted by cell (x fastest; within a cell by index), so the three cells of a row around a
 /// sphere's are one run; nine runs a sphere, no hashing.
@@ -109,7 +97,7 @@ std::vector<CandidatePair> pairsOnGrid(std::span<const Sphere> spheres, double m
                 [](const CandidatePair& a, const CandidatePair& b) { return a.second < b.second; });
     }
   });
-  return joined(perChunk);
+  return detail::joined<CandidatePair>(perChunk);
 }
 
 }  // namespace
@@ -183,7 +171,7 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
     }
     perChunk[begin / kSphereGrain] = std::move(found);
   });
-  return joined(perChunk);
+  return detail::joined<CandidatePair>(perChunk);
 }
 
 }  // namespace delta::dem

@@ -273,10 +273,7 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
       contactsOf(tasks[t], first, second, epsilon, solver, results, out);
     perChunk[begin / kTaskGrain] = std::move(out);
   });
-  std::vector<ContactPoint> all;
-  for (const std::vector<ContactPoint>& some : perChunk)
-    all.insert(all.end(), some.begin(), some.end());
-  return all;
+  return detail::joined<ContactPoint>(perChunk);
 }
 
 namespace {
@@ -409,15 +406,8 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
 }
 
 /// Phase 4: every run's contacts in one list, sorted by (first, second) id.
-std::vector<ContactPoint> joinedAndSorted(const std::vector<std::vector<ContactPoint>>& perRun,
-                                          std::size_t runs) {
-  std::size_t total = 0;
-  for (std::size_t run = 0; run < runs; ++run)
-    total += perRun[run].size();
-  std::vector<ContactPoint> found;
-  found.reserve(total);
-  for (std::size_t run = 0; run < runs; ++run)
-    found.insert(found.end(), perRun[run].begin(), perRun[run].end());
+std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoint>> perRun) {
+  std::vector<ContactPoint> found = detail::joined(perRun);
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
@@ -497,7 +487,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       contactsOfRun(run, a, scratch, reach, solver, work, perRun[run]);
   });
   // 4. Sorted by ids; 5. overlaps marked; 6. moved to where the first mesh is.
-  std::vector<ContactPoint> found = joinedAndSorted(perRun, runs);
+  std::vector<ContactPoint> found =
+      joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
   if (first.closed() && second.closed()) markOverlaps(first, second, secondToFirst, epsilon, found);
   if (first.moved())
     for (ContactPoint& contact : found) {

@@ -153,14 +153,7 @@ std::vector<ContactPoint> everySphere(std::span<const Sphere> spheres,
     for (std::size_t i = begin; i < end; ++i)
       contactsOf(i, out);
   });
-  std::size_t count = 0;
-  for (const std::vector<ContactPoint>& some : perChunk)
-    count += some.size();
-  std::vector<ContactPoint> all;
-  all.reserve(count);
-  for (const std::vector<ContactPoint>& some : perChunk)
-    all.insert(all.end(), some.begin(), some.end());
-  return all;
+  return detail::joined<ContactPoint>(perChunk);
 }
 
 }  // namespace

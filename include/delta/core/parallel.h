@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <cstddef>
+#include <span>
+#include <vector>
 
 namespace delta {
 
@@ -31,6 +33,20 @@ bool runOnPool(std::size_t chunks, int threads, void (*call)(const void* body, s
                const void* body);
 /// Whether this thread is running a chunk of a parallel loop of Δ's.
 bool insideParallelLoop() noexcept;
+
+/// The parts a parallel loop's chunks filled (one slot a chunk), joined in chunk order: the
+/// same list for any number of threads.
+template <class T>
+std::vector<T> joined(std::span<const std::vector<T>> parts) {
+  std::size_t total = 0;
+  for (const std::vector<T>& part : parts)
+    total += part.size();
+  std::vector<T> all;
+  all.reserve(total);
+  for (const std::vector<T>& part : parts)
+    all.insert(all.end(), part.begin(), part.end());
+  return all;
+}
 
 }  // namespace detail
 
