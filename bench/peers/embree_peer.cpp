@@ -1,7 +1,8 @@
 // Embree 3 as the points–mesh peer: closest-point queries (rtcPointQuery) on a triangle scene,
 // the way Embree's closest_point tutorial and Open3D's RaycastingScene use them, with the
 // textbook closest-point kernel in double in the callback. (Δ's own robust kernel there made
-// W1 on armadillo 2.5 times slower: 12.0 s against 4.8; the peer runs as fast as Embree allows.)
+// W1 on armadillo 2.0–2.5 times slower: 9.7–12.0 s against 4.8; the peer runs as fast as Embree
+// allows.)
 #include <embree3/rtcore.h>
 
 #include <algorithm>
