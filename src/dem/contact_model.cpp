@@ -29,9 +29,8 @@ double depthOf(const ContactPoint& point, double shell) noexcept {
 /// one step, this evaluation is the contact's first and its share is 0.5 + δ/(|v_n|·dt), between
 /// ½ (the crossing just now: half the step ahead is in contact) and 3/2 (the crossing a step
 /// ago: half of the step before, charged nothing, was in contact too). Otherwise 1.
-double onsetFactor(const std::vector<PointForce>& points, std::size_t deepestIndex,
-                   const BodyMotion& first, const BodyMotion& second, double timeStep) noexcept {
-  const PointForce& deepest = points[deepestIndex];
+double onsetFactor(const PointForce& deepest, const BodyMotion& first, const BodyMotion& second,
+                   double timeStep) noexcept {
   const Vec3 relative = first.velocityAt(deepest.point.x) - second.velocityAt(deepest.point.x);
   const double approach = -dot(relative, deepest.point.direction) * timeStep;  // per step
   if (!(approach > 0.0) || deepest.depth >= approach) return 1.0;
@@ -97,6 +96,41 @@ Friction frictionAt(const Vec3& centre, const Vec3& normal, double normalForce, 
   return result;
 }
 
+/// pairForces of one point: the general law's arithmetic with its sums of one term written out
+/// (a weight d/d is 1, x·1 and x/1 are x), so the same bits without its loops; a sphere pair's
+/// every contact, and most of a sphere's against a wall. No twist: one point has no arm.
+void onePointForces(const ContactPoint& point, const BodyMotion& first, const BodyMotion& second,
+                    double effectiveMass, const TangentialSpring& previous, double timeStep,
+                    const ContactLaw& law, PairForces& result) noexcept {
+  PointForce& out = result.points.front();
+  out.point = point;
+  out.depth = depthOf(point, 2.0 * law.epsilon);
+  if (out.depth > 0.0) result.deepest = out.depth;
+  // The general law's overlap directions change nothing here: a lone overlapping point has no
+  // clear points to take a direction from.
+  result.springEnergy = 0.5 * law.stiffness * result.deepest * result.deepest;
+  if (!(out.depth > 0.0)) return;  // exactly on the shell: no force yet
+
+  const double damping = 2.0 * law.dampingRatio * std::sqrt(law.stiffness * effectiveMass) *
+                         onsetFactor(out, first, second, timeStep);
+  const double spring = law.stiffness * result.deepest;
+  const Vec3& n = out.point.direction;
+  const Vec3 relative = first.velocityAt(out.point.x) - second.velocityAt(out.point.x);
+  const double normalForce = std::max(0.0, spring - damping * dot(relative, n));
+  out.force = n * normalForce;
+  result.normalForce = normalForce;
+  const Vec3 centre = Vec3{} + out.point.x;  // as the general sum from zero: −0 becomes +0
+  const Vec3 meanDirection = normalized(Vec3{} + n);
+  if (!(law.friction > 0.0) || !(law.tangentialStiffness > 0.0) ||
+      !(lengthSquared(meanDirection) > 0.5))
+    return;
+  const Friction friction = frictionAt(centre, meanDirection, result.normalForce, 0.0, 0.0, first,
+                                       second, effectiveMass, previous, timeStep, law);
+  result.spring = friction.spring;
+  result.sliding = friction.sliding;
+  out.force += friction.force;
+}
+
 }  // namespace
 
 PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
@@ -115,6 +149,10 @@ void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
   result.points = std::move(buffer);
   result.points.assign(points.size(), PointForce{});
   if (points.empty()) return;
+  if (points.size() == 1) {
+    onePointForces(points.front(), first, second, effectiveMass, previous, timeStep, law, result);
+    return;
+  }
   const double shell = 2.0 * law.epsilon;
   double depthSum = 0.0;
   std::size_t deepestIndex = 0, pressed = 0;
@@ -139,7 +177,7 @@ void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
   if (!(depthSum > 0.0)) return;  // every point exactly on the shell: no force yet
 
   const double damping = 2.0 * law.dampingRatio * std::sqrt(law.stiffness * effectiveMass) *
-                         onsetFactor(result.points, deepestIndex, first, second, timeStep);
+                         onsetFactor(result.points[deepestIndex], first, second, timeStep);
   const double pointDamping = damping / static_cast<double>(pressed);
   const double spring = law.stiffness * result.deepest;
   Vec3 centre, meanDirection;

@@ -123,14 +123,18 @@ struct Contact {
 /// Threading: a value type; no shared state.
 struct StepStatistics {
   std::size_t particlePairsTested = 0;  ///< particle pairs whose bounding spheres come within 2ε
-  std::size_t obstaclePairsTested = 0;  ///< particle–obstacle pairs within 2ε of the box
-  std::size_t pairsInContact = 0;       ///< pairs with at least one contact point
+  /// particle–obstacle pairs whose bounding sphere may be within 2ε of the obstacle's surface
+  /// (the neighbour list's bound: the class comment)
+  std::size_t obstaclePairsTested = 0;
+  std::size_t pairsInContact = 0;  ///< pairs with at least one contact point
   std::size_t rawContactPoints =
       0;                          ///< triangle (or sphere) pairs closer than 2ε, before filter(h)
   std::size_t contactPoints = 0;  ///< after filter(h): the points forces act at
-  std::size_t overlappingContacts = 0;   ///< points where the surfaces interpenetrate
-  double deepestRatio = 0.0;             ///< largest δ / 2ε (above 1: past the shell)
-  double broadPhaseSeconds = 0.0;        ///< placing the meshes, cell list, obstacle boxes
+  std::size_t overlappingContacts = 0;  ///< points where the surfaces interpenetrate
+  double deepestRatio = 0.0;            ///< largest δ / 2ε (above 1: past the shell)
+  /// placing the meshes; the neighbour list's test, and when remade its cell list and wall
+  /// searches
+  double broadPhaseSeconds = 0.0;
   double contactDetectionSeconds = 0.0;  ///< contacts() and filter(h) over all pairs
   double forceSeconds = 0.0;             ///< the contact law and summing the forces
   double integrationSeconds = 0.0;       ///< moving the particles and obstacles
@@ -191,7 +195,22 @@ struct Energies {
 /// Forces: the broad phase (broad_phase.h) pairs particles whose bounding spheres (centred at
 /// the centre of mass, radius ParticleShape::boundingRadius) come within 2ε, and particles with
 /// obstacles whose surface their bounding sphere comes within 2ε of (the obstacle's box first,
-/// then a nearest-triangle search, query/point_distance.h). The narrow phase, in parallel over
+/// then a nearest-triangle search, query/point_distance.h).
+///
+/// Neighbour list: the broad phase's candidates are kept from step to step (a Verlet list, as
+/// LIGGGHTS and LAMMPS keep theirs): particle pairs within 2ε + skin, and particle–obstacle pairs
+/// within 2ε + skin with their gap when listed, the skin a tenth of the smallest bounding radius.
+/// Until a particle has moved half the skin since the list was made, or a particle and an
+/// obstacle the whole of it between them (an obstacle's move bounded at the corners of its
+/// box), no pair outside the list can have come within 2ε, and no cell list or wall search is
+/// made; each step the listed particle pairs are tested against 2ε as the cell list would, and an
+/// obstacle pair goes on while its listed gap less both bodies' moves is under 2ε. The pairs
+/// evaluated, and so every result, are those of a broad phase made anew each step, bit for bit;
+/// only StepStatistics::obstaclePairsTested counts some pairs a little beyond 2ε. A World of
+/// several processes (DistributedWorld) makes its list anew every step, and so does a World
+/// whose particles or obstacles were set or added since the last step.
+///
+/// The narrow phase, in parallel over
 /// those pairs (delta::parallelFor, each pair into its own slot), runs pairContacts
 /// (narrow_phase.h: contactdetection::contacts on the two placed meshes, the particle first, and
 /// filter(h)), then the contact law. The forces are then summed pair by pair in a fixed order, so
@@ -316,7 +335,34 @@ class World {
   std::string stateDigest() const;
 
  private:
-  struct Interaction;
+  /// A pair the broad phase found: two particles (local indices; `first` has the lower id), or
+  /// a particle and an obstacle.
+  struct Interaction {
+    std::uint32_t first;
+    std::uint32_t second;
+    bool withObstacle;
+    std::uint64_t key;  ///< first id << 32 | second id (or obstacle): the order forces are summed
+  };
+  /// The broad phase's candidates kept from one force evaluation to the next (a Verlet list):
+  /// the particle pairs whose bounding spheres came within 2ε + skin, and the particle–obstacle
+  /// pairs whose bounding sphere came within 2ε + skin of the obstacle's surface, when the list
+  /// was made. Until the particles and obstacles have moved `budget` between them (a pair's two
+  /// displacements added), no other pair can have come within 2ε, so the cell list and the wall
+  /// searches are not redone (findPairs).
+  struct NeighbourList {
+    std::vector<Interaction> particlePairs;  ///< sorted by key
+    std::vector<Interaction> obstaclePairs;  ///< sorted by key
+    /// Each obstacle pair's gap when made: the distance from the bounding sphere's surface to
+    /// the obstacle's; less the two bodies' moves since, a lower bound on the gap now.
+    std::vector<double> obstacleGaps;
+    std::vector<Vec3> positions;  ///< each particle's position when made
+    std::vector<RigidTransform> obstaclePoses;
+    std::vector<double> moved;          ///< how far each particle has moved since (findPairs)
+    std::vector<double> obstacleMoved;  ///< how far each obstacle's surface has moved, at most
+    double budget = 0.0;                ///< the skin less the rounding allowance
+    double allowance = 0.0;  ///< rounding: 64 ulps of the largest coordinate or length met
+    bool valid = false;
+  };
   /// What the narrow phase and the contact law found for one pair; kept from step to step
   /// (outcomes_) so that their buffers are reused.
   struct PairOutcome {
@@ -384,7 +430,19 @@ class World {
   /// Throws delta::Error when the coming drift could carry two surfaces through each other
   /// unseen (the class comment: "No pass-through"); reads the state only (src/dem/guards.cpp).
   void requireCatchableMotion() const;
-  std::vector<Interaction> findPairs();
+  /// The broad phase: the pairs whose bounding spheres come within 2ε (particles), or within
+  /// 2ε of the obstacle's surface (obstacles; with the neighbour list, within 2ε + skin), sorted
+  /// by key, particle pairs first. Reuses the neighbour list when `reuseList` and it still holds.
+  const std::vector<Interaction>& findPairs(bool reuseList);
+  /// Sets placed_ and spheres_ (each particle's mesh and bounding sphere where it is now) and
+  /// placedObstacles_.
+  void placeBodies();
+  /// Whether the neighbour list still holds every pair within 2ε: made for these particles and
+  /// no two bodies moved more than its budget between them since. Sets its `moved` and
+  /// `obstacleMoved`.
+  bool neighbourListHolds() noexcept;
+  /// Makes the neighbour list from spheres_ and placedObstacles_.
+  void makeNeighbourList();
   /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
   /// other pairs), viewing sphereObstacleFound_.
   std::vector<std::span<const ContactPoint>> sphereObstacleContacts(
@@ -405,6 +463,9 @@ class World {
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
   std::vector<QueryMesh> placed_;
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now
+  std::vector<Sphere> spheres_;             ///< each particle's bounding sphere (findPairs)
+  NeighbourList neighbours_;
+  std::vector<Interaction> pairs_;  ///< this evaluation's pairs (findPairs; scratch)
   /// Per obstacle, the sphere particles' contacts with it of this evaluation (scratch).
   std::vector<std::vector<ContactPoint>> sphereObstacleFound_;
   /// Each pair's contacts and forces of this evaluation (scratch, kept for its buffers).
