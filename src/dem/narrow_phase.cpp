@@ -140,11 +140,15 @@ PairContacts meshSphereContacts(const QueryMesh& mesh, const Sphere& sphere, dou
 }
 
 PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                          double filterDistance, bool compareInSecondFrame) {
+                          double filterDistance, bool compareInSecondFrame,
+                          contactdetection::ContactCache* cache) {
   PairContacts result;
+  const auto detected = [&](const QueryMesh& one, const QueryMesh& other) {
+    return cache ? contactdetection::contacts(one, other, epsilon, *cache)
+                 : contactdetection::contacts(one, other, epsilon);
+  };
   std::vector<ContactPoint> found =
-      compareInSecondFrame ? turnedRound(contactdetection::contacts(second, first, epsilon))
-                           : contactdetection::contacts(first, second, epsilon);
+      compareInSecondFrame ? turnedRound(detected(second, first)) : detected(first, second);
   result.trianglePairs = found.size();
   if (found.empty()) return result;
   std::vector<ContactPoint> kept = contactdetection::filter(found, filterDistance);

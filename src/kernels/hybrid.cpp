@@ -15,6 +15,18 @@ static_assert(kHybridIterations == detail::HybridSchedule::kIterations);
 
 namespace {
 
+/// The narrowest table that computes as `kernels` does, bit for bit: AVX-512's and AVX2's fuse
+/// a·b + c into one rounding, SSE2's and the scalar's round twice, and within each pair the
+/// lanes compute alike. A lone pair on one scalar lane costs 0.4 µs, a whole register about
+/// 0.8 µs: the scalar table where it agrees, AVX2's eight lanes for AVX-512's sixteen.
+const detail::BatchKernels& loneKernels(const detail::BatchKernels& kernels) noexcept {
+#if defined(DELTA_X86_ISAS)
+  if (&kernels == &detail::avx512BatchKernels()) return detail::avx2BatchKernels();
+  if (&kernels == &detail::avx2BatchKernels()) return kernels;
+#endif
+  return detail::scalarBatchKernels();
+}
+
 /// Pairs gathered from the first stage's failures, in small SoA blocks on the stack, for the
 /// second (exhaustive) stage; results scattered back. No heap allocation.
 class Recheck {
@@ -60,9 +72,10 @@ class Recheck {
         first_[s][i] = first_[s][0];
         second_[s][i] = second_[s][0];
       }
-    // A lone pair costs 0.4 µs on one lane and a whole register (about 0.8 µs on any ISA) on
-    // more: small one-against-range batches often leave exactly one.
-    const detail::BatchKernels& stage = count_ == 1 ? detail::scalarBatchKernels() : kernels;
+    // A lone pair (small one-against-range batches often leave exactly one) runs on the
+    // narrowest table of the same arithmetic (loneKernels), so that its bits do not depend on
+    // the batch it came in.
+    const detail::BatchKernels& stage = count_ == 1 ? loneKernels(kernels) : kernels;
     stage.exhaustiveBlocks(firstView_, secondView_, count_, out_);
     for (std::size_t k = 0; k < count_; ++k) {
       const std::size_t i = index_[k];

@@ -167,6 +167,7 @@ struct MeshPairScratch {
   std::vector<detail::MovedOctet> partnerOctets;
   std::vector<detail::SeparatingPlane> partnerPlanes;
   std::vector<std::uint32_t> partnerIds;
+  std::vector<std::uint32_t> partnerIndices;      ///< the second mesh's sorted triangle index
   std::vector<std::vector<ContactPoint>> perRun;  ///< inner vectors emptied, not freed
 
   /// This thread's (a query never nests in a thread).
@@ -290,12 +291,14 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
   std::vector<detail::MovedOctet>& partnerOctets = scratch.partnerOctets;
   std::vector<detail::SeparatingPlane>& partnerPlanes = scratch.partnerPlanes;
   std::vector<std::uint32_t>& partnerIds = scratch.partnerIds;
+  std::vector<std::uint32_t>& partnerIndices = scratch.partnerIndices;
   // Every slot is written below (an empty one past a last leaf's end as such).
   partnerTriangles.resize(slots);
   partnerBoxes.resize(slots);
   partnerOctets.resize(secondLeaves.size());
   partnerPlanes.resize(slots);
   partnerIds.resize(slots);
+  partnerIndices.resize(slots);
   parallelFor(0, secondLeaves.size(), 64, [&](std::size_t begin, std::size_t end) {
     for (std::size_t j = begin; j < end; ++j) {
       const std::size_t from = std::size_t{secondLeaves[j]} * detail::kFanout;
@@ -307,6 +310,7 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
         partnerBoxes[slot] = other.bounds();
         partnerPlanes[slot] = detail::separatingPlane(other);
         partnerIds[slot] = b.order[k];
+        partnerIndices[slot] = static_cast<std::uint32_t>(k);
       }
       for (std::size_t slot = j * detail::kFanout + (to - from);  // past a last leaf's end: empty
            slot < (j + 1) * detail::kFanout; ++slot) {
@@ -314,6 +318,7 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
         partnerBoxes[slot] = Aabb{};
         partnerPlanes[slot] = detail::SeparatingPlane{};
         partnerIds[slot] = kNoPartner;
+        partnerIndices[slot] = kNoPartner;
       }
       detail::MovedOctet& octet = partnerOctets[j];  // the same boxes, eight side by side
       for (std::size_t i = 0; i < detail::kFanout; ++i) {
@@ -327,14 +332,19 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
   });
 }
 
+/// A triangle pair kept by a ContactCache: sorted indices into the first and second mesh.
+struct CandidatePair {
+  std::uint32_t first, second;
+};
+
 /// Phase 3: the contacts of run `run` (first leaves run·kGroupsPerBatch onward): per group, the
 /// partner leaves' eight triangle boxes at once against the first leaf's box, then each leaf
-/// triangle's box and the separating planes (a leaf triangle's made on its first use), the
-/// pairs left through the kernels in one batch, those within `reach` into `out` (unsorted: the
-/// caller sorts).
+/// triangle's box and the separating planes (a leaf triangle's made on its first use), all
+/// within `pruneReach`; the pairs left through the kernels in one batch, those within `reach`
+/// into `out` (unsorted: the caller sorts), and every pair left into `candidates` when given.
 void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPairScratch& scratch,
-                   double reach, kernels::Solver solver, RunScratch& work,
-                   std::vector<ContactPoint>& out) {
+                   double reach, double pruneReach, kernels::Solver solver, RunScratch& work,
+                   std::vector<ContactPoint>& out, std::vector<CandidatePair>* candidates) {
   const std::vector<detail::LeafPair>& pairs = scratch.pairs;
   const std::vector<std::size_t>& groups = scratch.groups;
   const std::size_t groupCount = groups.size() - 1;
@@ -356,7 +366,7 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
     partners.clear();
     for (std::size_t p = groups[g]; p < groups[g + 1]; ++p) {  // most leaf neighbours are not
       const std::size_t j = scratch.named.rankOfPair[p];
-      for (unsigned rest = detail::notApartMask(scratch.partnerOctets[j], firstLeafBox, reach);
+      for (unsigned rest = detail::notApartMask(scratch.partnerOctets[j], firstLeafBox, pruneReach);
            rest != 0; rest &= rest - 1)
         partners.push_back(static_cast<std::uint32_t>(j * detail::kFanout) +
                            static_cast<std::uint32_t>(std::countr_zero(rest)));
@@ -371,7 +381,7 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
     const detail::MovedOctet leafBoxes = detail::boxesOf(leafTriangles, count, a.slack);
     unsigned made = 0;
     for (const std::uint32_t slot : partners) {
-      for (unsigned rest = detail::notApartMask(leafBoxes, scratch.partnerBoxes[slot], reach);
+      for (unsigned rest = detail::notApartMask(leafBoxes, scratch.partnerBoxes[slot], pruneReach);
            rest != 0; rest &= rest - 1) {
         const auto i = static_cast<std::size_t>(std::countr_zero(rest));
         if (!(made & 1u << i)) {
@@ -382,9 +392,14 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
         const Triangle& other = scratch.partnerTriangles[slot];
         const detail::SeparatingPlane& otherPlane = scratch.partnerPlanes[slot];
         // Both tests, then one branch (each alone is a coin toss to the predictor).
-        if (static_cast<int>(detail::separated(leafPlanes[i], other, otherPlane.magnitude, reach)) |
-            static_cast<int>(detail::separated(otherPlane, one, leafPlanes[i].magnitude, reach)))
+        if (static_cast<int>(
+                detail::separated(leafPlanes[i], other, otherPlane.magnitude, pruneReach)) |
+            static_cast<int>(
+                detail::separated(otherPlane, one, leafPlanes[i].magnitude, pruneReach)))
           continue;
+        if (candidates)
+          candidates->push_back(
+              {static_cast<std::uint32_t>(firstBegin + i), scratch.partnerIndices[slot]});
         firsts.push_back(one);
         seconds.push_back(other);
         firstIds.push_back(a.order[firstBegin + i]);
@@ -445,50 +460,93 @@ void markOverlaps(const QueryMesh& first, const QueryMesh& second,
   });
 }
 
-}  // namespace
-
-std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                                   kernels::Solver solver) {
-  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
-    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+/// Phases 1–4 of contacts(QueryMesh, QueryMesh): the contacts closer than `reach` of the pairs
+/// within `pruneReach` (≥ reach), sorted by ids, in the first mesh's prepared frame; every pair
+/// within `pruneReach` into `candidates` when given (then the runs go serially: a cache is
+/// made inside a caller's parallel loop over its pairs).
+std::vector<ContactPoint> descendedContacts(const detail::QueryMeshData& a,
+                                            const detail::QueryMeshData& b,
+                                            const detail::MatrixMotion* motion, double reach,
+                                            double pruneReach, kernels::Solver solver,
+                                            std::vector<CandidatePair>* candidates) {
   // Both trees are descended together down to pairs of leaves within reach (boxes grown by the
   // slack, so no pair the kernel would find is dropped); then each triangle of the first leaf
   // against the second leaf's eight. Moved meshes meet in the first one's prepared frame: the
   // second's boxes and, leaf by leaf, its triangles are carried there; nothing is rebuilt.
-  detail::checkPlacedPair(first, second, "contacts");
-  const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
-  const double reach = 2.0 * epsilon;
+  const detail::MovedTree secondTree(b.levels, motion);
   MeshPairScratch& scratch = MeshPairScratch::ofThread();
 
   // 1. The leaf pairs within reach, grouped by the first leaf: each of its triangles then meets
   // the triangles of all its second leaves in one kernel batch (the batched solvers want long
   // batches, not eight pairs a call).
-  detail::leafPairsWithin(a, b, secondTree, reach, scratch.pairs);
+  detail::leafPairsWithin(a, b, secondTree, pruneReach, scratch.pairs);
   groupByFirst(scratch.pairs, a.levels[0].size(), scratch.groups, scratch.start, scratch.grouped);
   secondLeavesOf(scratch.pairs, b.levels[0].size(), scratch.named);
   // 2. The second leaves they name, in the first's frame.
-  placePartnerLeaves(b, moved ? &motion : nullptr, scratch);
+  placePartnerLeaves(b, motion, scratch);
 
   // 3. The candidate pairs of a run of kGroupsPerBatch first leaves go to the kernels in one
   // batch of pairs: a first leaf has a few (nearly parallel surfaces: two), which would leave
-  // most of a batch's lanes idle and pay a call each. Runs are fixed by index, so the batches
-  // (and the bits of the hybrid solver, which can depend on a batch's other pairs) are the same
-  // for any number of threads.
+  // most of a batch's lanes idle and pay a call each. A pair's answer does not depend on its
+  // batch (kernels/hybrid.h), so neither on the runs nor on the thread count.
   const std::size_t runs = (scratch.groups.size() - 1 + kGroupsPerBatch - 1) / kGroupsPerBatch;
   std::vector<std::vector<ContactPoint>>& perRun = scratch.perRun;
   if (perRun.size() < runs) perRun.resize(runs);
-  parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
+  if (candidates) {
+    candidates->clear();
     RunScratch& work = RunScratch::ofThread();
-    for (std::size_t run = firstRun; run < endRun; ++run)
-      contactsOfRun(run, a, scratch, reach, solver, work, perRun[run]);
+    for (std::size_t run = 0; run < runs; ++run)
+      contactsOfRun(run, a, scratch, reach, pruneReach, solver, work, perRun[run], candidates);
+  } else {
+    parallelFor(0, runs, 1, [&](std::size_t firstRun, std::size_t endRun) {
+      RunScratch& work = RunScratch::ofThread();
+      for (std::size_t run = firstRun; run < endRun; ++run)
+        contactsOfRun(run, a, scratch, reach, pruneReach, solver, work, perRun[run], nullptr);
+    });
+  }
+  // 4. Sorted by ids.
+  return joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
+}
+
+/// The contacts closer than `reach` among the kept triangle pairs (sorted indices), in one
+/// kernel batch: phases 3–4 as a descent would give them, for the same pairs within reach.
+std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
+                                       const detail::QueryMeshData& b,
+                                       const detail::MatrixMotion* motion, double reach,
+                                       kernels::Solver solver,
+                                       const std::vector<std::uint32_t>& firstTriangles,
+                                       const std::vector<std::uint32_t>& secondTriangles) {
+  std::vector<ContactPoint> found;
+  if (firstTriangles.empty()) return found;
+  RunScratch& work = RunScratch::ofThread();
+  std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
+  firsts.clear();
+  seconds.clear();
+  for (std::size_t k = 0; k < firstTriangles.size(); ++k) {
+    firsts.push_back(a.triangle(firstTriangles[k]));
+    const Triangle other = b.triangle(secondTriangles[k]);
+    seconds.push_back(motion ? motion->apply(other) : other);  // as placePartnerLeaves does
+  }
+  work.firstBatch.assign(firsts);
+  work.secondBatch.assign(seconds);
+  kernels::PairResults& results = work.results;
+  results.reserve(firsts.size());
+  kernels::distances(solver, work.firstBatch, work.secondBatch, results);
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (results.distanceSquared(k) < reach * reach)
+      found.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
+                                   results.intersect(k), results.converged(k),
+                                   a.order[firstTriangles[k]], b.order[secondTriangles[k]]));
+  std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
+    return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
-  // 4. Sorted by ids; 5. overlaps marked; 6. moved to where the first mesh is.
-  std::vector<ContactPoint> found =
-      joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
+  return found;
+}
+
+/// Phases 5–6: overlaps marked (both meshes closed), then moved to where the first mesh is.
+void finishContacts(const QueryMesh& first, const QueryMesh& second,
+                    const RigidTransform& secondToFirst, double epsilon,
+                    std::vector<ContactPoint>& found) {
   if (first.closed() && second.closed()) markOverlaps(first, second, secondToFirst, epsilon, found);
   if (first.moved())
     for (ContactPoint& contact : found) {
@@ -496,6 +554,101 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       contact.normal = first.pose().rotation.rotate(contact.normal);
       contact.direction = first.pose().rotation.rotate(contact.direction);
     }
+}
+
+void checkEpsilon(double epsilon) {
+  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
+    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+}
+
+/// How far any point of `box` moves from where `then` puts it to where `now` does: at most the
+/// farthest corner's move (|(R − R₀)·p + t − t₀| is convex in p).
+double farthestMove(const Aabb& box, const RigidTransform& now, const RigidTransform& then) {
+  double farthest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
+                 (corner & 4) ? box.upper.z : box.lower.z};
+    farthest = std::max(farthest, distance(now.apply(p), then.apply(p)));
+  }
+  return farthest;
+}
+
+}  // namespace
+
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   kernels::Solver solver) {
+  checkEpsilon(epsilon);
+  detail::checkPlacedPair(first, second, "contacts");
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const double reach = 2.0 * epsilon;
+  std::vector<ContactPoint> found =
+      descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
+  finishContacts(first, second, secondToFirst, epsilon, found);
+  return found;
+}
+
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   ContactCache& cache, kernels::Solver solver) {
+  checkEpsilon(epsilon);
+  detail::checkPlacedPair(first, second, "contacts");
+  const detail::QueryMeshData &a = first.data(), &b = second.data();
+  const bool moved = first.moved() || second.moved();
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const double reach = 2.0 * epsilon;
+  const double skin = cache.skin_;
+  std::vector<ContactPoint> found;
+  if (cache.valid_ && cache.firstData_.get() == &a && cache.secondData_.get() == &b &&
+      cache.epsilon_ == epsilon && cache.solver_ == solver &&
+      farthestMove(b.bounds, secondToFirst, cache.secondToFirst_) <= cache.budget_) {
+    found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver, cache.firstTriangles_,
+                         cache.secondTriangles_);
+    ++cache.reused_;
+  } else if (std::isfinite(skin) && skin > 0.0) {
+    // The kept pairs are those the kernels could find within 2ε until the second has moved by
+    // the skin less what rounding can add: the kernels' error at both poses (10⁻¹² of a pair's
+    // size: kernels/hybrid.h), the triangles' placement and the move's bound (a few ulps of the
+    // coordinates each); allowed 2⁻³⁶ of the largest coordinate, as the flat query's prune is
+    // (2ε itself has the prune's slack in the boxes and planes already).
+    const Aabb moved2 = [&] {
+      Aabb box;
+      for (int corner = 0; corner < 8; ++corner)
+        box.extend(secondToFirst.apply({(corner & 1) ? b.bounds.upper.x : b.bounds.lower.x,
+                                        (corner & 2) ? b.bounds.upper.y : b.bounds.lower.y,
+                                        (corner & 4) ? b.bounds.upper.z : b.bounds.lower.z}));
+      return box;
+    }();
+    const double magnitude = std::max({maxAbs(a.bounds.lower), maxAbs(a.bounds.upper),
+                                       maxAbs(moved2.lower), maxAbs(moved2.upper)});
+    std::vector<CandidatePair> candidates;
+    found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach + skin, solver,
+                              &candidates);
+    std::sort(candidates.begin(), candidates.end(),
+              [](const CandidatePair& x, const CandidatePair& y) {
+                return x.first != y.first ? x.first < y.first : x.second < y.second;
+              });
+    cache.firstTriangles_.clear();
+    cache.secondTriangles_.clear();
+    for (const CandidatePair& pair : candidates) {
+      cache.firstTriangles_.push_back(pair.first);
+      cache.secondTriangles_.push_back(pair.second);
+    }
+    cache.valid_ = true;
+    cache.firstData_ = first.sharedData();
+    cache.secondData_ = second.sharedData();
+    cache.epsilon_ = epsilon;
+    cache.solver_ = solver;
+    cache.secondToFirst_ = secondToFirst;
+    cache.budget_ = skin - 0x1p-36 * magnitude;
+    ++cache.made_;
+  } else {
+    found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
+    ++cache.made_;
+  }
+  finishContacts(first, second, secondToFirst, epsilon, found);
   return found;
 }
 

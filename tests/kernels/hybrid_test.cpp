@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "delta/kernels/penalty.h"
 #include "delta/kernels/point_triangle.h"
 #include "delta/kernels/segment_segment.h"
 #include "delta/kernels/triangle_batch.h"
@@ -260,6 +261,46 @@ TEST(Hybrid, KnownPairs) {
 
 namespace delta::kernels {
 namespace {
+
+// A pair's answer is the same bits in any batch: alone, or among others at any place (the DEM's
+// contact caches hand the kernels the same pairs in other batches than a fresh query would;
+// query/contacts.h, ContactCache). Every family, every ISA, the hybrid and the penalty solver;
+// the hybrid's stage-2 pairs of a batch come out one, several or none in the sizes below.
+TEST(Hybrid, APairsAnswerDoesNotDependOnItsBatch) {
+  for (Isa isa : supportedIsas())
+    for (auto family : kAllFamilies) {
+      SCOPED_TRACE(name(isa));
+      const test::PairBatch batch = test::makeBatch(test::makePairs(family, 120, 29));
+      for (const bool penalty : {false, true}) {
+        const auto solve = [&](const TriangleSoA& first, const TriangleSoA& second,
+                               PairResults& results) {
+          penalty ? penaltyDistances(first, second, results, isa)
+                  : hybridDistances(first, second, results, isa);
+        };
+        PairResults whole(batch.size());
+        solve(batch.firstSoa, batch.secondSoa, whole);
+        std::size_t mismatches = 0;
+        for (std::size_t size : {1, 2, 3, 7, 17}) {
+          for (std::size_t begin = 0; begin + size <= batch.size(); begin += size) {
+            const std::vector<Triangle> first(batch.first.begin() + begin,
+                                              batch.first.begin() + begin + size);
+            const std::vector<Triangle> second(batch.second.begin() + begin,
+                                               batch.second.begin() + begin + size);
+            PairResults part(size);
+            solve(test::flattenTriangles(first), test::flattenTriangles(second), part);
+            for (std::size_t k = 0; k < size; ++k) {
+              const std::size_t i = begin + k;
+              const bool same = part.distanceSquared(k) == whole.distanceSquared(i) &&
+                                part.p(k) == whole.p(i) && part.q(k) == whole.q(i) &&
+                                part.intersect(k) == whole.intersect(i);
+              mismatches += same ? 0 : 1;
+            }
+          }
+        }
+        EXPECT_EQ(mismatches, 0u) << test::name(family) << (penalty ? ", penalty" : ", hybrid");
+      }
+    }
+}
 
 // The DEM case: user threads call the hybrid at once on shared, const triangle blocks (each with
 // its own results). Every thread gets the serial answer, bit for bit; run under TSan in CI.

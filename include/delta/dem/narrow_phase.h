@@ -6,6 +6,7 @@
 
 #include "delta/core/contact_point.h"
 #include "delta/core/sphere.h"
+#include "delta/query/contacts.h"
 #include "delta/query/query_mesh.h"
 
 namespace delta::dem {
@@ -39,10 +40,16 @@ struct PairContacts {
 /// Throws delta::Error as contactdetection::contacts and filter do (ε or h not finite and
 /// positive).
 ///
-/// Threading: reads both meshes only; safe to call concurrently; serial inside an enclosing
-/// OpenMP parallel region (core/parallel.h).
+/// With `cache` (not null), step 1 goes through it (contactdetection::ContactCache: the same
+/// contacts, bit for bit, from the triangle pairs it kept while the meshes have moved little
+/// against each other), serially; it must be the pair's own, used with the same
+/// `compareInSecondFrame` each time.
+///
+/// Threading: reads both meshes only; safe to call concurrently (each with its own cache);
+/// serial inside an enclosing OpenMP parallel region (core/parallel.h).
 PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                          double filterDistance, bool compareInSecondFrame = false);
+                          double filterDistance, bool compareInSecondFrame = false,
+                          contactdetection::ContactCache* cache = nullptr);
 
 /// The narrow phase of two sphere particles (kernels::sphereSphere): one point when the gap
 /// between the surfaces, |c₁ − c₂| − r₁ − r₂, is below 2ε (strictly), none otherwise. As for

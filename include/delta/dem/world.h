@@ -210,6 +210,13 @@ struct Energies {
 /// several processes (DistributedWorld) makes its list anew every step, and so does a World
 /// whose particles or obstacles were set or added since the last step.
 ///
+/// Contact caches: under the point law each pair of two meshes (particle–particle, or particle
+/// and obstacle) keeps a contactdetection::ContactCache (query/contacts.h) with a skin of ε/4
+/// while it stays in the broad phase's pairs: the triangle pairs within 2ε + ε/4 when it was
+/// made, handed alone to the kernels until the two bodies have moved ε/4 against each other. The
+/// contacts are those of a fresh query, bit for bit, so neither the thread count nor the process
+/// count (a pair's cache is made anew where a pair moves to another process) changes a result.
+///
 /// The narrow phase, in parallel over
 /// those pairs (delta::parallelFor, each pair into its own slot), runs pairContacts
 /// (narrow_phase.h: contactdetection::contacts on the two placed meshes, the particle first, and
@@ -411,6 +418,9 @@ class World {
   void evaluateForces(bool halfStepVelocities, Exchange* exchange);
   /// Each pair's contact points (the point law) or overlap regions (the volume law).
   void detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes);
+  /// Carries the contact caches of the pairs still found over to this evaluation's pairs (new
+  /// ones empty, those of pairs gone dropped) and points cacheOf_ at them.
+  void routeContactCaches(std::span<const Interaction> pairs);
   /// Each pair's forces from its contacts, with the velocities predicted to the positions' time
   /// when `halfStepVelocities`.
   void applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
@@ -460,6 +470,12 @@ class World {
   std::vector<std::uint32_t> ids_;   ///< each particle's id: its index, unless distributed
   std::size_t owned_ = 0;
   std::vector<Obstacle> obstacles_;
+  /// Each mesh pair's contact cache (query/contacts.h), keyed and sorted like the springs:
+  /// the pairs of the last evaluation that had triangles on both sides, under the point law.
+  using ContactCaches = std::vector<std::pair<std::uint64_t, contactdetection::ContactCache>>;
+  ContactCaches particleCaches_, obstacleCaches_;
+  /// Each pair's cache for this evaluation (null: none), for detectContacts.
+  std::vector<contactdetection::ContactCache*> cacheOf_;
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
   std::vector<QueryMesh> placed_;
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now

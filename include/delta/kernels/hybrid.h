@@ -41,6 +41,9 @@ inline constexpr int kHybridIterations = 3;
 /// unique. For an intersecting pair p = q, a point of both triangles (stages 1–2: where an edge
 /// pierces the other triangle; stage 3: the brute force's point). errorBound is 0 and converged
 /// is true for every pair; newtonStep is the Newton's last step (+∞ where it diverged).
+/// A pair's answer is the same bits whatever batch it is in, and on AVX2 as on AVX-512 (SSE2
+/// as the scalar build, which round a·b + c twice where those fuse it): a lone pair the first
+/// stage left goes to the narrowest table of the same arithmetic.
 ///
 /// Pairs: as penaltyDistances. Returns the count of pairs, of pairs left to stage 2
 /// (`rechecked`) and of pairs recomputed by the brute force (`fallbacks`); padding lanes are

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "delta/core/contact_point.h"
@@ -64,6 +66,64 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 /// Throws and threading as the flattened form; moved meshes are checked where they are and with
 /// the second carried into the first's frame (where the kernels meet them).
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   kernels::Solver solver = kernels::Solver::Hybrid);
+
+/// What contacts(first, second, ε, cache) keeps of a pair of prepared meshes from one call to
+/// the next (temporal coherence, as a DEM pair in contact is met step after step): the triangle
+/// pairs closer than 2ε + `skin` where the second mesh was, relative to the first, when it was
+/// made. Until the second has moved against the first by about the skin (bounded at the corners
+/// of its box), no other triangle pair can have come within 2ε, so the two trees are not
+/// descended again: only the kept pairs go to the kernels. A larger skin keeps the cache longer
+/// and hands the kernels more pairs each call.
+///
+/// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
+class ContactCache {
+ public:
+  /// An empty cache (made at the first call) that keeps pairs within 2ε + `skin`; a skin that is
+  /// not finite and positive makes every call a fresh query.
+  explicit ContactCache(double skin = 0.0) noexcept : skin_(skin) {}
+
+  /// The skin it was given.
+  double skin() const noexcept { return skin_; }
+  /// The triangle pairs it holds (0: empty, or a pair further than 2ε + skin apart).
+  std::size_t size() const noexcept { return firstTriangles_.size(); }
+  /// How many calls made it anew, and how many it answered; for statistics.
+  std::size_t made() const noexcept { return made_; }
+  std::size_t reused() const noexcept { return reused_; }
+  /// Forgets what it holds: the next call makes it anew.
+  void clear() noexcept {
+    valid_ = false;
+    firstData_.reset();
+    secondData_.reset();
+  }
+
+ private:
+  friend std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second,
+                                            double epsilon, ContactCache& cache,
+                                            kernels::Solver solver);
+  double skin_ = 0.0;
+  bool valid_ = false;
+  /// The prepared meshes it was made for, held: no other mesh comes to their addresses.
+  std::shared_ptr<const void> firstData_, secondData_;
+  double epsilon_ = 0.0;
+  kernels::Solver solver_ = kernels::Solver::Hybrid;
+  RigidTransform secondToFirst_;  ///< when made
+  double budget_ = 0.0;           ///< how far the second may move: the skin less rounding
+  std::vector<std::uint32_t> firstTriangles_, secondTriangles_;  ///< prepared (sorted) indices
+  std::size_t made_ = 0, reused_ = 0;
+};
+
+/// contacts(first, second, ε, solver), the same contacts bit for bit, through `cache`: made
+/// (from a descent of both trees to 2ε + skin) when empty, made for other meshes, ε or solver,
+/// or when the second mesh has moved against the first by more than its skin allows since;
+/// otherwise only the triangle pairs it holds are handed to the kernels, in one batch (a pair's
+/// answer does not depend on the batch it is in: kernels/hybrid.h). Runs serially.
+///
+/// Throws as contacts(first, second, ε, solver).
+///
+/// Threading: as contacts(); `cache` is the caller's, one thread at a time.
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   ContactCache& cache,
                                    kernels::Solver solver = kernels::Solver::Hybrid);
 
 }  // namespace delta::contactdetection

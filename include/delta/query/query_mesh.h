@@ -104,6 +104,9 @@ class QueryMesh {
 
   /// The prepared data, for the query implementations.
   const detail::QueryMeshData& data() const noexcept { return *data_; }
+  /// The same, shared: what keeps it alive (a ContactCache holds it, so that no other mesh's
+  /// data can come to the same address while it names it).
+  const std::shared_ptr<const detail::QueryMeshData>& sharedData() const noexcept { return data_; }
 
  private:
   std::shared_ptr<const detail::QueryMeshData> data_;

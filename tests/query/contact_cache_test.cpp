@@ -1,0 +1,154 @@
+// contacts(first, second, ε, cache) against contacts(first, second, ε): the same contacts, bit
+// for bit, at every pose of a pair moved along a path, whether the cache answered or was made
+// anew. The paths move the second mesh against the first by small steps (the cache answers most
+// calls) and by jumps (it must be made anew), both meshes moved or only one, on random and
+// adversarial pairs: granulates, overlapping icospheres, a box face on a box face (coplanar,
+// touching), a cylinder resting on a box a million units from the origin, a tiny pair.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "delta/core/error.h"
+#include "delta/core/rotation.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/contacts.h"
+#include "delta/query/query_mesh.h"
+
+namespace delta::contactdetection {
+namespace {
+
+bool sameContacts(const std::vector<ContactPoint>& a, const std::vector<ContactPoint>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const ContactPoint &x = a[i], &y = b[i];
+    const bool same = std::memcmp(&x.x, &y.x, sizeof(Vec3)) == 0 &&
+                      std::memcmp(&x.normal, &y.normal, sizeof(Vec3)) == 0 &&
+                      std::memcmp(&x.direction, &y.direction, sizeof(Vec3)) == 0 &&
+                      std::memcmp(&x.distance, &y.distance, sizeof(double)) == 0 &&
+                      x.overlap == y.overlap && x.converged == y.converged && x.first == y.first &&
+                      x.second == y.second;
+    if (!same) return false;
+  }
+  return true;
+}
+
+struct Scene {
+  const char* name;
+  Mesh first, second;
+  double epsilon;
+  double step;  ///< the path's step, against the scene's size
+};
+
+std::vector<Scene> scenes() {
+  std::vector<Scene> all;
+  Mesh a = primitives::granulate(3);
+  Mesh b = primitives::granulate(4);
+  b.translate({1.75, 0.1, 0.0});
+  all.push_back({"granulates", a, b, 0.05, 0.004});
+  Mesh c = primitives::icosphere(3);
+  Mesh d = primitives::icosphere(3);
+  d.rotate({1, 0, 0}, 0.3).translate({1.8, 0.3, 0});
+  all.push_back({"overlapping icospheres", c, d, 0.01, 0.002});
+  all.push_back({"box face on box face", primitives::box({1, 1, 1}),
+                 primitives::box({1, 1, 1}, {0.2, 0.1, 1.0}), 0.01, 0.001});
+  all.push_back({"cylinder on a box far from the origin", primitives::box({2, 2, 0.5}, {1e6, 0, 0}),
+                 primitives::cylinder(0.5, 1, 24, {1e6 + 0.3, 0.2, 0.75 + 1e-3}), 0.002, 2e-4});
+  Mesh e = primitives::granulate(5, {1e-6, 1e-6, 1e-6});
+  Mesh f = primitives::granulate(6, {1e-6, 1e-6, 1e-6});
+  f.translate({1.8e-6, 0.0, 0.0});
+  all.push_back({"tiny granulates", e, f, 5e-8, 4e-9});
+  return all;
+}
+
+/// The move at step `s` of a path: a drift and a turn of about the scene's step, with a jump
+/// every 37 steps (40 steps at once) that no skin covers.
+RigidTransform poseAt(int s, double step, std::mt19937_64& random) {
+  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
+  const double jump = s % 37 == 36 ? 40.0 : 1.0;
+  const Vec3 axis{0.3 + uniform(), 0.5, 1.0};
+  return RigidTransform{Quaternion::fromAxisAngle(axis, 0.5 * step),
+                        Vec3{uniform(), uniform(), uniform()} * (jump * step)};
+}
+
+TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
+  for (const Scene& scene : scenes()) {
+    SCOPED_TRACE(scene.name);
+    for (const bool moveFirst : {false, true}) {
+      const QueryMesh first(scene.first), second(scene.second);
+      ContactCache cache(0.5 * scene.epsilon);
+      std::mt19937_64 random(7);
+      RigidTransform secondPose, firstPose;
+      std::size_t withContacts = 0;
+      for (int s = 0; s < 150; ++s) {
+        const RigidTransform step = poseAt(s, scene.step, random);
+        // Turned about the second mesh's centre, so that it rolls on the first.
+        const Vec3 centre = secondPose.apply(scene.second.bounds().center());
+        secondPose = RigidTransform::translationBy(step.translation) *
+                     RigidTransform::rotationAbout(step.rotation, centre) * secondPose;
+        if (moveFirst)
+          firstPose = RigidTransform::translationBy(step.translation * 0.5) * firstPose;
+        QueryMesh a = first, b = second;
+        a.setPose(firstPose);
+        b.setPose(secondPose);
+        const std::vector<ContactPoint> fresh = contacts(a, b, scene.epsilon);
+        const std::vector<ContactPoint> cached = contacts(a, b, scene.epsilon, cache);
+        ASSERT_TRUE(sameContacts(cached, fresh))
+            << "step " << s << ": " << cached.size() << " against " << fresh.size();
+        withContacts += fresh.empty() ? 0 : 1;
+      }
+      // Both ways of answering were taken, on a path that touched most of the time.
+      EXPECT_GT(cache.reused(), 75u);
+      EXPECT_GT(cache.made(), 4u);
+      EXPECT_GT(withContacts, 75u);
+    }
+  }
+}
+
+TEST(ContactCache, OtherMeshesEpsilonOrSolverMakeItAnew) {
+  const QueryMesh a(primitives::granulate(3));
+  QueryMesh b(primitives::granulate(4));
+  b.setPose(RigidTransform::translationBy({1.7, 0.1, 0.0}));
+  QueryMesh c(primitives::icosphere(2));
+  c.setPose(RigidTransform::translationBy({1.9, 0.0, 0.0}));
+  ContactCache cache(0.02);
+  EXPECT_TRUE(sameContacts(contacts(a, b, 0.05, cache), contacts(a, b, 0.05)));
+  EXPECT_TRUE(sameContacts(contacts(a, b, 0.05, cache), contacts(a, b, 0.05)));
+  EXPECT_EQ(cache.made(), 1u);
+  EXPECT_EQ(cache.reused(), 1u);
+  EXPECT_TRUE(sameContacts(contacts(a, c, 0.05, cache), contacts(a, c, 0.05)));  // another mesh
+  EXPECT_TRUE(sameContacts(contacts(c, b, 0.05, cache), contacts(c, b, 0.05)));  // swapped roles
+  EXPECT_TRUE(sameContacts(contacts(c, b, 0.1, cache), contacts(c, b, 0.1)));    // another ε
+  EXPECT_TRUE(sameContacts(contacts(c, b, 0.1, cache, kernels::Solver::BruteForce),
+                           contacts(c, b, 0.1, kernels::Solver::BruteForce)));
+  EXPECT_EQ(cache.made(), 5u);
+  cache.clear();
+  EXPECT_TRUE(sameContacts(contacts(c, b, 0.1, cache), contacts(c, b, 0.1)));
+  EXPECT_EQ(cache.made(), 6u);
+}
+
+TEST(ContactCache, NoSkinAskedIsAFreshQueryEachCall) {
+  const QueryMesh a(primitives::granulate(3));
+  QueryMesh b(primitives::granulate(4));
+  b.setPose(RigidTransform::translationBy({1.7, 0.1, 0.0}));
+  for (const double skin : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    ContactCache cache(skin);
+    for (int call = 0; call < 3; ++call)
+      EXPECT_TRUE(sameContacts(contacts(a, b, 0.05, cache), contacts(a, b, 0.05)));
+    EXPECT_EQ(cache.reused(), 0u) << skin;
+    EXPECT_EQ(cache.size(), 0u) << skin;
+  }
+}
+
+TEST(ContactCache, BadInputThrowsAsTheQueryDoes) {
+  const QueryMesh a(primitives::granulate(3)), b(primitives::granulate(4));
+  ContactCache cache(0.01);
+  for (const double epsilon : {0.0, -1.0, std::nan("")})
+    EXPECT_THROW(contacts(a, b, epsilon, cache), Error) << epsilon;
+  EXPECT_EQ(cache.made(), 0u);
+}
+
+}  // namespace
+}  // namespace delta::contactdetection
