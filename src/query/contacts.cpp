@@ -332,9 +332,11 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
   });
 }
 
-/// A triangle pair kept by a ContactCache: sorted indices into the first and second mesh.
+/// A triangle pair kept by a ContactCache: sorted indices into the first and second mesh, and
+/// the kernels' distance between them when kept.
 struct CandidatePair {
   std::uint32_t first, second;
+  double distance;
 };
 
 /// Phase 3: the contacts of run `run` (first leaves run·kGroupsPerBatch onward): per group, the
@@ -399,7 +401,7 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
           continue;
         if (candidates)
           candidates->push_back(
-              {static_cast<std::uint32_t>(firstBegin + i), scratch.partnerIndices[slot]});
+              {static_cast<std::uint32_t>(firstBegin + i), scratch.partnerIndices[slot], 0.0});
         firsts.push_back(one);
         seconds.push_back(other);
         firstIds.push_back(a.order[firstBegin + i]);
@@ -418,6 +420,9 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
       out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
                                  results.intersect(k), results.converged(k), firstIds[k],
                                  secondIds[k]));
+  if (candidates)  // the run's pairs are its last ones, in the batch's order
+    for (std::size_t k = 0; k < results.size(); ++k)
+      (*candidates)[candidates->size() - results.size() + k].distance = results.distance(k);
 }
 
 /// Phase 4: every run's contacts in one list, sorted by (first, second) id.
@@ -508,25 +513,38 @@ std::vector<ContactPoint> descendedContacts(const detail::QueryMeshData& a,
   return joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
 }
 
-/// The contacts closer than `reach` among the kept triangle pairs (sorted indices), in one
-/// kernel batch: phases 3–4 as a descent would give them, for the same pairs within reach.
+/// A ContactCache's pairs, as keptContacts reads them.
+struct ContactCacheView {
+  const std::vector<std::uint32_t>& firstTriangles;
+  const std::vector<std::uint32_t>& secondTriangles;
+  const std::vector<double>& distances;
+};
+
+/// The contacts closer than `reach` among the kept triangle pairs (sorted indices) whose
+/// distance when kept is below `nearer` (2ε plus the move since and the rounding allowance), in
+/// one kernel batch: phases 3–4 as a descent would give them, for the same pairs within reach.
 std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
                                        const detail::QueryMeshData& b,
                                        const detail::MatrixMotion* motion, double reach,
-                                       kernels::Solver solver,
-                                       const std::vector<std::uint32_t>& firstTriangles,
-                                       const std::vector<std::uint32_t>& secondTriangles) {
+                                       kernels::Solver solver, const ContactCacheView& kept,
+                                       double nearer) {
   std::vector<ContactPoint> found;
-  if (firstTriangles.empty()) return found;
   RunScratch& work = RunScratch::ofThread();
   std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
+  std::vector<std::uint32_t>&firstIds = work.firstIds, &secondIds = work.secondIds;
   firsts.clear();
   seconds.clear();
-  for (std::size_t k = 0; k < firstTriangles.size(); ++k) {
-    firsts.push_back(a.triangle(firstTriangles[k]));
-    const Triangle other = b.triangle(secondTriangles[k]);
+  firstIds.clear();
+  secondIds.clear();
+  for (std::size_t k = 0; k < kept.firstTriangles.size(); ++k) {
+    if (!(kept.distances[k] < nearer)) continue;  // still beyond 2ε, rounding allowed for
+    firsts.push_back(a.triangle(kept.firstTriangles[k]));
+    const Triangle other = b.triangle(kept.secondTriangles[k]);
     seconds.push_back(motion ? motion->apply(other) : other);  // as placePartnerLeaves does
+    firstIds.push_back(a.order[kept.firstTriangles[k]]);
+    secondIds.push_back(b.order[kept.secondTriangles[k]]);
   }
+  if (firsts.empty()) return found;
   work.firstBatch.assign(firsts);
   work.secondBatch.assign(seconds);
   kernels::PairResults& results = work.results;
@@ -535,8 +553,8 @@ std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
   for (std::size_t k = 0; k < results.size(); ++k)
     if (results.distanceSquared(k) < reach * reach)
       found.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
-                                   results.intersect(k), results.converged(k),
-                                   a.order[firstTriangles[k]], b.order[secondTriangles[k]]));
+                                   results.intersect(k), results.converged(k), firstIds[k],
+                                   secondIds[k]));
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
@@ -601,11 +619,13 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const double reach = 2.0 * epsilon;
   const double skin = cache.skin_;
   std::vector<ContactPoint> found;
-  if (cache.valid_ && cache.firstData_.get() == &a && cache.secondData_.get() == &b &&
-      cache.epsilon_ == epsilon && cache.solver_ == solver &&
-      farthestMove(b.bounds, secondToFirst, cache.secondToFirst_) <= cache.budget_) {
-    found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver, cache.firstTriangles_,
-                         cache.secondTriangles_);
+  const bool same = cache.valid_ && cache.firstData_.get() == &a && cache.secondData_.get() == &b &&
+                    cache.epsilon_ == epsilon && cache.solver_ == solver;
+  const double move = same ? farthestMove(b.bounds, secondToFirst, cache.secondToFirst_) : 0.0;
+  if (same && move <= cache.budget_) {
+    found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver,
+                         {cache.firstTriangles_, cache.secondTriangles_, cache.distances_},
+                         reach + move + cache.allowance_);
     ++cache.reused_;
   } else if (std::isfinite(skin) && skin > 0.0) {
     // The kept pairs are those the kernels could find within 2ε until the second has moved by
@@ -632,9 +652,11 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
               });
     cache.firstTriangles_.clear();
     cache.secondTriangles_.clear();
+    cache.distances_.clear();
     for (const CandidatePair& pair : candidates) {
       cache.firstTriangles_.push_back(pair.first);
       cache.secondTriangles_.push_back(pair.second);
+      cache.distances_.push_back(solver == kernels::Solver::Penalty ? 0.0 : pair.distance);
     }
     cache.valid_ = true;
     cache.firstData_ = first.sharedData();
@@ -642,7 +664,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     cache.epsilon_ = epsilon;
     cache.solver_ = solver;
     cache.secondToFirst_ = secondToFirst;
-    cache.budget_ = skin - 0x1p-36 * magnitude;
+    cache.allowance_ = 0x1p-36 * magnitude;
+    cache.budget_ = skin - cache.allowance_;
     ++cache.made_;
   } else {
     found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);

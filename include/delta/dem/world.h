@@ -211,9 +211,9 @@ struct Energies {
 /// whose particles or obstacles were set or added since the last step.
 ///
 /// Contact caches: under the point law each pair of two meshes (particle–particle, or particle
-/// and obstacle) keeps a contactdetection::ContactCache (query/contacts.h) with a skin of ε/4
-/// while it stays in the broad phase's pairs: the triangle pairs within 2ε + ε/4 when it was
-/// made, handed alone to the kernels until the two bodies have moved ε/4 against each other. The
+/// and obstacle) keeps a contactdetection::ContactCache (query/contacts.h) with a skin of ε/2
+/// while it stays in the broad phase's pairs: the triangle pairs within 2ε + ε/2 when it was
+/// made, handed alone to the kernels until the two bodies have moved ε/2 against each other. The
 /// contacts are those of a fresh query, bit for bit, so neither the thread count nor the process
 /// count (a pair's cache is made anew where a pair moves to another process) changes a result.
 ///

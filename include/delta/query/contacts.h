@@ -73,8 +73,9 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
 /// pairs closer than 2ε + `skin` where the second mesh was, relative to the first, when it was
 /// made. Until the second has moved against the first by about the skin (bounded at the corners
 /// of its box), no other triangle pair can have come within 2ε, so the two trees are not
-/// descended again: only the kept pairs go to the kernels. A larger skin keeps the cache longer
-/// and hands the kernels more pairs each call.
+/// descended again: only the kept pairs go to the kernels, and of those only the ones whose
+/// distance when kept, less the move since, is still under 2ε. A larger skin keeps the cache
+/// longer and costs a larger descent each time it is made.
 ///
 /// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
 class ContactCache {
@@ -109,7 +110,11 @@ class ContactCache {
   kernels::Solver solver_ = kernels::Solver::Hybrid;
   RigidTransform secondToFirst_;  ///< when made
   double budget_ = 0.0;           ///< how far the second may move: the skin less rounding
+  double allowance_ = 0.0;        ///< the rounding allowed for: 2⁻³⁶ of the coordinates
   std::vector<std::uint32_t> firstTriangles_, secondTriangles_;  ///< prepared (sorted) indices
+  /// The kernels' distance of each kept pair when made (0 with the penalty solver, whose
+  /// distances may be too long): less the move since, a lower bound of the distance now.
+  std::vector<double> distances_;
   std::size_t made_ = 0, reused_ = 0;
 };
 
