@@ -143,8 +143,10 @@ PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, doubl
                           double filterDistance, bool compareInSecondFrame,
                           contactdetection::ContactCache* cache) {
   PairContacts result;
+  // Through the cache the inside test waits for the points filter(h) keeps.
   const auto detected = [&](const QueryMesh& one, const QueryMesh& other) {
-    return cache ? contactdetection::contacts(one, other, epsilon, *cache)
+    return cache ? contactdetection::contacts(one, other, epsilon, *cache, kernels::Solver::Hybrid,
+                                              contactdetection::InsideTest::later)
                  : contactdetection::contacts(one, other, epsilon);
   };
   std::vector<ContactPoint> found =
@@ -152,6 +154,7 @@ PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, doubl
   result.trianglePairs = found.size();
   if (found.empty()) return result;
   std::vector<ContactPoint> kept = contactdetection::filter(found, filterDistance);
+  if (cache) contactdetection::markInside(first, second, epsilon, kept);
   for (ContactPoint& contact : kept)
     closestToP(contact, second);
   result.points = kept.size() > 1 ? contactdetection::filter(kept, filterDistance) : kept;

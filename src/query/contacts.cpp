@@ -436,12 +436,12 @@ std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoi
 
 /// Phase 5, for two closed meshes: a contact whose triangles do not cross is marked overlapping
 /// where its x lies inside both (each mesh's nearest-triangle sign, or its winding number where
-/// it crosses itself). `found` in the first mesh's prepared frame.
-void markOverlaps(const QueryMesh& first, const QueryMesh& second,
-                  const RigidTransform& secondToFirst, double epsilon,
-                  std::vector<ContactPoint>& found) {
+/// it crosses itself); `toFirst` and `toSecond` carry x into each mesh's prepared frame.
+template <class ToFirst, class ToSecond>
+void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                    std::span<ContactPoint> found, const ToFirst& toFirst,
+                    const ToSecond& toSecond) {
   const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
   // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
   const double limit = 4.0 * epsilon * epsilon;
   // A closed mesh that crosses itself is signed by its winding number (pseudonormals are wrong
@@ -449,7 +449,6 @@ void markOverlaps(const QueryMesh& first, const QueryMesh& second,
   const bool aCrosses = a.selfIntersections().any(), bCrosses = b.selfIntersections().any();
   aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
   bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();
-  const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
   const auto inside = [limit, &a, aCrosses, bCrosses](const detail::QueryMeshData& mesh,
                                                       const Vec3& x) {
     const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
@@ -460,9 +459,19 @@ void markOverlaps(const QueryMesh& first, const QueryMesh& second,
   parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       if (!found[i].overlap)
-        found[i].overlap = inside(a, found[i].x) &&
-                           inside(b, moved ? firstToSecond.apply(found[i].x) : found[i].x);
+        found[i].overlap = inside(a, toFirst(found[i].x)) && inside(b, toSecond(found[i].x));
   });
+}
+
+/// Phase 5 on contacts in the first mesh's prepared frame.
+void markOverlaps(const QueryMesh& first, const QueryMesh& second,
+                  const RigidTransform& secondToFirst, double epsilon,
+                  std::vector<ContactPoint>& found) {
+  const bool moved = first.moved() || second.moved();
+  const detail::MatrixMotion firstToSecond = detail::matrixMotion(secondToFirst.inverse());
+  markInsideBoth(
+      first, second, epsilon, found, [](const Vec3& x) { return x; },
+      [&](const Vec3& x) { return moved ? firstToSecond.apply(x) : x; });
 }
 
 /// Phases 1–4 of contacts(QueryMesh, QueryMesh): the contacts closer than `reach` of the pairs
@@ -561,11 +570,13 @@ std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
   return found;
 }
 
-/// Phases 5–6: overlaps marked (both meshes closed), then moved to where the first mesh is.
+/// Phases 5–6: overlaps marked (both meshes closed; unless `inside` leaves it to the caller),
+/// then moved to where the first mesh is.
 void finishContacts(const QueryMesh& first, const QueryMesh& second,
-                    const RigidTransform& secondToFirst, double epsilon,
+                    const RigidTransform& secondToFirst, double epsilon, InsideTest inside,
                     std::vector<ContactPoint>& found) {
-  if (first.closed() && second.closed()) markOverlaps(first, second, secondToFirst, epsilon, found);
+  if (first.closed() && second.closed() && inside == InsideTest::now)
+    markOverlaps(first, second, secondToFirst, epsilon, found);
   if (first.moved())
     for (ContactPoint& contact : found) {
       contact.x = first.pose().apply(contact.x);
@@ -579,16 +590,19 @@ void checkEpsilon(double epsilon) {
     throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
 }
 
-/// How far any point of `box` moves from where `then` puts it to where `now` does: at most the
-/// farthest corner's move (|(R − R₀)·p + t − t₀| is convex in p).
-double farthestMove(const Aabb& box, const RigidTransform& now, const RigidTransform& then) {
+/// How far any point of `box` moves from where (`rotation`, `translation`) put it to where
+/// `now` does: at most the farthest corner's move (|(R − R₀)·p + t − t₀| is convex in p).
+double farthestMove(const Aabb& box, const detail::MatrixMotion& now, const Mat3& rotation,
+                    const Vec3& translation) noexcept {
+  const Mat3 turn = now.rotation + rotation * -1.0;
+  const Vec3 shift = now.translation - translation;
   double farthest = 0.0;
   for (int corner = 0; corner < 8; ++corner) {
     const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
                  (corner & 4) ? box.upper.z : box.lower.z};
-    farthest = std::max(farthest, distance(now.apply(p), then.apply(p)));
+    farthest = std::max(farthest, lengthSquared(turn * p + shift));
   }
-  return farthest;
+  return std::sqrt(farthest);
 }
 
 }  // namespace
@@ -604,12 +618,12 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const double reach = 2.0 * epsilon;
   std::vector<ContactPoint> found =
       descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
-  finishContacts(first, second, secondToFirst, epsilon, found);
+  finishContacts(first, second, secondToFirst, epsilon, InsideTest::now, found);
   return found;
 }
 
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                                   ContactCache& cache, kernels::Solver solver) {
+                                   ContactCache& cache, kernels::Solver solver, InsideTest inside) {
   checkEpsilon(epsilon);
   detail::checkPlacedPair(first, second, "contacts");
   const detail::QueryMeshData &a = first.data(), &b = second.data();
@@ -621,7 +635,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   std::vector<ContactPoint> found;
   const bool same = cache.valid_ && cache.firstData_.get() == &a && cache.secondData_.get() == &b &&
                     cache.epsilon_ == epsilon && cache.solver_ == solver;
-  const double move = same ? farthestMove(b.bounds, secondToFirst, cache.secondToFirst_) : 0.0;
+  const double move =
+      same ? farthestMove(b.bounds, motion, cache.rotation_, cache.translation_) : 0.0;
   if (same && move <= cache.budget_) {
     found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver,
                          {cache.firstTriangles_, cache.secondTriangles_, cache.distances_},
@@ -633,7 +648,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     // size: kernels/hybrid.h), the triangles' placement and the move's bound (a few ulps of the
     // coordinates each); allowed 2⁻³⁶ of the largest coordinate, as the flat query's prune is
     // (2ε itself has the prune's slack in the boxes and planes already).
-    const Aabb moved2 = [&] {
+    const Aabb secondBox = [&] {
       Aabb box;
       for (int corner = 0; corner < 8; ++corner)
         box.extend(secondToFirst.apply({(corner & 1) ? b.bounds.upper.x : b.bounds.lower.x,
@@ -642,7 +657,7 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
       return box;
     }();
     const double magnitude = std::max({maxAbs(a.bounds.lower), maxAbs(a.bounds.upper),
-                                       maxAbs(moved2.lower), maxAbs(moved2.upper)});
+                                       maxAbs(secondBox.lower), maxAbs(secondBox.upper)});
     std::vector<CandidatePair> candidates;
     found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach + skin, solver,
                               &candidates);
@@ -663,7 +678,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     cache.secondData_ = second.sharedData();
     cache.epsilon_ = epsilon;
     cache.solver_ = solver;
-    cache.secondToFirst_ = secondToFirst;
+    cache.rotation_ = motion.rotation;
+    cache.translation_ = motion.translation;
     cache.allowance_ = 0x1p-36 * magnitude;
     cache.budget_ = skin - cache.allowance_;
     ++cache.made_;
@@ -671,8 +687,18 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
     ++cache.made_;
   }
-  finishContacts(first, second, secondToFirst, epsilon, found);
+  finishContacts(first, second, secondToFirst, epsilon, inside, found);
   return found;
+}
+
+void markInside(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                std::span<ContactPoint> contacts) {
+  checkEpsilon(epsilon);
+  if (contacts.empty() || !first.closed() || !second.closed()) return;
+  markInsideBoth(
+      first, second, epsilon, contacts,
+      [&](const Vec3& x) { return first.moved() ? first.inversePose().apply(x) : x; },
+      [&](const Vec3& x) { return second.moved() ? second.inversePose().apply(x) : x; });
 }
 
 }  // namespace delta::contactdetection

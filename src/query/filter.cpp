@@ -49,11 +49,46 @@ class Grid {
   double cell_;
 };
 
+/// filter() of a few contacts (a DEM pair's), on the stack: every kept point is tested, not only
+/// those of the neighbouring cells, which holds every point closer than h, so the same points
+/// are kept.
+std::vector<ContactPoint> filterFew(std::span<const ContactPoint> contacts, double h) {
+  constexpr std::size_t kFew = 64;
+  std::size_t order[kFew];
+  const std::size_t count = contacts.size();
+  // Insertion sort by |normal|, equal keys in index order (as the stable sort below).
+  for (std::size_t i = 0; i < count; ++i) {
+    const double key = lengthSquared(contacts[i].normal);
+    std::size_t j = i;
+    for (; j > 0 && key < lengthSquared(contacts[order[j - 1]].normal); --j)
+      order[j] = order[j - 1];
+    order[j] = i;
+  }
+  bool keep[kFew] = {};
+  std::size_t kept[kFew], keptCount = 0;
+  const double hSquared = h * h;
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t candidate = order[k];
+    bool crowded = false;
+    for (std::size_t other = 0; other < keptCount && !crowded; ++other)
+      crowded = distanceSquared(contacts[kept[other]].x, contacts[candidate].x) < hSquared;
+    if (crowded) continue;
+    keep[candidate] = true;
+    kept[keptCount++] = candidate;
+  }
+  std::vector<ContactPoint> result;
+  result.reserve(keptCount);
+  for (std::size_t i = 0; i < count; ++i)
+    if (keep[i]) result.push_back(contacts[i]);
+  return result;
+}
+
 }  // namespace
 
 std::vector<ContactPoint> filter(std::span<const ContactPoint> contacts, double h) {
   if (!std::isfinite(h) || !(h > 0.0))
     throw Error("filter: h = " + toString(h) + " must be finite and positive");
+  if (contacts.size() <= 64) return filterFew(contacts, h);
   std::vector<std::size_t> order(contacts.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

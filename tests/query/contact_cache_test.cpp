@@ -1,9 +1,10 @@
 // contacts(first, second, ε, cache) against contacts(first, second, ε): the same contacts, bit
 // for bit, at every pose of a pair moved along a path, whether the cache answered or was made
-// anew. The paths move the second mesh against the first by small steps (the cache answers most
-// calls) and by jumps (it must be made anew), both meshes moved or only one, on random and
-// adversarial pairs: granulates, overlapping icospheres, a box face on a box face (coplanar,
-// touching), a cylinder resting on a box a million units from the origin, a tiny pair.
+// anew, and with the inside test left for later (markInside). The paths move the second mesh
+// against the first by small steps (the cache answers most calls) and by jumps (it must be made
+// anew), both meshes moved or only one, on random and adversarial pairs: granulates, overlapping
+// icospheres, a box face on a box face (coplanar, touching), a cylinder resting on a box a million
+// units from the origin, a tiny pair.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -74,11 +75,12 @@ RigidTransform poseAt(int s, double step, std::mt19937_64& random) {
 }
 
 TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
+  std::size_t insideMarks = 0;  // contacts marked by the inside test alone
   for (const Scene& scene : scenes()) {
     SCOPED_TRACE(scene.name);
     for (const bool moveFirst : {false, true}) {
       const QueryMesh first(scene.first), second(scene.second);
-      ContactCache cache(0.5 * scene.epsilon);
+      ContactCache cache(0.5 * scene.epsilon), laterCache(0.5 * scene.epsilon);
       std::mt19937_64 random(7);
       RigidTransform secondPose, firstPose;
       std::size_t withContacts = 0;
@@ -97,6 +99,13 @@ TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
         const std::vector<ContactPoint> cached = contacts(a, b, scene.epsilon, cache);
         ASSERT_TRUE(sameContacts(cached, fresh))
             << "step " << s << ": " << cached.size() << " against " << fresh.size();
+        // The inside test left for later, then made on every contact: the same marks.
+        std::vector<ContactPoint> later =
+            contacts(a, b, scene.epsilon, laterCache, kernels::Solver::Hybrid, InsideTest::later);
+        for (std::size_t i = 0; i < std::min(later.size(), fresh.size()); ++i)
+          insideMarks += fresh[i].overlap && !later[i].overlap ? 1 : 0;
+        markInside(a, b, scene.epsilon, later);
+        ASSERT_TRUE(sameContacts(later, fresh)) << "step " << s << ", the inside test later";
         withContacts += fresh.empty() ? 0 : 1;
       }
       // Both ways of answering were taken, on a path that touched most of the time.
@@ -105,6 +114,7 @@ TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
       EXPECT_GT(withContacts, 75u);
     }
   }
+  EXPECT_GT(insideMarks, 100u);
 }
 
 TEST(ContactCache, OtherMeshesEpsilonOrSolverMakeItAnew) {

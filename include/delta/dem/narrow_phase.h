@@ -42,8 +42,9 @@ struct PairContacts {
 ///
 /// With `cache` (not null), step 1 goes through it (contactdetection::ContactCache: the same
 /// contacts, bit for bit, from the triangle pairs it kept while the meshes have moved little
-/// against each other), serially; it must be the pair's own, used with the same
-/// `compareInSecondFrame` each time.
+/// against each other), serially, and the inside test of step 1 (`overlap` where x lies inside
+/// both meshes) waits for the points step 2 keeps (contactdetection::markInside); it must be the
+/// pair's own, used with the same `compareInSecondFrame` each time.
 ///
 /// Threading: reads both meshes only; safe to call concurrently (each with its own cache);
 /// serial inside an enclosing OpenMP parallel region (core/parallel.h).

@@ -2,9 +2,11 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "delta/core/contact_point.h"
+#include "delta/core/mat3.h"
 #include "delta/kernels/triangle_batch.h"
 #include "delta/mesh/triangle_soa.h"
 #include "delta/query/query_mesh.h"
@@ -68,6 +70,12 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver = kernels::Solver::Hybrid);
 
+/// Whether contacts() marks `overlap` where a contact's x lies inside both closed meshes itself
+/// (`now`, as contacts(first, second, ε) always does), or leaves that to markInside() on the
+/// contacts a caller keeps (`later`: a DEM pair keeps about one in five after filter(h), and the
+/// test costs two nearest-triangle searches a contact).
+enum class InsideTest : std::uint8_t { now, later };
+
 /// What contacts(first, second, ε, cache) keeps of a pair of prepared meshes from one call to
 /// the next (temporal coherence, as a DEM pair in contact is met step after step): the triangle
 /// pairs closer than 2ε + `skin` where the second mesh was, relative to the first, when it was
@@ -101,16 +109,19 @@ class ContactCache {
  private:
   friend std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second,
                                             double epsilon, ContactCache& cache,
-                                            kernels::Solver solver);
+                                            kernels::Solver solver, InsideTest inside);
   double skin_ = 0.0;
   bool valid_ = false;
   /// The prepared meshes it was made for, held: no other mesh comes to their addresses.
   std::shared_ptr<const void> firstData_, secondData_;
   double epsilon_ = 0.0;
   kernels::Solver solver_ = kernels::Solver::Hybrid;
-  RigidTransform secondToFirst_;  ///< when made
-  double budget_ = 0.0;           ///< how far the second may move: the skin less rounding
-  double allowance_ = 0.0;        ///< the rounding allowed for: 2⁻³⁶ of the coordinates
+  /// Where the second mesh was in the first's prepared frame when made, as the matrix the
+  /// kernels' triangles were placed with.
+  Mat3 rotation_;
+  Vec3 translation_;
+  double budget_ = 0.0;     ///< how far the second may move: the skin less rounding
+  double allowance_ = 0.0;  ///< the rounding allowed for: 2⁻³⁶ of the coordinates
   std::vector<std::uint32_t> firstTriangles_, secondTriangles_;  ///< prepared (sorted) indices
   /// The kernels' distance of each kept pair when made (0 with the penalty solver, whose
   /// distances may be too long): less the move since, a lower bound of the distance now.
@@ -124,11 +135,28 @@ class ContactCache {
 /// otherwise only the triangle pairs it holds are handed to the kernels, in one batch (a pair's
 /// answer does not depend on the batch it is in: kernels/hybrid.h). Runs serially.
 ///
+/// With InsideTest::later, `overlap` is set only where two triangles intersect or touch.
+///
 /// Throws as contacts(first, second, ε, solver).
 ///
 /// Threading: as contacts(); `cache` is the caller's, one thread at a time.
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    ContactCache& cache,
-                                   kernels::Solver solver = kernels::Solver::Hybrid);
+                                   kernels::Solver solver = kernels::Solver::Hybrid,
+                                   InsideTest inside = InsideTest::now);
+
+/// The inside test contacts() makes, on contacts found with InsideTest::later (in the world
+/// frame, as contacts() gives them, from the same meshes in the same order): each contact not
+/// yet marked `overlap` is marked where its x lies inside both meshes; nothing when either is
+/// not closed. Decided in each mesh's prepared frame (x carried there by its inverse pose), so
+/// a mark can differ from contacts()'s own, made in the first mesh's frame, only where x lies
+/// on a surface within rounding.
+///
+/// Throws delta::Error when ε is not finite and positive.
+///
+/// Threading: reads both meshes only; any number of threads may call it at once; parallel over
+/// the contacts itself, serially inside an enclosing parallel loop.
+void markInside(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                std::span<ContactPoint> contacts);
 
 }  // namespace delta::contactdetection
