@@ -492,9 +492,11 @@ void World::routeContactCaches(std::span<const Interaction> pairs) {
   // hopper's flow 3% to 4% slower at ε/4 and ε; docs/performance.md). A pair at rest keeps
   // its triangle pairs for good.
   const double skin = 0.5 * law_.epsilon;
+  std::vector<std::size_t> pairOf;
   const auto route = [&](std::size_t begin, std::size_t end, ContactCaches& caches) {
-    ContactCaches next;
-    std::vector<std::size_t> pairOf;
+    ContactCaches& next = spareCaches_;  // its capacity kept from step to step
+    next.clear();
+    pairOf.clear();
     std::size_t old = 0;
     for (std::size_t p = begin; p < end; ++p) {
       const Interaction& pair = pairs[p];
@@ -509,7 +511,7 @@ void World::routeContactCaches(std::span<const Interaction> pairs) {
         next.emplace_back(pair.key, contactdetection::ContactCache(skin));
       pairOf.push_back(p);
     }
-    caches = std::move(next);
+    caches.swap(next);
     for (std::size_t k = 0; k < pairOf.size(); ++k)
       cacheOf_[pairOf[k]] = &caches[k].second;
   };
@@ -527,6 +529,7 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
   overlapOptions.curves = false;
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p) {
+      if (p + 1 < end && cacheOf_[p + 1]) cacheOf_[p + 1]->prefetch();
       const Interaction& pair = pairs[p];
       PairOutcome& outcome = outcomes[p];
       outcome.regions.clear();

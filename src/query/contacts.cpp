@@ -332,12 +332,7 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
   });
 }
 
-/// A triangle pair kept by a ContactCache: sorted indices into the first and second mesh, and
-/// the kernels' distance between them when kept.
-struct CandidatePair {
-  std::uint32_t first, second;
-  double distance;
-};
+using CandidatePair = ContactCache::KeptPair;
 
 /// Phase 3: the contacts of run `run` (first leaves run·kGroupsPerBatch onward): per group, the
 /// partner leaves' eight triangle boxes at once against the first leaf's box, then each leaf
@@ -522,20 +517,14 @@ std::vector<ContactPoint> descendedContacts(const detail::QueryMeshData& a,
   return joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
 }
 
-/// A ContactCache's pairs, as keptContacts reads them.
-struct ContactCacheView {
-  const std::vector<std::uint32_t>& firstTriangles;
-  const std::vector<std::uint32_t>& secondTriangles;
-  const std::vector<double>& distances;
-};
-
 /// The contacts closer than `reach` among the kept triangle pairs (sorted indices) whose
 /// distance when kept is below `nearer` (2ε plus the move since and the rounding allowance), in
 /// one kernel batch: phases 3–4 as a descent would give them, for the same pairs within reach.
 std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
                                        const detail::QueryMeshData& b,
                                        const detail::MatrixMotion* motion, double reach,
-                                       kernels::Solver solver, const ContactCacheView& kept,
+                                       kernels::Solver solver,
+                                       const std::vector<ContactCache::KeptPair>& kept,
                                        double nearer) {
   std::vector<ContactPoint> found;
   RunScratch& work = RunScratch::ofThread();
@@ -545,13 +534,14 @@ std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
   seconds.clear();
   firstIds.clear();
   secondIds.clear();
-  for (std::size_t k = 0; k < kept.firstTriangles.size(); ++k) {
-    if (!(kept.distances[k] < nearer)) continue;  // still beyond 2ε, rounding allowed for
-    firsts.push_back(a.triangle(kept.firstTriangles[k]));
-    const Triangle other = b.triangle(kept.secondTriangles[k]);
+  // Sorted by distance: those that may be within 2ε now, rounding allowed for, come first (a
+  // scan reads only them: a binary search's scattered reads missed the cache).
+  for (std::size_t k = 0; k < kept.size() && kept[k].distance < nearer; ++k) {
+    firsts.push_back(a.triangle(kept[k].first));
+    const Triangle other = b.triangle(kept[k].second);
     seconds.push_back(motion ? motion->apply(other) : other);  // as placePartnerLeaves does
-    firstIds.push_back(a.order[kept.firstTriangles[k]]);
-    secondIds.push_back(b.order[kept.secondTriangles[k]]);
+    firstIds.push_back(a.order[kept[k].first]);
+    secondIds.push_back(b.order[kept[k].second]);
   }
   if (firsts.empty()) return found;
   work.firstBatch.assign(firsts);
@@ -638,9 +628,9 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const double move =
       same ? farthestMove(b.bounds, motion, cache.rotation_, cache.translation_) : 0.0;
   if (same && move <= cache.budget_) {
-    found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver,
-                         {cache.firstTriangles_, cache.secondTriangles_, cache.distances_},
-                         reach + move + cache.allowance_);
+    const double nearer = reach + move + cache.allowance_;
+    if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts
+      found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver, cache.pairs_, nearer);
     ++cache.reused_;
   } else if (std::isfinite(skin) && skin > 0.0) {
     // The kept pairs are those the kernels could find within 2ε until the second has moved by
@@ -661,18 +651,19 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     std::vector<CandidatePair> candidates;
     found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach + skin, solver,
                               &candidates);
+    // By distance (then ids, for a fixed order): a call hands the kernels a prefix. The penalty
+    // solver's distances are not bounds: its pairs all go, as if at distance 0.
+    if (solver == kernels::Solver::Penalty)
+      for (CandidatePair& pair : candidates)
+        pair.distance = 0.0;
     std::sort(candidates.begin(), candidates.end(),
               [](const CandidatePair& x, const CandidatePair& y) {
+                if (x.distance != y.distance) return x.distance < y.distance;
                 return x.first != y.first ? x.first < y.first : x.second < y.second;
               });
-    cache.firstTriangles_.clear();
-    cache.secondTriangles_.clear();
-    cache.distances_.clear();
-    for (const CandidatePair& pair : candidates) {
-      cache.firstTriangles_.push_back(pair.first);
-      cache.secondTriangles_.push_back(pair.second);
-      cache.distances_.push_back(solver == kernels::Solver::Penalty ? 0.0 : pair.distance);
-    }
+    cache.pairs_ = std::move(candidates);
+    cache.nearest_ = cache.pairs_.empty() ? std::numeric_limits<double>::infinity()
+                                          : cache.pairs_.front().distance;
     cache.valid_ = true;
     cache.firstData_ = first.sharedData();
     cache.secondData_ = second.sharedData();

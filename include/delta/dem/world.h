@@ -474,6 +474,7 @@ class World {
   /// the pairs of the last evaluation that had triangles on both sides, under the point law.
   using ContactCaches = std::vector<std::pair<std::uint64_t, contactdetection::ContactCache>>;
   ContactCaches particleCaches_, obstacleCaches_;
+  ContactCaches spareCaches_;  ///< routeContactCaches' scratch (the caches of pairs gone)
   /// Each pair's cache for this evaluation (null: none), for detectContacts.
   std::vector<contactdetection::ContactCache*> cacheOf_;
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).

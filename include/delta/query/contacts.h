@@ -88,6 +88,14 @@ enum class InsideTest : std::uint8_t { now, later };
 /// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
 class ContactCache {
  public:
+  /// A kept triangle pair: prepared (sorted) triangle indices, and the kernels' distance when
+  /// made (0 with the penalty solver, whose distances may be too long): less the move since, a
+  /// lower bound of the distance now.
+  struct KeptPair {
+    std::uint32_t first, second;
+    double distance;
+  };
+
   /// An empty cache (made at the first call) that keeps pairs within 2ε + `skin`; a skin that is
   /// not finite and positive makes every call a fresh query.
   explicit ContactCache(double skin = 0.0) noexcept : skin_(skin) {}
@@ -95,10 +103,13 @@ class ContactCache {
   /// The skin it was given.
   double skin() const noexcept { return skin_; }
   /// The triangle pairs it holds (0: empty, or a pair further than 2ε + skin apart).
-  std::size_t size() const noexcept { return firstTriangles_.size(); }
+  std::size_t size() const noexcept { return pairs_.size(); }
   /// How many calls made it anew, and how many it answered; for statistics.
   std::size_t made() const noexcept { return made_; }
   std::size_t reused() const noexcept { return reused_; }
+  /// Asks the processor to fetch what the next call reads first (a caller's loop over its
+  /// pairs calls it one pair ahead: the kept pairs are touched once a step, cold).
+  void prefetch() const noexcept { __builtin_prefetch(pairs_.data()); }
   /// Forgets what it holds: the next call makes it anew.
   void clear() noexcept {
     valid_ = false;
@@ -120,12 +131,12 @@ class ContactCache {
   /// kernels' triangles were placed with.
   Mat3 rotation_;
   Vec3 translation_;
-  double budget_ = 0.0;     ///< how far the second may move: the skin less rounding
-  double allowance_ = 0.0;  ///< the rounding allowed for: 2⁻³⁶ of the coordinates
-  std::vector<std::uint32_t> firstTriangles_, secondTriangles_;  ///< prepared (sorted) indices
-  /// The kernels' distance of each kept pair when made (0 with the penalty solver, whose
-  /// distances may be too long): less the move since, a lower bound of the distance now.
-  std::vector<double> distances_;
+  double budget_ = 0.0;          ///< how far the second may move: the skin less rounding
+  double allowance_ = 0.0;       ///< the rounding allowed for: 2⁻³⁶ of the coordinates
+  std::vector<KeptPair> pairs_;  ///< by increasing distance, in one block (one cache miss)
+  /// The first's distance (+∞: none), beside the rest: a pair still apart by it costs no read
+  /// of the kept pairs.
+  double nearest_ = 0.0;
   std::size_t made_ = 0, reused_ = 0;
 };
 
