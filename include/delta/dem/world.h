@@ -458,8 +458,11 @@ class World {
   std::vector<std::span<const ContactPoint>> sphereObstacleContacts(
       std::span<const Interaction> pairs);
   Sphere boundingSphere(const Particle& particle) const noexcept;
+  /// v += dt/2·(F/m + g), L += dt/2·τ, ω from L: steps 1 and 4 of the class comment.
   void halfKick();
-  void drift();
+  void kick(Particle& particle, double half) const noexcept;
+  /// Steps 1 and 2 of the class comment, particle by particle in one pass; the obstacles moved.
+  void kickAndDrift();
   Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation) const noexcept;
   Particle& particleAt(std::size_t index, const char* operation);
 
