@@ -17,7 +17,7 @@ namespace delta::dem {
 namespace {
 
 /// Particles per parallel chunk: a bound costs about as much as a half kick.
-constexpr std::size_t kParticleGrain = 512;
+constexpr std::size_t kParticleGrain = 128;
 
 /// The farthest a point of `box` lies from `pivot`: the farthest corner (a box is convex).
 double reachFrom(const Aabb& box, const Vec3& pivot) noexcept {
