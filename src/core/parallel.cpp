@@ -1,6 +1,9 @@
 #include "delta/core/parallel.h"
 
+#include <time.h>
+
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <exception>
 #include <mutex>
@@ -11,6 +14,7 @@ namespace delta::detail {
 namespace {
 
 thread_local bool tInsideLoop = false;
+thread_local bool tSerialLoops = false;
 thread_local int tThreadIndex = 0;  ///< loopThreadIndex()
 
 /// Marks this thread as running chunks while it lives.
@@ -147,6 +151,25 @@ bool runOnPool(std::size_t chunks, int threads, void (*call)(const void*, std::s
 
 bool insideParallelLoop() noexcept {
   return tInsideLoop;
+}
+
+bool serialLoops() noexcept {
+  return tSerialLoops;
+}
+
+double threadCpuSeconds() noexcept {
+  timespec time{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &time) == 0)
+    return static_cast<double>(time.tv_sec) + 1e-9 * static_cast<double>(time.tv_nsec);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+SerialLoops::SerialLoops() noexcept : enclosing_(tSerialLoops) {
+  tSerialLoops = true;
+}
+
+SerialLoops::~SerialLoops() {
+  tSerialLoops = enclosing_;
 }
 
 }  // namespace delta::detail

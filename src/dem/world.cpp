@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -32,6 +33,10 @@ constexpr std::size_t kPairGrain = 2;
 constexpr std::size_t kParticleGrain = 128;
 
 using Clock = std::chrono::steady_clock;
+/// Threads under load (World::advance): steps run on the calling thread alone after a step held
+/// up by other processes, and the shortest step judged (a shorter one is all noise).
+constexpr std::size_t kSerialSteps = 64;
+constexpr double kSteadyStep = 2e-4;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -804,6 +809,18 @@ void World::requireFiniteParticles(Exchange* exchange) const {
 }
 
 void World::advance(Exchange* exchange) {
+  // Threads under load (world.h): a step whose calling thread ran for less than 60% of it, the
+  // rest put aside by the operating system or waiting for workers that were, was held up by
+  // other processes on every core; the next steps run on the calling thread alone, a step on
+  // the threads now and then to see whether the cores are free again. One process only (a
+  // DistributedWorld's steps wait for other ranks).
+  std::optional<delta::detail::SerialLoops> alone;
+  if (serialSteps_ > 0) {
+    alone.emplace();
+    --serialSteps_;
+  }
+  const bool probing = !alone && exchange == nullptr && threadCount() > 1;
+  const double cpuStart = probing ? delta::detail::threadCpuSeconds() : 0.0;
   const Clock::time_point start = Clock::now();
   double communication = 0.0;
   const auto refreshGhosts = [&] {
@@ -837,6 +854,9 @@ void World::advance(Exchange* exchange) {
   time_ += parameters_.timeStep;
   ++stepCount_;
   statistics_.totalSeconds = secondsSince(start);
+  if (probing && statistics_.totalSeconds > kSteadyStep &&
+      delta::detail::threadCpuSeconds() - cpuStart < 0.6 * statistics_.totalSeconds)
+    serialSteps_ = kSerialSteps;
 }
 
 void World::run(std::size_t steps) {

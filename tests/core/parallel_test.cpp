@@ -59,6 +59,50 @@ TEST(ParallelFor, UsesSeveralThreadsWhenAllowed) {
   EXPECT_NE(std::count(owner.begin(), owner.end(), 0), 64) << "everything ran on thread 0";
 }
 
+// Where the same loop ran on two threads (as above), under SerialLoops every chunk runs on the
+// calling thread, nested scopes included, and the pool is back when the outermost one ends.
+TEST(ParallelFor, SerialLoopsRunOnTheCallingThreadAlone) {
+  if (omp_get_num_procs() < 2) GTEST_SKIP() << "one processor";
+  omp_set_num_threads(2);
+  const auto owners = [] {
+    std::vector<int> owner(64, -1);
+    parallelFor(0, owner.size(), 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        owner[i] = loopThreadIndex();
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+      }
+    });
+    return static_cast<std::size_t>(std::count(owner.begin(), owner.end(), 0));
+  };
+  {
+    const detail::SerialLoops alone;
+    EXPECT_TRUE(detail::serialLoops());
+    {
+      const detail::SerialLoops nested;
+      EXPECT_EQ(owners(), 64u);
+    }
+    EXPECT_TRUE(detail::serialLoops());
+    EXPECT_EQ(owners(), 64u);
+  }
+  EXPECT_FALSE(detail::serialLoops());
+  EXPECT_NE(owners(), 64u) << "everything ran on thread 0 after the scope";
+}
+
+TEST(ParallelFor, ThreadCpuTimeCountsWorkNotSleep) {
+  const double start = detail::threadCpuSeconds();
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  const double slept = detail::threadCpuSeconds() - start;
+  EXPECT_LT(slept, 0.01);
+  // Busy until 20 ms of CPU time: reached (within 5 s, however busy the machine) only if the
+  // clock counts the work.
+  volatile double sink = 0.0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (detail::threadCpuSeconds() - start - slept < 0.02 &&
+         std::chrono::steady_clock::now() < deadline)
+    sink = sink + 1.0;
+  EXPECT_GE(detail::threadCpuSeconds() - start - slept, 0.02);
+}
+
 TEST(ParallelFor, CapsTheThreadsAskedFor) {
   // OMP_NUM_THREADS=100000 asked libgomp for a team it set up on the caller's stack: a segfault.
   const int before = omp_get_max_threads();

@@ -33,6 +33,25 @@ bool runOnPool(std::size_t chunks, int threads, void (*call)(const void* body, s
                const void* body);
 /// Whether this thread is running a chunk of a parallel loop of Δ's.
 bool insideParallelLoop() noexcept;
+/// Whether the loops this thread starts run on it alone (a SerialLoops lives on it).
+bool serialLoops() noexcept;
+/// The calling thread's CPU time in seconds (where the clock is not to be had, its wall time).
+double threadCpuSeconds() noexcept;
+/// While it lives, the parallel loops the constructing thread starts run on that thread alone,
+/// chunk by chunk, as on one thread: what a caller does when its loops' threads are held up by
+/// other processes (a World stepping on a machine whose cores are all busy). Nests.
+///
+/// Threading: about the constructing thread only; destroy it there.
+class SerialLoops {
+ public:
+  SerialLoops() noexcept;
+  ~SerialLoops();
+  SerialLoops(const SerialLoops&) = delete;
+  SerialLoops& operator=(const SerialLoops&) = delete;
+
+ private:
+  bool enclosing_;
+};
 
 /// The parts a parallel loop's chunks filled (one slot a chunk), joined in chunk order: the
 /// same list for any number of threads.
@@ -84,7 +103,8 @@ void parallelFor(std::size_t first, std::size_t last, std::size_t grain, const B
   if (grain == 0) grain = 1;
   const std::size_t chunks = (last - first + grain - 1) / grain;
   const int threads = threadCount();
-  if (chunks == 1 || threads == 1 || detail::insideParallelLoop() || omp_in_parallel()) {
+  if (chunks == 1 || threads == 1 || detail::insideParallelLoop() || detail::serialLoops() ||
+      omp_in_parallel()) {
     body(first, last);
     return;
   }
