@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -32,8 +33,11 @@ namespace {
 using namespace pybind11::literals;
 
 constexpr const char* kWorld = "delta.dem.World";
-/// Steps between looks for a pending KeyboardInterrupt during World.run.
-constexpr std::size_t kSignalCheckInterval = 16;
+/// Time between looks for a pending KeyboardInterrupt during World.run. By time, not by steps:
+/// a look takes the GIL, and a run of short steps that took it every few microseconds starved
+/// the thread that was to raise the interrupt (Python hands the GIL over on request only to a
+/// thread that waited 5 ms without seeing it change hands).
+constexpr auto kSignalCheckInterval = std::chrono::milliseconds(10);
 
 static_assert(sizeof(Quaternion) == 4 * sizeof(double), "a Quaternion is (w, x, y, z)");
 static_assert(std::is_trivially_copyable_v<dem::Particle> &&
@@ -61,13 +65,15 @@ class PyWorld {
   void run(std::size_t steps) {
     const BusyFlag::Hold hold(busy_, kWorld);
     py::gil_scoped_release release;
+    auto lookedAt = std::chrono::steady_clock::now();
     for (std::size_t step = 1; step <= steps; ++step) {
       world_.step();
       for (const std::shared_ptr<dem::RestitutionMeter>& meter : meters_)
         meter->observe(world_);
-      if (step % kSignalCheckInterval == 0 && step < steps) {
+      if (step < steps && std::chrono::steady_clock::now() - lookedAt >= kSignalCheckInterval) {
         py::gil_scoped_acquire acquire;
         if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        lookedAt = std::chrono::steady_clock::now();
       }
     }
   }

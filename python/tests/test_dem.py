@@ -1,7 +1,7 @@
 """delta.dem: the built-in scenarios against the C++ tool (`delta dem`), a World built by hand,
 and the rule that a World running in one thread raises in the others."""
 
-import _thread
+import signal
 import threading
 
 import numpy as np
@@ -114,12 +114,20 @@ def test_a_running_world_refuses_other_threads():
 
 def test_ctrl_c_stops_a_run_between_steps():
     world = delta.dem.two_particles(restitution=0.5).world
-    timer = threading.Timer(0.05, _thread.interrupt_main)  # as Ctrl-C does
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        # Far longer than the timer on any machine: 200,000 steps take 0.17 s on a Zen 5, so a
-        # run of that length could end before the interrupt came (it did once in CI).
-        world.run(20_000_000)
-    timer.join()
+    # SIGINT itself, sent to the main thread, with Python's own handler installed for the test:
+    # _thread.interrupt_main() does nothing while another handler (SIG_IGN, SIG_DFL) is set,
+    # which an earlier test in the same process may leave (the run then went on to its end).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    main = threading.main_thread().ident
+    timer = threading.Timer(0.05, lambda: signal.pthread_kill(main, signal.SIGINT))
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            # Far longer than the timer on any machine: 200,000 steps take 0.3 s on a Zen 5, so
+            # a run of that length could end before the interrupt came (it did once in CI).
+            world.run(20_000_000)
+    finally:
+        timer.join()
+        signal.signal(signal.SIGINT, previous)
     assert 0 < world.step_count < 20_000_000
     world.step()  # the world is usable again

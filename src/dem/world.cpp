@@ -819,7 +819,9 @@ void World::advance(Exchange* exchange) {
     alone.emplace();
     --serialSteps_;
   }
-  const bool probing = !alone && exchange == nullptr && threadCount() > 1;
+  // Judged only after a step long enough to judge (its thread's CPU clock is a system call).
+  const bool probing =
+      !alone && exchange == nullptr && threadCount() > 1 && statistics_.totalSeconds > kSteadyStep;
   const double cpuStart = probing ? delta::detail::threadCpuSeconds() : 0.0;
   const Clock::time_point start = Clock::now();
   double communication = 0.0;

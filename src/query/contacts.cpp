@@ -595,42 +595,70 @@ double farthestMove(const Aabb& box, const detail::MatrixMotion& now, const Mat3
   return std::sqrt(farthest);
 }
 
+/// Where both QueryMesh contact queries start: ε and the pair checked, the second mesh placed
+/// in the first's prepared frame (the motion only where either has moved).
+struct PlacedPair {
+  const detail::QueryMeshData& a;
+  const detail::QueryMeshData& b;
+  RigidTransform secondToFirst;
+  detail::MatrixMotion motion;
+  bool moved;
+  double reach;  ///< 2ε
+
+  const detail::MatrixMotion* placement() const noexcept { return moved ? &motion : nullptr; }
+};
+
+PlacedPair placedPair(const QueryMesh& first, const QueryMesh& second, double epsilon) {
+  checkEpsilon(epsilon);
+  detail::checkPlacedPair(first, second, "contacts");
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  return {first.data(),
+          second.data(),
+          secondToFirst,
+          detail::matrixMotion(secondToFirst),
+          first.moved() || second.moved(),
+          2.0 * epsilon};
+}
+
+/// The largest coordinate of the pair where the kernels meet it: the first mesh's box and the
+/// corners of the second's, placed.
+double magnitudeOf(const PlacedPair& pair) noexcept {
+  double magnitude = std::max(maxAbs(pair.a.bounds.lower), maxAbs(pair.a.bounds.upper));
+  const Aabb& box = pair.b.bounds;
+  for (int corner = 0; corner < 8; ++corner)
+    magnitude = std::max(
+        magnitude, maxAbs(pair.secondToFirst.apply({(corner & 1) ? box.upper.x : box.lower.x,
+                                                    (corner & 2) ? box.upper.y : box.lower.y,
+                                                    (corner & 4) ? box.upper.z : box.lower.z})));
+  return magnitude;
+}
+
 }  // namespace
 
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    kernels::Solver solver) {
-  checkEpsilon(epsilon);
-  detail::checkPlacedPair(first, second, "contacts");
-  const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const double reach = 2.0 * epsilon;
+  const PlacedPair pair = placedPair(first, second, epsilon);
   std::vector<ContactPoint> found =
-      descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
-  finishContacts(first, second, secondToFirst, epsilon, InsideTest::now, found);
+      descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach, solver, nullptr);
+  finishContacts(first, second, pair.secondToFirst, epsilon, InsideTest::now, found);
   return found;
 }
 
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    ContactCache& cache, kernels::Solver solver, InsideTest inside) {
-  checkEpsilon(epsilon);
-  detail::checkPlacedPair(first, second, "contacts");
-  const detail::QueryMeshData &a = first.data(), &b = second.data();
-  const bool moved = first.moved() || second.moved();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const double reach = 2.0 * epsilon;
+  const PlacedPair pair = placedPair(first, second, epsilon);
   const double skin = cache.skin_;
   std::vector<ContactPoint> found;
-  const bool same = cache.valid_ && cache.firstData_.get() == &a && cache.secondData_.get() == &b &&
-                    cache.epsilon_ == epsilon && cache.solver_ == solver;
+  const bool same = cache.valid_ && cache.firstData_.get() == &pair.a &&
+                    cache.secondData_.get() == &pair.b && cache.epsilon_ == epsilon &&
+                    cache.solver_ == solver;
   const double move =
-      same ? farthestMove(b.bounds, motion, cache.rotation_, cache.translation_) : 0.0;
+      same ? farthestMove(pair.b.bounds, pair.motion, cache.rotation_, cache.translation_) : 0.0;
   if (same && move <= cache.budget_) {
-    const double nearer = reach + move + cache.allowance_;
+    const double nearer = pair.reach + move + cache.allowance_;
     if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts
-      found = keptContacts(a, b, moved ? &motion : nullptr, reach, solver, cache.pairs_, nearer);
+      found =
+          keptContacts(pair.a, pair.b, pair.placement(), pair.reach, solver, cache.pairs_, nearer);
     ++cache.reused_;
   } else if (std::isfinite(skin) && skin > 0.0) {
     // The kept pairs are those the kernels could find within 2ε until the second has moved by
@@ -638,24 +666,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     // size: kernels/hybrid.h), the triangles' placement and the move's bound (a few ulps of the
     // coordinates each); allowed 2⁻³⁶ of the largest coordinate, as the flat query's prune is
     // (2ε itself has the prune's slack in the boxes and planes already).
-    const Aabb secondBox = [&] {
-      Aabb box;
-      for (int corner = 0; corner < 8; ++corner)
-        box.extend(secondToFirst.apply({(corner & 1) ? b.bounds.upper.x : b.bounds.lower.x,
-                                        (corner & 2) ? b.bounds.upper.y : b.bounds.lower.y,
-                                        (corner & 4) ? b.bounds.upper.z : b.bounds.lower.z}));
-      return box;
-    }();
-    const double magnitude = std::max({maxAbs(a.bounds.lower), maxAbs(a.bounds.upper),
-                                       maxAbs(secondBox.lower), maxAbs(secondBox.upper)});
     std::vector<CandidatePair> candidates;
-    found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach + skin, solver,
-                              &candidates);
+    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach + skin,
+                              solver, &candidates);
     // By distance (then ids, for a fixed order): a call hands the kernels a prefix. The penalty
     // solver's distances are not bounds: its pairs all go, as if at distance 0.
     if (solver == kernels::Solver::Penalty)
-      for (CandidatePair& pair : candidates)
-        pair.distance = 0.0;
+      for (CandidatePair& candidate : candidates)
+        candidate.distance = 0.0;
     std::sort(candidates.begin(), candidates.end(),
               [](const CandidatePair& x, const CandidatePair& y) {
                 if (x.distance != y.distance) return x.distance < y.distance;
@@ -669,16 +687,17 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     cache.secondData_ = second.sharedData();
     cache.epsilon_ = epsilon;
     cache.solver_ = solver;
-    cache.rotation_ = motion.rotation;
-    cache.translation_ = motion.translation;
-    cache.allowance_ = 0x1p-36 * magnitude;
+    cache.rotation_ = pair.motion.rotation;
+    cache.translation_ = pair.motion.translation;
+    cache.allowance_ = 0x1p-36 * magnitudeOf(pair);
     cache.budget_ = skin - cache.allowance_;
     ++cache.made_;
   } else {
-    found = descendedContacts(a, b, moved ? &motion : nullptr, reach, reach, solver, nullptr);
+    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach, solver,
+                              nullptr);
     ++cache.made_;
   }
-  finishContacts(first, second, secondToFirst, epsilon, inside, found);
+  finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
   return found;
 }
 
