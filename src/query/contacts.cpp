@@ -334,6 +334,24 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
 
 using CandidatePair = ContactCache::KeptPair;
 
+/// The triangle pairs gathered in `work` (firsts[k] against seconds[k], ids firstIds[k] and
+/// secondIds[k]) through the kernels in one batch; those within `reach` appended to `out`.
+/// Returns the kernels' answers, pair by pair.
+const kernels::PairResults& batchedContacts(RunScratch& work, double reach, kernels::Solver solver,
+                                            std::vector<ContactPoint>& out) {
+  work.firstBatch.assign(work.firsts);
+  work.secondBatch.assign(work.seconds);
+  kernels::PairResults& results = work.results;
+  results.reserve(work.firsts.size());  // the kernels fill at most the capacity
+  kernels::distances(solver, work.firstBatch, work.secondBatch, results);
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (results.distanceSquared(k) < reach * reach)
+      out.push_back(contactPoint(work.firsts[k], work.seconds[k], results.p(k), results.q(k),
+                                 results.intersect(k), results.converged(k), work.firstIds[k],
+                                 work.secondIds[k]));
+  return results;
+}
+
 /// Phase 3: the contacts of run `run` (first leaves run·kGroupsPerBatch onward): per group, the
 /// partner leaves' eight triangle boxes at once against the first leaf's box, then each leaf
 /// triangle's box and the separating planes (a leaf triangle's made on its first use), all
@@ -405,16 +423,7 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
     }
   }
   if (firsts.empty()) return;
-  work.firstBatch.assign(firsts);
-  work.secondBatch.assign(seconds);
-  kernels::PairResults& results = work.results;
-  results.reserve(firsts.size());  // the kernels fill at most the capacity
-  kernels::distances(solver, work.firstBatch, work.secondBatch, results);
-  for (std::size_t k = 0; k < results.size(); ++k)
-    if (results.distanceSquared(k) < reach * reach)
-      out.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
-                                 results.intersect(k), results.converged(k), firstIds[k],
-                                 secondIds[k]));
+  const kernels::PairResults& results = batchedContacts(work, reach, solver, out);
   if (candidates)  // the run's pairs are its last ones, in the batch's order
     for (std::size_t k = 0; k < results.size(); ++k)
       (*candidates)[candidates->size() - results.size() + k].distance = results.distance(k);
@@ -544,16 +553,7 @@ std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
     secondIds.push_back(b.order[kept[k].second]);
   }
   if (firsts.empty()) return found;
-  work.firstBatch.assign(firsts);
-  work.secondBatch.assign(seconds);
-  kernels::PairResults& results = work.results;
-  results.reserve(firsts.size());
-  kernels::distances(solver, work.firstBatch, work.secondBatch, results);
-  for (std::size_t k = 0; k < results.size(); ++k)
-    if (results.distanceSquared(k) < reach * reach)
-      found.push_back(contactPoint(firsts[k], seconds[k], results.p(k), results.q(k),
-                                   results.intersect(k), results.converged(k), firstIds[k],
-                                   secondIds[k]));
+  batchedContacts(work, reach, solver, found);
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
