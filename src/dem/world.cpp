@@ -366,29 +366,17 @@ void World::makeNeighbourList() {
       }
   });
   list.obstaclePairs.clear();
-  list.obstacleGaps.clear();
   for (std::size_t i = 0; i < owned_; ++i)
     for (std::size_t o = 0; o < obstacles_.size(); ++o)
-      if (gaps[i * obstacles_.size() + o] != unreached) {
-        list.obstaclePairs.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o),
-                                      true, (std::uint64_t{ids_[i]} << 32) | o});
-        list.obstacleGaps.push_back(gaps[i * obstacles_.size() + o]);
-      }
+      if (gaps[i * obstacles_.size() + o] != unreached)
+        list.obstaclePairs.push_back({{static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o),
+                                       true, (std::uint64_t{ids_[i]} << 32) | o},
+                                      gaps[i * obstacles_.size() + o]});
   // By key: the order of the particles' ids (as the particles' own order in one process).
-  std::vector<std::size_t> order(list.obstaclePairs.size());
-  for (std::size_t k = 0; k < order.size(); ++k)
-    order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return list.obstaclePairs[a].key < list.obstaclePairs[b].key;
-  });
-  std::vector<Interaction> sortedPairs(order.size());
-  std::vector<double> sortedGaps(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    sortedPairs[k] = list.obstaclePairs[order[k]];
-    sortedGaps[k] = list.obstacleGaps[order[k]];
-  }
-  list.obstaclePairs = std::move(sortedPairs);
-  list.obstacleGaps = std::move(sortedGaps);
+  std::sort(list.obstaclePairs.begin(), list.obstaclePairs.end(),
+            [](const NeighbourList::ListedObstacle& a, const NeighbourList::ListedObstacle& b) {
+              return a.pair.key < b.pair.key;
+            });
 
   list.positions.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i)
@@ -421,9 +409,9 @@ const std::vector<World::Interaction>& World::findPairs(bool reuseList) {
     if (distanceSquared(one.center, other.center) < limit * limit) pairs_.push_back(pair);
   }
   statistics_.particlePairsTested = pairs_.size();
-  for (std::size_t k = 0; k < list.obstaclePairs.size(); ++k) {
-    const Interaction& pair = list.obstaclePairs[k];
-    if (list.obstacleGaps[k] - list.moved[pair.first] - list.obstacleMoved[pair.second] <
+  for (const NeighbourList::ListedObstacle& listed : list.obstaclePairs) {
+    const Interaction& pair = listed.pair;
+    if (listed.gap - list.moved[pair.first] - list.obstacleMoved[pair.second] <
         reach + list.allowance)
       pairs_.push_back(pair);
   }

@@ -367,11 +367,15 @@ class World {
   /// searches are not redone (findPairs).
   struct NeighbourList {
     std::vector<Interaction> particlePairs;  ///< sorted by key
-    std::vector<Interaction> obstaclePairs;  ///< sorted by key
-    /// Each obstacle pair's gap when made: the distance from the bounding sphere's surface to
-    /// the obstacle's; less the two bodies' moves since, a lower bound on the gap now.
-    std::vector<double> obstacleGaps;
-    std::vector<Vec3> positions;  ///< each particle's position when made
+    /// A particle–obstacle pair and its gap when listed: the distance from the bounding
+    /// sphere's surface to the obstacle's; less the two bodies' moves since, a lower bound on
+    /// the gap now.
+    struct ListedObstacle {
+      Interaction pair;
+      double gap;
+    };
+    std::vector<ListedObstacle> obstaclePairs;  ///< sorted by key
+    std::vector<Vec3> positions;                ///< each particle's position when made
     std::vector<RigidTransform> obstaclePoses;
     std::vector<double> moved;          ///< how far each particle has moved since (findPairs)
     std::vector<double> obstacleMoved;  ///< how far each obstacle's surface has moved, at most
