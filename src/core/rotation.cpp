@@ -7,15 +7,7 @@
 #include "delta/core/format.h"
 
 namespace delta {
-namespace {
-
-Quaternion normalizedOrIdentity(double w, double x, double y, double z) noexcept {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
-  if (!(n > 0.0)) return Quaternion{};
-  return {w / n, x / n, y / n, z / n};
-}
-
-}  // namespace
+using detail::normalizedOrIdentity;
 
 Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
   const double n = length(axis);
@@ -90,12 +82,6 @@ Vec3 Quaternion::rotate(const Vec3& v) const noexcept {
   const Vec3 u{x, y, z};
   const Vec3 t = cross(u, v) * 2.0;
   return v + t * w + cross(u, t);
-}
-
-Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept {
-  return normalizedOrIdentity(
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w);
 }
 
 }  // namespace delta

@@ -264,8 +264,9 @@ class CheckpointCodec {
     }
 
     out.tag("CONT");
-    out.u64(world.contacts_.size());
-    for (const Contact& contact : world.contacts_) {
+    const std::span<const Contact> contacts = world.contacts();
+    out.u64(contacts.size());
+    for (const Contact& contact : contacts) {
       out.vec(contact.point.x);
       out.vec(contact.point.normal);
       out.vec(contact.point.direction);
@@ -391,6 +392,7 @@ class CheckpointCodec {
     }
 
     in.tag("CONT");
+    world.contactsPending_ = false;
     world.contacts_.resize(in.count(8 * 14 + 2 + 16 + 1 + (version >= 2 ? 8 * 4 : 0), "contact"));
     for (Contact& contact : world.contacts_) {
       contact.point.x = in.vec();

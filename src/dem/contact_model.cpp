@@ -29,8 +29,9 @@ double depthOf(const ContactPoint& point, double shell) noexcept {
 /// one step, this evaluation is the contact's first and its share is 0.5 + δ/(|v_n|·dt), between
 /// ½ (the crossing just now: half the step ahead is in contact) and 3/2 (the crossing a step
 /// ago: half of the step before, charged nothing, was in contact too). Otherwise 1.
-double onsetFactor(const PointForce& deepest, const BodyMotion& first, const BodyMotion& second,
-                   double timeStep) noexcept {
+[[gnu::always_inline]] inline double onsetFactor(const PointForce& deepest, const BodyMotion& first,
+                                                 const BodyMotion& second,
+                                                 double timeStep) noexcept {
   const Vec3 relative = first.velocityAt(deepest.point.x) - second.velocityAt(deepest.point.x);
   const double approach = -dot(relative, deepest.point.direction) * timeStep;  // per step
   if (!(approach > 0.0) || deepest.depth >= approach) return 1.0;
@@ -48,10 +49,12 @@ struct Friction {
 /// The tangential and torsion springs at `centre` with unit `normal` (the header's "Friction"),
 /// limited by μ·normalForce and μ·normalForce·meanArm; `polarMoment` is Σwᵢ|rᵢ|², the torsion
 /// spring's stiffness per k_t (0: no twist).
-Friction frictionAt(const Vec3& centre, const Vec3& normal, double normalForce, double polarMoment,
-                    double meanArm, const BodyMotion& first, const BodyMotion& second,
-                    double effectiveMass, const TangentialSpring& previous, double timeStep,
-                    const ContactLaw& law) noexcept {
+[[gnu::always_inline]] inline Friction frictionAt(const Vec3& centre, const Vec3& normal,
+                                                  double normalForce, double polarMoment,
+                                                  double meanArm, const BodyMotion& first,
+                                                  const BodyMotion& second, double effectiveMass,
+                                                  const TangentialSpring& previous, double timeStep,
+                                                  const ContactLaw& law) noexcept {
   Friction result;
   const double tangentialDamping =
       2.0 * law.dampingRatio * std::sqrt(law.tangentialStiffness * effectiveMass);
@@ -97,12 +100,13 @@ Friction frictionAt(const Vec3& centre, const Vec3& normal, double normalForce, 
 }
 
 /// pairForces of one point: the general law's arithmetic with its sums of one term written out
-/// (a weight d/d is 1, x·1 and x/1 are x), so the same bits without its loops; a sphere pair's
-/// every contact, and most of a sphere's against a wall. No twist: one point has no arm.
+/// (a weight d/d is 1, x·1 and x/1 are x), so the same bits without its loops; a mesh pair's
+/// lone contact. No twist: one point has no arm.
 void onePointForces(const ContactPoint& point, const BodyMotion& first, const BodyMotion& second,
                     double effectiveMass, const TangentialSpring& previous, double timeStep,
-                    const ContactLaw& law, PairForces& result) noexcept {
-  PointForce& out = result.points.front();
+                    const ContactLaw& law, OnePointForces& result) noexcept {
+  result = OnePointForces{};
+  PointForce& out = result.point;
   out.point = point;
   out.depth = depthOf(point, 2.0 * law.epsilon);
   if (out.depth > 0.0) result.deepest = out.depth;
@@ -133,6 +137,180 @@ void onePointForces(const ContactPoint& point, const BodyMotion& first, const Bo
 
 }  // namespace
 
+PairDamping pairDamping(const ContactLaw& law, double effectiveMass) noexcept {
+  return {2.0 * law.dampingRatio * std::sqrt(law.stiffness * effectiveMass),
+          2.0 * law.dampingRatio * std::sqrt(law.tangentialStiffness * effectiveMass)};
+}
+
+namespace {
+
+/// Pairs side by side in one batch of the one-point law: every step of the law a loop over the
+/// lanes, so that the pairs' chains of square roots and divisions overlap instead of waiting
+/// one after the other (a pair alone is a chain of four of each).
+constexpr std::size_t kLanes = 4;
+
+/// What the one-point law reads of each lane's pair, and what it gives.
+struct LawLanes {
+  Vec3 x[kLanes];  ///< the contact point
+  Vec3 n[kLanes];  ///< its unit direction, from the second body toward the first
+  double gap[kLanes];
+  const BodyMotion* first[kLanes];
+  const BodyMotion* second[kLanes];
+  PairDamping damping[kLanes];
+  Vec3 previous[kLanes];  ///< the sliding spring of the step before
+
+  double depth[kLanes];
+  double normalForce[kLanes];
+  Vec3 force[kLanes];
+  Vec3 displacement[kLanes];  ///< the sliding spring to keep
+  bool sliding[kLanes];
+};
+
+/// The point law of one point (onePointForces' arithmetic, without its sums of one term) on
+/// every lane.
+[[gnu::always_inline]] inline void pointLaw(LawLanes& lanes, double timeStep,
+                                            const ContactLaw& law) noexcept {
+  const double shell = 2.0 * law.epsilon;
+  Vec3 relative[kLanes];
+  double normalVelocity[kLanes];
+  for (std::size_t k = 0; k < kLanes; ++k) {
+    lanes.depth[k] = shell - lanes.gap[k];  // 2ε − gap, overlapping or not (depthOf)
+    relative[k] = lanes.first[k]->velocityAt(lanes.x[k]) - lanes.second[k]->velocityAt(lanes.x[k]);
+    normalVelocity[k] = dot(relative[k], lanes.n[k]);
+  }
+  // The normal law, its dashpot charged from the onset (onsetFactor).
+  for (std::size_t k = 0; k < kLanes; ++k) {
+    const double approach = -normalVelocity[k] * timeStep;
+    const double depth = lanes.depth[k];
+    const double onset = approach > 0.0 && depth < approach ? 0.5 + depth / approach : 1.0;
+    lanes.normalForce[k] =
+        std::max(0.0, law.stiffness * depth - lanes.damping[k].normal * onset * normalVelocity[k]);
+    lanes.force[k] = lanes.n[k] * lanes.normalForce[k];
+    lanes.displacement[k] = Vec3{};
+    lanes.sliding[k] = false;
+  }
+  if (!(law.friction > 0.0 && law.tangentialStiffness > 0.0)) return;
+  // The sliding spring turned into the tangent plane at its length, stretched (frictionAt).
+  Vec3 slidingVelocity[kLanes], tangential[kLanes];
+  double previousLength[kLanes], projectedLength[kLanes], magnitude[kLanes];
+  for (std::size_t k = 0; k < kLanes; ++k) {
+    const Vec3& n = lanes.n[k];
+    slidingVelocity[k] = relative[k] - n * normalVelocity[k];
+    previousLength[k] = length(lanes.previous[k]);
+    lanes.displacement[k] = lanes.previous[k] - n * dot(lanes.previous[k], n);
+    projectedLength[k] = length(lanes.displacement[k]);
+  }
+  for (std::size_t k = 0; k < kLanes; ++k) {
+    Vec3& displacement = lanes.displacement[k];
+    displacement =
+        projectedLength[k] > 0.0 ? displacement * (previousLength[k] / projectedLength[k]) : Vec3{};
+    displacement += slidingVelocity[k] * timeStep;
+    tangential[k] =
+        displacement * -law.tangentialStiffness - slidingVelocity[k] * lanes.damping[k].tangential;
+    magnitude[k] = length(tangential[k]);
+  }
+  for (std::size_t k = 0; k < kLanes; ++k) {
+    const double limit = law.friction * lanes.normalForce[k];
+    if (magnitude[k] > limit) {
+      tangential[k] = magnitude[k] > 0.0 ? tangential[k] * (limit / magnitude[k]) : Vec3{};
+      lanes.displacement[k] = tangential[k] * (-1.0 / law.tangentialStiffness);
+      lanes.sliding[k] = true;
+    }
+    lanes.force[k] += tangential[k];
+  }
+}
+
+/// Lane k's forces into `result` (its point set by the caller).
+void laneForces(const LawLanes& lanes, std::size_t k, const ContactLaw& law,
+                OnePointForces& result) noexcept {
+  PointForce& out = result.point;
+  out.depth = lanes.depth[k];
+  out.force = lanes.force[k];
+  out.couple = Vec3{};
+  out.volume = 0.0;
+  result.deepest = lanes.depth[k];
+  result.springEnergy = 0.5 * law.stiffness * lanes.depth[k] * lanes.depth[k];
+  result.normalForce = lanes.normalForce[k];
+  result.spring = {lanes.displacement[k], 0.0};
+  result.sliding = lanes.sliding[k];
+}
+
+}  // namespace
+
+void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, const ContactLaw& law,
+                        std::span<bool> touching) noexcept {
+  const double shell = 2.0 * law.epsilon;
+  for (std::size_t base = 0; base < pairs.size(); base += kLanes) {
+    // A short last batch repeats its first pair.
+    const std::size_t count = std::min(kLanes, pairs.size() - base);
+    const SpherePair* lane[kLanes];
+    LawLanes lanes;
+    Vec3 difference[kLanes], half[kLanes];
+    double centres[kLanes];
+    for (std::size_t k = 0; k < kLanes; ++k) {
+      lane[k] = &pairs[base + (k < count ? k : 0)];
+      difference[k] = lane[k]->first->center - lane[k]->second->center;
+      centres[k] = length(difference[k]);
+    }
+    for (std::size_t k = 0; k < kLanes; ++k) {
+      const Sphere& first = *lane[k]->first;
+      const double gap = centres[k] - first.radius - lane[k]->second->radius;
+      const Vec3 n = centres[k] > 0.0 ? difference[k] * (1.0 / centres[k]) : Vec3{1, 0, 0};
+      // Halfway between the surfaces' closest points c₁ − r₁n and c₂ + r₂n; P − x is half the
+      // gap.
+      half[k] = n * (0.5 * gap);
+      lanes.x[k] = first.center - n * first.radius - half[k];
+      lanes.n[k] = n;
+      lanes.gap[k] = gap;
+      lanes.first[k] = lane[k]->firstMotion;
+      lanes.second[k] = lane[k]->secondMotion;
+      lanes.damping[k] = lane[k]->damping;
+      lanes.previous[k] = lane[k]->previous ? lane[k]->previous->displacement : Vec3{};
+    }
+    pointLaw(lanes, timeStep, law);
+    for (std::size_t k = 0; k < count; ++k) {
+      touching[base + k] = lanes.gap[k] < shell;
+      if (!touching[base + k]) continue;
+      OnePointForces& result = *lane[k]->result;
+      ContactPoint& point = result.point.point;
+      point.x = lanes.x[k];
+      point.normal = half[k];
+      point.direction = lanes.n[k];
+      point.distance = std::fabs(lanes.gap[k]);
+      point.overlap = lanes.gap[k] < 0.0;
+      point.converged = true;
+      point.first = point.second = 0;
+      laneForces(lanes, k, law, result);
+    }
+  }
+}
+
+void onePointForces(std::span<const OnePointPair> pairs, double timeStep,
+                    const ContactLaw& law) noexcept {
+  for (std::size_t base = 0; base < pairs.size(); base += kLanes) {
+    const std::size_t count = std::min(kLanes, pairs.size() - base);
+    const OnePointPair* lane[kLanes];
+    LawLanes lanes;
+    for (std::size_t k = 0; k < kLanes; ++k) {
+      lane[k] = &pairs[base + (k < count ? k : 0)];
+      const ContactPoint& point = *lane[k]->point;
+      lanes.x[k] = point.x;
+      lanes.n[k] = point.direction;
+      lanes.gap[k] = point.overlap ? -point.distance : point.distance;
+      lanes.first[k] = lane[k]->firstMotion;
+      lanes.second[k] = lane[k]->secondMotion;
+      lanes.damping[k] = lane[k]->damping;
+      lanes.previous[k] = lane[k]->previous ? lane[k]->previous->displacement : Vec3{};
+    }
+    pointLaw(lanes, timeStep, law);
+    for (std::size_t k = 0; k < count; ++k) {
+      ContactPoint& point = lane[k]->result->point.point;
+      if (&point != lane[k]->point) point = *lane[k]->point;
+      laneForces(lanes, k, law, *lane[k]->result);
+    }
+  }
+}
+
 PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
                       const BodyMotion& second, double effectiveMass,
                       const TangentialSpring& previous, double timeStep, const ContactLaw& law) {
@@ -150,7 +328,10 @@ void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
   result.points.assign(points.size(), PointForce{});
   if (points.empty()) return;
   if (points.size() == 1) {
-    onePointForces(points.front(), first, second, effectiveMass, previous, timeStep, law, result);
+    OnePointForces one;
+    onePointForces(points.front(), first, second, effectiveMass, previous, timeStep, law, one);
+    static_cast<PairForceSummary&>(result) = one;
+    result.points.front() = one.point;
     return;
   }
   const double shell = 2.0 * law.epsilon;

@@ -55,20 +55,23 @@ void World::requireCatchableMotion() const {
   // Each particle's drift in the coming step, with the velocities the half kick will give it
   // (computed as halfKick() does: World::step in world.h), and how far its surface may move
   // about its centre by turning (|ω|·r·dt).
-  std::vector<Vec3> drift(owned_);
-  std::vector<double> turn(owned_), speeds(owned_);
+  struct Motion {
+    Vec3 velocity;
+    double angular;  ///< |ω|
+  };
+  const auto motionOf = [&](std::size_t i) {
+    const Particle& particle = particles_[i];
+    const ParticleShape& shape = shapes_[particle.shape];
+    return Motion{particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * half,
+                  length(angularVelocityOf(particle, particle.orientation,
+                                           particle.angularMomentum + particle.torque * half))};
+  };
+  std::vector<double> speeds(owned_);
   parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      const Particle& particle = particles_[i];
-      const ParticleShape& shape = shapes_[particle.shape];
-      const Vec3 velocity =
-          particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * half;
-      Particle kicked = particle;
-      kicked.angularMomentum = particle.angularMomentum + particle.torque * half;
-      const double angular = length(angularVelocityOf(kicked, particle.orientation));
-      drift[i] = velocity * dt;
-      turn[i] = angular * shape.boundingRadius() * dt;
-      speeds[i] = length(velocity) + angular * shape.boundingRadius();
+      const Motion motion = motionOf(i);
+      speeds[i] =
+          length(motion.velocity) + motion.angular * shapes_[particles_[i].shape].boundingRadius();
     }
   });
   // The cheap bound first: the two fastest particles (not finite: the step goes on and
@@ -98,6 +101,13 @@ void World::requireCatchableMotion() const {
     obstacle = std::max(obstacle, wallSpeed[o]);
   }
   if ((first + std::max(second, obstacle)) * dt < shell) return;
+  std::vector<Vec3> drift(owned_);
+  std::vector<double> turn(owned_);
+  for (std::size_t i = 0; i < owned_; ++i) {
+    const Motion motion = motionOf(i);
+    drift[i] = motion.velocity * dt;
+    turn[i] = motion.angular * shapes_[particles_[i].shape].boundingRadius() * dt;
+  }
 
   // Some two bodies could approach by 2ε: look at the pairs that could, where one moves by ε or
   // more. A pair is unsafe when its bounding spheres (grown by their turning and the shell) can

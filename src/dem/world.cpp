@@ -26,6 +26,9 @@ namespace {
 /// Pairs per parallel chunk in the narrow phase: a pair costs from a few µs (distant boxes) to
 /// a few hundred (large meshes in contact), so small chunks under dynamic scheduling balance.
 constexpr std::size_t kPairGrain = 2;
+/// Pairs of two spheres per parallel chunk and per batch of their law: a few hundred
+/// nanoseconds of work each.
+constexpr std::size_t kSphereGrain = 64;
 /// Particles per parallel chunk when integrating: a few hundred ns each, so a chunk is tens of
 /// µs; smaller than a step's share of the pool, so that the caller takes most of a short loop
 /// while a worker wakes (with 512, 1000 particles' kicks and drifts ran no faster on two threads
@@ -250,8 +253,12 @@ void World::setAngularVelocity(std::size_t index, const Vec3& angularVelocity) {
 
 Vec3 World::angularVelocityOf(const Particle& particle,
                               const Quaternion& orientation) const noexcept {
-  return rotatedApply(orientation, shapes_[particle.shape].inverseInertia(),
-                      particle.angularMomentum);
+  return angularVelocityOf(particle, orientation, particle.angularMomentum);
+}
+
+Vec3 World::angularVelocityOf(const Particle& particle, const Quaternion& orientation,
+                              const Vec3& angularMomentum) const noexcept {
+  return rotatedApply(orientation, shapes_[particle.shape].inverseInertia(), angularMomentum);
 }
 
 void World::placeBodies() {
@@ -423,42 +430,6 @@ Sphere World::boundingSphere(const Particle& particle) const noexcept {
   return {particle.position, shapes_[particle.shape].boundingRadius()};
 }
 
-std::vector<std::span<const ContactPoint>> World::sphereObstacleContacts(
-    std::span<const Interaction> pairs) {
-  // One sphereContacts call per obstacle over every sphere paired with it, through the
-  // obstacle's tree. Spheres go into the obstacle's prepared frame.
-  std::vector<std::span<const ContactPoint>> found(pairs.size());
-  sphereObstacleFound_.resize(obstacles_.size());
-  std::vector<std::size_t> pairOf;
-  std::vector<Sphere> spheres;
-  for (std::size_t o = 0; o < obstacles_.size(); ++o) {
-    sphereObstacleFound_[o].clear();
-    pairOf.clear();
-    spheres.clear();
-    const QueryMesh& obstacle = placedObstacles_[o];
-    for (std::size_t p = statistics_.particlePairsTested; p < pairs.size(); ++p) {
-      const Particle& particle = particles_[pairs[p].first];
-      if (pairs[p].second != o || !shapes_[particle.shape].isSphere()) continue;
-      Sphere sphere = boundingSphere(particle);
-      if (obstacle.moved()) sphere.center = obstacle.inversePose().apply(sphere.center);
-      pairOf.push_back(p);
-      spheres.push_back(sphere);
-    }
-    if (spheres.empty()) continue;
-    sphereObstacleFound_[o] = contactdetection::sphereContacts(spheres, obstacle, law_.epsilon);
-    const std::vector<ContactPoint>& all = sphereObstacleFound_[o];
-    for (std::size_t begin = 0; begin < all.size();) {  // sorted by sphere
-      std::size_t end = begin;
-      while (end < all.size() && all[end].first == all[begin].first)
-        ++end;
-      found[pairOf[all[begin].first]] =
-          std::span<const ContactPoint>(all).subspan(begin, end - begin);
-      begin = end;
-    }
-  }
-  return found;
-}
-
 void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   Clock::time_point start = Clock::now();
   // The neighbour list is kept between evaluations in a World of one process; a distributed
@@ -467,13 +438,14 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   statistics_.broadPhaseSeconds = secondsSince(start);
 
   start = Clock::now();
+  predictMotions(halfStepVelocities);
   if (outcomes_.size() < pairs.size()) outcomes_.resize(pairs.size());
   const std::span<PairOutcome> outcomes(outcomes_.data(), pairs.size());
   detectContacts(pairs, outcomes);
   statistics_.contactDetectionSeconds = secondsSince(start);
 
   start = Clock::now();
-  applyContactLaw(pairs, outcomes, halfStepVelocities);
+  applyContactLaw(pairs, outcomes);
   const std::vector<GhostForce> imported =
       exchange ? exchangeGhostForces(pairs, outcomes, *exchange) : std::vector<GhostForce>{};
   sumForces(pairs, outcomes, imported);
@@ -481,52 +453,112 @@ void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
   forcesCurrent_ = true;
 }
 
+namespace {
+
+/// Carries the caches keyed like `caches` over to the pairs [begin, end) that `wanted` picks
+/// (sorted by key; new ones made with `skin`, those of pairs gone dropped into `spare`, whose
+/// capacity is kept), and points cacheOf[p] at pair p's.
+template <class Cache, class Pairs, class Wanted>
+void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const Wanted& wanted,
+                 double skin, std::vector<std::pair<std::uint64_t, Cache>>& caches,
+                 std::vector<std::pair<std::uint64_t, Cache>>& spare,
+                 std::vector<Cache*>& cacheOf) {
+  std::vector<std::size_t> pairOf;
+  spare.clear();
+  std::size_t old = 0;
+  for (std::size_t p = begin; p < end; ++p) {
+    const auto& pair = pairs[p];
+    if (!wanted(pair)) continue;
+    while (old < caches.size() && caches[old].first < pair.key)
+      ++old;
+    if (old < caches.size() && caches[old].first == pair.key)
+      spare.emplace_back(pair.key, std::move(caches[old].second));
+    else
+      spare.emplace_back(pair.key, Cache(skin));
+    pairOf.push_back(p);
+  }
+  caches.swap(spare);
+  for (std::size_t k = 0; k < pairOf.size(); ++k)
+    cacheOf[pairOf[k]] = &caches[k].second;
+}
+
+}  // namespace
+
 void World::routeContactCaches(std::span<const Interaction> pairs) {
   cacheOf_.assign(pairs.size(), nullptr);
+  sphereCacheOf_.assign(pairs.size(), nullptr);
   if (law_.model != ContactModel::point) return;
   // The skin: half of ε (measured: ε/4 to ε gave the same settled pile within 4%, and the
   // hopper's flow 3% to 4% slower at ε/4 and ε; docs/performance.md). A pair at rest keeps
   // its triangle pairs for good.
   const double skin = 0.5 * law_.epsilon;
-  std::vector<std::size_t> pairOf;
-  const auto route = [&](std::size_t begin, std::size_t end, ContactCaches& caches) {
-    ContactCaches& next = spareCaches_;  // its capacity kept from step to step
-    next.clear();
-    pairOf.clear();
-    std::size_t old = 0;
-    for (std::size_t p = begin; p < end; ++p) {
-      const Interaction& pair = pairs[p];
-      if (shapes_[particles_[pair.first].shape].isSphere() ||
-          (!pair.withObstacle && shapes_[particles_[pair.second].shape].isSphere()))
-        continue;
-      while (old < caches.size() && caches[old].first < pair.key)
-        ++old;
-      if (old < caches.size() && caches[old].first == pair.key)
-        next.emplace_back(pair.key, std::move(caches[old].second));
-      else
-        next.emplace_back(pair.key, contactdetection::ContactCache(skin));
-      pairOf.push_back(p);
-    }
-    caches.swap(next);
-    for (std::size_t k = 0; k < pairOf.size(); ++k)
-      cacheOf_[pairOf[k]] = &caches[k].second;
+  const auto sphere = [&](std::uint32_t particle) {
+    return shapes_[particles_[particle].shape].isSphere();
   };
-  route(0, statistics_.particlePairsTested, particleCaches_);
-  route(statistics_.particlePairsTested, pairs.size(), obstacleCaches_);
+  const auto meshes = [&](const Interaction& pair) {
+    return !sphere(pair.first) && (pair.withObstacle || !sphere(pair.second));
+  };
+  const std::size_t particlePairs = statistics_.particlePairsTested;
+  routeCaches(pairs, 0, particlePairs, meshes, skin, particleCaches_, spareCaches_, cacheOf_);
+  routeCaches(pairs, particlePairs, pairs.size(), meshes, skin, obstacleCaches_, spareCaches_,
+              cacheOf_);
+  routeCaches(
+      pairs, particlePairs, pairs.size(),
+      [&](const Interaction& pair) { return sphere(pair.first); }, skin, sphereObstacleCaches_,
+      spareSphereCaches_, sphereCacheOf_);
 }
 
 void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes) {
-  const std::vector<std::span<const ContactPoint>> sphereObstacleFound =
-      sphereObstacleContacts(pairs);
   routeContactCaches(pairs);
   const double epsilon = law_.epsilon, filterDistance = parameters_.filterDistance;
   const bool volumeLaw = law_.model == ContactModel::volume;
   contactdetection::OverlapOptions overlapOptions;
   overlapOptions.curves = false;
+  routes_.resize(pairs.size());
+  onePoints_.resize(pairs.size());
+  // Pairs of two spheres have their own batched law (sphereSphereLaw); marked here.
+  spherePairs_.clear();
+  for (std::size_t p = 0; p < statistics_.particlePairsTested; ++p) {
+    const Interaction& pair = pairs[p];
+    if (!volumeLaw && shapes_[particles_[pair.first].shape].isSphere() &&
+        shapes_[particles_[pair.second].shape].isSphere()) {
+      spherePairs_.push_back(p);
+      routes_[p].route = PairRoute::onePoint;
+    } else {
+      routes_[p].route = PairRoute::general;
+    }
+  }
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
+    // The sphere pairs' springs, in increasing key order; a sphere's points on an obstacle.
+    std::vector<ContactPoint> sphereFound;  // a sphere's contacts on an obstacle, raw
+    PairContacts onObstacle;                // and finished
     for (std::size_t p = begin; p < end; ++p) {
       if (p + 1 < end && cacheOf_[p + 1]) cacheOf_[p + 1]->prefetch();
       const Interaction& pair = pairs[p];
+      RoutedPair& routed = routes_[p];
+      if (routed.route == PairRoute::onePoint && !pair.withObstacle) continue;  // two spheres
+      const bool firstSphere = shapes_[particles_[pair.first].shape].isSphere();
+      if (!volumeLaw && firstSphere && pair.withObstacle) {
+        // Through the pair's cache, the sphere in the obstacle's prepared frame.
+        const QueryMesh& obstacle = placedObstacles_[pair.second];
+        Sphere sphere = spheres_[pair.first];
+        if (obstacle.moved()) sphere.center = obstacle.inversePose().apply(sphere.center);
+        contactdetection::sphereContacts(sphere, obstacle, epsilon, *sphereCacheOf_[p],
+                                         sphereFound);
+        finishSphereMeshContacts(sphereFound, obstacle, filterDistance, onObstacle);
+        routed.rawPoints = onObstacle.trianglePairs;
+        if (onObstacle.points.size() <= 1) {  // most: one point, its law in a batch below
+          routed.route = onObstacle.points.empty() ? PairRoute::apart : PairRoute::onePoint;
+          if (!onObstacle.points.empty()) onePoints_[p].point.point = onObstacle.points.front();
+          continue;
+        }
+        routed.route = PairRoute::general;
+        outcomes[p].regions.clear();
+        outcomes[p].forces.points.clear();
+        outcomes[p].contacts.points.assign(onObstacle.points.begin(), onObstacle.points.end());
+        continue;
+      }
+      routed.route = PairRoute::general;
       PairOutcome& outcome = outcomes[p];
       outcome.regions.clear();
       outcome.forces.points.clear();
@@ -536,26 +568,19 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
         contactdetection::Overlap found =
             contactdetection::overlap(placed_[pair.first], other, overlapOptions);
         outcome.contacts.points.clear();
-        outcome.rawPoints = found.segments;
+        routed.rawPoints = found.segments;
         outcome.regions = std::move(found.regions);
         continue;
       }
       const Particle& one = particles_[pair.first];
-      const bool firstSphere = shapes_[one.shape].isSphere();
       PairContacts& found = outcome.contacts;
       if (pair.withObstacle) {
-        const QueryMesh& obstacle = placedObstacles_[pair.second];
-        if (firstSphere)
-          finishSphereMeshContacts(sphereObstacleFound[p], obstacle, filterDistance, found);
-        else
-          found = pairContacts(placed_[pair.first], obstacle, epsilon, filterDistance, true,
-                               cacheOf_[p]);
+        found = pairContacts(placed_[pair.first], placedObstacles_[pair.second], epsilon,
+                             filterDistance, true, cacheOf_[p]);
       } else {
         const Particle& other = particles_[pair.second];
         const bool secondSphere = shapes_[other.shape].isSphere();
-        if (firstSphere && secondSphere)
-          sphereSphereContacts(boundingSphere(one), boundingSphere(other), epsilon, found);
-        else if (firstSphere)
+        if (firstSphere)
           found = sphereMeshContacts(boundingSphere(one), placed_[pair.second], epsilon,
                                      filterDistance);
         else if (secondSphere)
@@ -565,67 +590,138 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
           found = pairContacts(placed_[pair.first], placed_[pair.second], epsilon, filterDistance,
                                false, cacheOf_[p]);
       }
-      outcome.rawPoints = found.trianglePairs;
+      routed.rawPoints = found.trianglePairs;
+    }
+  });
+  sphereSphereLaw(pairs);
+  onePointLaw(pairs);
+}
+
+void World::onePointLaw(std::span<const Interaction> pairs) {
+  spherePairs_.clear();  // now the obstacle pairs of one point
+  for (std::size_t p = statistics_.particlePairsTested; p < pairs.size(); ++p)
+    if (routes_[p].route == PairRoute::onePoint) spherePairs_.push_back(p);
+  parallelFor(0, spherePairs_.size(), kSphereGrain, [&](std::size_t begin, std::size_t end) {
+    SpringCursor springs(obstacleSprings_);  // in increasing key order
+    std::uint32_t dampedShape = std::numeric_limits<std::uint32_t>::max();
+    PairDamping damping;
+    OnePointPair batch[kSphereGrain];
+    for (std::size_t from = begin; from < end; from += kSphereGrain) {
+      const std::size_t count = std::min(kSphereGrain, end - from);
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::size_t p = spherePairs_[from + k];
+        const Interaction& pair = pairs[p];
+        if (particles_[pair.first].shape != dampedShape) {
+          damping = pairDamping(law_, effectiveMass(pair));
+          dampedShape = particles_[pair.first].shape;
+        }
+        batch[k] = {&onePoints_[p].point.point,     &motions_[pair.first],
+                    &obstacleMotions_[pair.second], damping,
+                    springs.find(pair.key),         &onePoints_[p]};
+      }
+      onePointForces(std::span<const OnePointPair>(batch, count), parameters_.timeStep, law_);
     }
   });
 }
 
-void World::applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
-                            bool halfStepVelocities) {
-  const bool volumeLaw = law_.model == ContactModel::volume;
-  const double dt = parameters_.timeStep;
+void World::sphereSphereLaw(std::span<const Interaction> pairs) {
+  // In runs of kSphereGrain pairs, each one batch of the law (contact_model.h).
+  parallelFor(0, spherePairs_.size(), kSphereGrain, [&](std::size_t begin, std::size_t end) {
+    SpringCursor springs(particleSprings_);  // in increasing key order
+    // The dashpots of the last pair of shapes met (a pile of one or a few sphere shapes).
+    std::uint64_t dampedShapes = std::numeric_limits<std::uint64_t>::max();
+    PairDamping damping;
+    SpherePair batch[kSphereGrain];
+    bool touching[kSphereGrain];
+    for (std::size_t from = begin; from < end; from += kSphereGrain) {
+      const std::size_t count = std::min(kSphereGrain, end - from);
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::size_t p = spherePairs_[from + k];
+        const Interaction& pair = pairs[p];
+        const std::uint64_t shapes =
+            std::uint64_t{particles_[pair.first].shape} << 32 | particles_[pair.second].shape;
+        if (shapes != dampedShapes) {
+          damping = pairDamping(law_, effectiveMass(pair));
+          dampedShapes = shapes;
+        }
+        const TangentialSpring* spring = springs.find(pair.key);
+        batch[k] = {&spheres_[pair.first],
+                    &spheres_[pair.second],
+                    &motions_[pair.first],
+                    &motions_[pair.second],
+                    damping,
+                    spring,
+                    &onePoints_[p]};
+      }
+      sphereSphereForces(std::span<const SpherePair>(batch, count), parameters_.timeStep, law_,
+                         std::span<bool>(touching, count));
+      for (std::size_t k = 0; k < count; ++k)
+        routes_[spherePairs_[from + k]] = {touching[k] ? PairRoute::onePoint : PairRoute::apart,
+                                           touching[k] ? 1u : 0u};
+    }
+  });
+}
+
+void World::predictMotions(bool halfStepVelocities) {
   // The dashpot and friction want the velocities at the time of the positions. Between the
   // kicks they are half a step behind: predict them with the previous forces (the first half
   // kick again), which keeps the velocity-dependent forces second order in dt.
-  std::vector<BodyMotion> motions(particles_.size());
-  const double predict = halfStepVelocities ? 0.5 * dt : 0.0;
+  motions_.resize(particles_.size());
+  const double predict = halfStepVelocities ? 0.5 * parameters_.timeStep : 0.0;
   parallelFor(0, particles_.size(), kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const Particle& particle = particles_[i];
       const ParticleShape& shape = shapes_[particle.shape];
       const Vec3 momentum = particle.angularMomentum + particle.torque * predict;
-      motions[i] = {
+      motions_[i] = {
           particle.position,
           particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * predict,
           rotatedApply(particle.orientation, shape.inverseInertia(), momentum)};
     }
   });
+  obstacleMotions_.clear();
+  for (const Obstacle& obstacle : obstacles_)
+    obstacleMotions_.push_back({obstacle.pose.apply(obstacle.motion.pivot),
+                                obstacle.motion.velocity, obstacle.motion.angularVelocity});
+}
+
+double World::effectiveMass(const Interaction& pair) const noexcept {
+  const double mass = shapes_[particles_[pair.first].shape].mass();
+  if (pair.withObstacle) return mass;
+  const double otherMass = shapes_[particles_[pair.second].shape].mass();
+  return mass * otherMass / (mass + otherMass);
+}
+
+void World::applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes) {
+  const bool volumeLaw = law_.model == ContactModel::volume;
+  const double dt = parameters_.timeStep;
+  const std::vector<BodyMotion>& motions = motions_;
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
     // The particle pairs, then the obstacle pairs, each run in increasing key order.
     SpringCursor particleSprings(particleSprings_), obstacleSprings(obstacleSprings_);
     for (std::size_t p = begin; p < end; ++p) {
-      if (outcomes[p].contacts.points.empty() && outcomes[p].regions.empty()) continue;
+      if (routes_[p].route != PairRoute::general ||
+          (outcomes[p].contacts.points.empty() && outcomes[p].regions.empty()))
+        continue;
       const Interaction& pair = pairs[p];
       const Particle& one = particles_[pair.first];
-      const double mass = shapes_[one.shape].mass();
       const BodyMotion& firstMotion = motions[pair.first];
-      BodyMotion secondMotion;
-      double effectiveMass = mass;
-      const TangentialSpring* spring = nullptr;
-      if (pair.withObstacle) {
-        const Obstacle& obstacle = obstacles_[pair.second];
-        const Vec3 pivot = obstacle.pose.apply(obstacle.motion.pivot);
-        secondMotion = {pivot, obstacle.motion.velocity, obstacle.motion.angularVelocity};
-        spring = obstacleSprings.find(pair.key);
-      } else {
-        const Particle& other = particles_[pair.second];
-        const double otherMass = shapes_[other.shape].mass();
-        secondMotion = motions[pair.second];
-        effectiveMass = mass * otherMass / (mass + otherMass);
-        spring = particleSprings.find(pair.key);
-      }
+      const BodyMotion& secondMotion =
+          pair.withObstacle ? obstacleMotions_[pair.second] : motions[pair.second];
+      const double mass = effectiveMass(pair);
+      const TangentialSpring* spring =
+          pair.withObstacle ? obstacleSprings.find(pair.key) : particleSprings.find(pair.key);
       if (volumeLaw) {
         double radius = equivalentRadius(shapes_[one.shape].volume());
         if (!pair.withObstacle)
           radius =
               std::min(radius, equivalentRadius(shapes_[particles_[pair.second].shape].volume()));
-        outcomes[p].forces =
-            volumePairForces(outcomes[p].regions, firstMotion, secondMotion, effectiveMass,
-                             volumeStiffness(law_.stiffness, radius),
-                             spring ? *spring : TangentialSpring{}, dt, law_);
+        outcomes[p].forces = volumePairForces(outcomes[p].regions, firstMotion, secondMotion, mass,
+                                              volumeStiffness(law_.stiffness, radius),
+                                              spring ? *spring : TangentialSpring{}, dt, law_);
         continue;
       }
-      pairForces(outcomes[p].contacts.points, firstMotion, secondMotion, effectiveMass,
+      pairForces(outcomes[p].contacts.points, firstMotion, secondMotion, mass,
                  spring ? *spring : TangentialSpring{}, dt, law_, outcomes[p].forces);
     }
   });
@@ -638,7 +734,7 @@ std::vector<World::GhostForce> World::exchangeGhostForces(std::span<const Intera
   std::vector<GhostForce> exported;
   for (std::size_t p = 0; p < statistics_.particlePairsTested; ++p)
     if (pairs[p].second >= owned_)
-      for (const PointForce& point : outcomes[p].forces.points)
+      for (const PointForce& point : pointForces(p, outcomes))
         exported.push_back(
             {pairs[p].key, ids_[pairs[p].second], point.point.x, point.force, point.couple});
   const Clock::time_point swap = Clock::now();
@@ -677,7 +773,7 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
   // for any number of processes a DistributedWorld splits the particles over.
   for (Particle& particle : particles_)
     particle.force = particle.torque = Vec3{};
-  contacts_.clear();
+  contactsPending_ = true;  // the records wait for contacts()
   particleSprings_.clear();
   obstacleSprings_.clear();
   statistics_.pairsInContact = statistics_.rawContactPoints = statistics_.contactPoints = 0;
@@ -687,21 +783,26 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
   const bool friction = law_.friction > 0.0;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const Interaction& pair = pairs[p];
-    const PairOutcome& outcome = outcomes[p];
     importBefore(pair.withObstacle ? std::numeric_limits<std::uint64_t>::max() : pair.key);
-    statistics_.rawContactPoints += outcome.rawPoints;
-    if (outcome.forces.points.empty()) continue;
+    const PairRoute route = routes_[p].route;
+    statistics_.rawContactPoints += routes_[p].rawPoints;
+    if (route == PairRoute::apart) continue;
+    const std::span<const PointForce> points = pointForces(p, outcomes);
+    if (points.empty()) continue;
+    const PairForceSummary& forces = route == PairRoute::onePoint
+                                         ? static_cast<const PairForceSummary&>(onePoints_[p])
+                                         : outcomes[p].forces;
     ++statistics_.pairsInContact;
     statistics_.deepestRatio =
-        std::max(statistics_.deepestRatio, outcome.forces.deepest / (2.0 * law_.epsilon));
-    elasticEnergy_ += outcome.forces.springEnergy;
+        std::max(statistics_.deepestRatio, forces.deepest / (2.0 * law_.epsilon));
+    elasticEnergy_ += forces.springEnergy;
     if (friction)
       (pair.withObstacle ? obstacleSprings_ : particleSprings_)
-          .push_back({pair.key, outcome.forces.spring});
+          .push_back({pair.key, forces.spring});
     Particle& one = particles_[pair.first];
     Particle* other =
         pair.withObstacle || pair.second >= owned_ ? nullptr : &particles_[pair.second];
-    for (const PointForce& point : outcome.forces.points) {
+    for (const PointForce& point : points) {
       one.force += point.force;
       one.torque += cross(point.point.x - one.position, point.force);
       if (other) {
@@ -714,6 +815,26 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
       }
       statistics_.contactPoints += 1;
       statistics_.overlappingContacts += point.point.overlap ? 1 : 0;
+    }
+  }
+  importBefore(std::numeric_limits<std::uint64_t>::max());
+}
+
+std::span<const Contact> World::contacts() const {
+  const std::lock_guard<std::mutex> lock(contactsLock_.mutex);
+  if (contactsPending_) {
+    makeContacts();
+    contactsPending_ = false;
+  }
+  return contacts_;
+}
+
+void World::makeContacts() const {
+  contacts_.clear();
+  const std::span<const PairOutcome> outcomes(outcomes_.data(), pairs_.size());
+  for (std::size_t p = 0; p < pairs_.size(); ++p) {
+    const Interaction& pair = pairs_[p];
+    for (const PointForce& point : pointForces(p, outcomes)) {
       // Field by field into a value-initialised record: its padding bytes are zeros, so that
       // copies of the contacts (Python's arrays, checkpoints read back) compare byte for byte.
       Contact& contact = contacts_.emplace_back();
@@ -727,7 +848,19 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
       contact.volume = point.volume;
     }
   }
-  importBefore(std::numeric_limits<std::uint64_t>::max());
+}
+
+std::span<const PointForce> World::pointForces(std::size_t p,
+                                               std::span<const PairOutcome> outcomes) const {
+  switch (routes_[p].route) {
+    case PairRoute::onePoint:
+      return {&onePoints_[p].point, 1};
+    case PairRoute::apart:
+      return {};
+    case PairRoute::general:
+      break;
+  }
+  return outcomes[p].forces.points;
 }
 
 void World::halfKick() {
@@ -757,12 +890,13 @@ void World::kickAndDrift() {
       // The turn at the angular velocity of the half-turned body (midpoint rule): an asymmetric
       // body's ω changes as it turns at fixed L, and the start's ω made a free spin gain energy
       // at first order in dt (0.7% in 100,000 steps at 50 rad/s). A body of isotropic inertia
-      // (a sphere's) turns at L/I whatever its orientation.
-      const Vec3 midpointRate =
-          isotropic(shapes_[particle.shape].inverseInertia())
-              ? angularVelocityOf(particle, particle.orientation)
-              : angularVelocityOf(particle,
-                                  turned(particle.orientation, particle.angularVelocity, 0.5 * dt));
+      // (a sphere's) turns at L/I whatever its orientation: the ω the kick gave it.
+      if (isotropic(shapes_[particle.shape].inverseInertia())) {
+        particle.orientation = turned(particle.orientation, particle.angularVelocity, dt);
+        continue;
+      }
+      const Vec3 midpointRate = angularVelocityOf(
+          particle, turned(particle.orientation, particle.angularVelocity, 0.5 * dt));
       particle.orientation = turned(particle.orientation, midpointRate, dt);
       particle.angularVelocity = angularVelocityOf(particle, particle.orientation);
     }

@@ -103,20 +103,28 @@ void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh
   }
 }
 
-/// The contacts of one (validated) sphere with the triangles of a prepared mesh (its prepared
-/// frame), found through its tree: the nodes and then the triangles whose boxes come within
-/// reach of the sphere's box, with the same slack as above (the tree's boxes are grown by the
-/// mesh's own slack on top), so no triangle the kernel would report is skipped. In id order.
-void contactsOf(const Sphere& sphere, std::size_t index, const detail::QueryMeshData& data,
-                double scale, double epsilon, std::vector<ContactPoint>& out) {
+/// A triangle of a prepared mesh near a sphere: its prepared (tree) index, its id, and the
+/// kernel's answer.
+struct NearTriangle {
+  std::uint32_t index;
+  std::uint32_t id;
+  kernels::SphereContactResult result;
+};
+
+/// The triangles of a prepared mesh (its prepared frame) whose kernel gap to one (validated)
+/// sphere is below `reach`, found through its tree: the nodes and then the triangles whose boxes
+/// come within reach of the sphere's box, with the same slack as above (the tree's boxes are
+/// grown by the mesh's own slack on top), so no triangle the kernel would report is skipped. In
+/// id order.
+void nearTriangles(const Sphere& sphere, const detail::QueryMeshData& data, double scale,
+                   double reach, std::vector<NearTriangle>& out) {
   const Vec3 extent{sphere.radius, sphere.radius, sphere.radius};
   const Aabb box{sphere.center - extent, sphere.center + extent};
-  const double reach = 2.0 * epsilon;
   const double gap = reach + kPruneUlps * (maxAbs(sphere.center) + sphere.radius + scale);
   thread_local std::vector<std::pair<std::size_t, std::size_t>> stack;  // (level, node)
   stack.clear();
   stack.emplace_back(data.levels.size() - 1, 0);
-  const std::size_t first = out.size();
+  out.clear();
   while (!stack.empty()) {
     const auto [level, node] = stack.back();
     stack.pop_back();
@@ -133,12 +141,22 @@ void contactsOf(const Sphere& sphere, std::size_t index, const detail::QueryMesh
       const Triangle triangle = data.triangle(k);
       if (apart(box, triangle.bounds(), gap)) continue;
       const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, triangle);
-      if (r.gap < reach)
-        out.push_back(sphereContactPoint(r, static_cast<std::uint32_t>(index), data.order[k]));
+      if (r.gap < reach) out.push_back({static_cast<std::uint32_t>(k), data.order[k], r});
     }
   }
-  std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
-            [](const ContactPoint& x, const ContactPoint& y) { return x.second < y.second; });
+  std::sort(out.begin(), out.end(),
+            [](const NearTriangle& x, const NearTriangle& y) { return x.id < y.id; });
+}
+
+/// The contacts of one (validated) sphere with the triangles of a prepared mesh (its prepared
+/// frame): nearTriangles within 2ε, in id order.
+void contactsOf(const Sphere& sphere, std::size_t index, const detail::QueryMeshData& data,
+                double scale, double epsilon, std::vector<ContactPoint>& out) {
+  thread_local std::vector<NearTriangle> near;
+  nearTriangles(sphere, data, scale, 2.0 * epsilon, near);
+  for (const NearTriangle& triangle : near)
+    out.push_back(
+        sphereContactPoint(triangle.result, static_cast<std::uint32_t>(index), triangle.id));
 }
 
 /// The contacts of every sphere, each found by `contactsOf(sphere, index, out)`, in sphere order.
@@ -188,6 +206,57 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
   return everySphere(spheres, [&](std::size_t i, std::vector<ContactPoint>& out) {
     contactsOf(spheres[i], i, data, scale, epsilon, out);
   });
+}
+
+void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
+                    SphereContactCache& cache, std::vector<ContactPoint>& out) {
+  checkEpsilon(epsilon);
+  checkSphere(sphere, 0);
+  out.clear();
+  const detail::QueryMeshData& data = mesh.data();
+  const double scale = std::fmax(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));
+  const double reach = 2.0 * epsilon;
+  const bool same = cache.valid_ && cache.meshData_.get() == &data && cache.epsilon_ == epsilon &&
+                    cache.radius_ == sphere.radius;
+  const double move = same ? distance(sphere.center, cache.center_) : 0.0;
+  if (same && move <= cache.budget_) {
+    // A kept triangle whose gap, less the move and the rounding, is 2ε or more is still apart;
+    // the others go to the kernel as the tree would hand them over, in index order.
+    const double nearer = reach + move + cache.allowance_;
+    for (const SphereContactCache::KeptTriangle& kept : cache.triangles_) {
+      if (!(kept.gap < nearer)) continue;
+      const kernels::SphereContactResult r =
+          kernels::sphereTriangle(sphere, data.triangle(kept.index));
+      if (r.gap < reach) out.push_back(sphereContactPoint(r, 0, data.order[kept.index]));
+    }
+    ++cache.reused_;
+    return;
+  }
+  const double skin = cache.skin_;
+  if (!(std::isfinite(skin) && skin > 0.0)) {
+    contactsOf(sphere, 0, data, scale, epsilon, out);
+    ++cache.made_;
+    return;
+  }
+  // The triangles within 2ε + skin, and of those the ones within 2ε (the kernel's own test).
+  thread_local std::vector<NearTriangle> near;
+  nearTriangles(sphere, data, scale, reach + skin, near);
+  cache.triangles_.clear();
+  for (const NearTriangle& triangle : near) {
+    cache.triangles_.push_back({triangle.index, triangle.result.gap});
+    if (triangle.result.gap < reach)
+      out.push_back(sphereContactPoint(triangle.result, 0, triangle.id));
+  }
+  cache.valid_ = true;
+  cache.meshData_ = mesh.sharedData();
+  cache.epsilon_ = epsilon;
+  cache.radius_ = sphere.radius;
+  cache.center_ = sphere.center;
+  // The kernel's gaps at both centres and the move round to a few ulps of the coordinates;
+  // allowed 2⁻³⁶ of the largest, as the mesh pairs' cache does.
+  cache.allowance_ = 0x1p-36 * (maxAbs(sphere.center) + sphere.radius + scale);
+  cache.budget_ = skin - cache.allowance_;
+  ++cache.made_;
 }
 
 ContactPoint sphereContactPoint(const kernels::SphereContactResult& result, std::uint32_t first,

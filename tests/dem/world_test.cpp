@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <span>
+#include <thread>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -215,6 +217,30 @@ TEST(DemWorld, SameResultsForOneAndTwoThreads) {
     EXPECT_EQ(std::memcmp(&one[i].velocity, &two[i].velocity, sizeof(Vec3)), 0) << i;
     EXPECT_EQ(std::memcmp(&one[i].angularMomentum, &two[i].angularMomentum, sizeof(Vec3)), 0);
     EXPECT_EQ(std::memcmp(&one[i].orientation, &two[i].orientation, sizeof(Quaternion)), 0);
+  }
+}
+
+TEST(DemWorld, ContactsAskedFromManyThreadsAreMadeOnce) {
+  // The records wait for the first contacts() after a step; readers on several threads at
+  // once (const calls between steps) all get the same records.
+  Scenario settling = settle(30, 5, ParticleKind::Sphere);
+  settling.world.run(3000);
+  ASSERT_GT(settling.world.statistics().contactPoints, 0u);
+  const World copy = settling.world;  // its records made on their own
+  std::vector<std::vector<Contact>> seen(4);
+  std::vector<std::thread> readers;
+  for (std::vector<Contact>& records : seen)
+    readers.emplace_back([&] {
+      const std::span<const Contact> contacts = settling.world.contacts();
+      records.assign(contacts.begin(), contacts.end());
+    });
+  for (std::thread& reader : readers)
+    reader.join();
+  const std::span<const Contact> expected = copy.contacts();
+  ASSERT_EQ(expected.size(), settling.world.statistics().contactPoints);
+  for (const std::vector<Contact>& records : seen) {
+    ASSERT_EQ(records.size(), expected.size());
+    EXPECT_EQ(std::memcmp(records.data(), expected.data(), expected.size() * sizeof(Contact)), 0);
   }
 }
 

@@ -495,5 +495,90 @@ TEST(SphereContacts, ManyUserThreadsGetTheReferenceResult) {
     expectSame(answers[t], expected, "thread " + std::to_string(t));
 }
 
+/// A sphere walking about a point by a prepared mesh in steps of `stride` (some steps a skin
+/// long or more, most shorter), in the mesh's prepared frame: through `cache`, each call gives the
+/// fresh query's contacts, bit for bit.
+void expectCachedWalkMatchesFresh(const QueryMesh& mesh, const Sphere& start, double epsilon,
+                                  SphereContactCache& cache, double stride, int steps,
+                                  std::uint64_t seed, const std::string& label) {
+  Random random(seed);
+  Sphere sphere = start;
+  std::vector<ContactPoint> cached;
+  std::size_t found = 0;
+  for (int step = 0; step < steps; ++step) {
+    const double length = random.uniform(0.0, 1.0) < 0.9 ? stride : 20.0 * stride;
+    sphere.center +=
+        Vec3{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)} * length;
+    // On a leash about where it started, so that it stays by the wall.
+    if (distance(sphere.center, start.center) > 50.0 * stride)
+      sphere.center = start.center + (sphere.center - start.center) * 0.5;
+    sphereContacts(sphere, mesh, epsilon, cache, cached);
+    const std::vector<ContactPoint> fresh =
+        sphereContacts(std::span<const Sphere>(&sphere, 1), mesh, epsilon);
+    expectSame(cached, fresh, label + " step " + std::to_string(step));
+    found += fresh.size();
+  }
+  EXPECT_GT(found, static_cast<std::size_t>(steps) / 4) << label << ": the walk met the wall";
+}
+
+TEST(SphereContactCache, AWalkGivesTheFreshContactsBitForBit) {
+  const double epsilon = 0.01;
+  // A box (a floor of two triangles), a fine icosphere, and a granulate far from the origin.
+  const QueryMesh box(primitives::box({3, 2, 1}));
+  SphereContactCache boxCache(0.5 * epsilon);
+  expectCachedWalkMatchesFresh(box, {{0.3, 0.2, -0.5 - 0.1 - epsilon}, 0.1}, epsilon, boxCache,
+                               0.002, 2000, 1, "box");
+  EXPECT_GT(boxCache.reused(), boxCache.made()) << "the cache answered most calls";
+  EXPECT_GT(boxCache.made(), 10u) << "and was made again as the sphere moved";
+
+  const QueryMesh icosphere(primitives::icosphere(4));
+  SphereContactCache icosphereCache(0.5 * epsilon);
+  expectCachedWalkMatchesFresh(icosphere, {{0, 0, 1.05}, 0.06}, epsilon, icosphereCache, 0.001,
+                               2000, 2, "icosphere");
+  EXPECT_GT(icosphereCache.reused(), icosphereCache.made());
+
+  Mesh granulate = primitives::granulate(11, {2, 1.5, 1}, 300);
+  granulate.translate({1e6, -1e6, 5e5});
+  const QueryMesh far(granulate);
+  SphereContactCache farCache(0.5 * epsilon);
+  const Aabb bounds = granulate.bounds();
+  expectCachedWalkMatchesFresh(far, {{bounds.upper.x, 1e6 * -1.0, 5e5}, 0.2}, epsilon, farCache,
+                               0.002, 1000, 3, "granulate far from the origin");
+}
+
+TEST(SphereContactCache, RemadeForAnotherMeshRadiusOrEpsilon) {
+  const double epsilon = 0.01;
+  const QueryMesh box(primitives::box({2, 2, 2}));
+  const QueryMesh bigger(primitives::box({2.02, 2.02, 2.02}));
+  SphereContactCache cache(0.5 * epsilon);
+  std::vector<ContactPoint> out;
+  const Sphere sphere{{0, 0, 1.105}, 0.1};
+  const auto expectFresh = [&](const QueryMesh& mesh, const Sphere& s, double eps,
+                               const std::string& label) {
+    sphereContacts(s, mesh, eps, cache, out);
+    expectSame(out, sphereContacts(std::span<const Sphere>(&s, 1), mesh, eps), label);
+  };
+  expectFresh(box, sphere, epsilon, "first");
+  EXPECT_EQ(cache.made(), 1u);
+  expectFresh(box, sphere, epsilon, "again");
+  EXPECT_EQ(cache.reused(), 1u);
+  expectFresh(bigger, sphere, epsilon, "another mesh");  // overlaps it: kept gaps would not say
+  expectFresh(box, {sphere.center, 0.11}, epsilon, "another radius");
+  expectFresh(box, sphere, 0.001, "another epsilon");
+  EXPECT_EQ(cache.made(), 4u);
+  // No skin: every call a fresh query.
+  SphereContactCache none(0.0);
+  for (int i = 0; i < 3; ++i) {
+    sphereContacts(sphere, box, epsilon, none, out);
+    expectSame(out, sphereContacts(std::span<const Sphere>(&sphere, 1), box, epsilon), "no skin");
+  }
+  EXPECT_EQ(none.made(), 3u);
+  EXPECT_EQ(none.reused(), 0u);
+  // Bad input throws as the fresh query does.
+  EXPECT_THROW(sphereContacts(sphere, box, -1.0, cache, out), Error);
+  EXPECT_THROW(sphereContacts({{0, 0, NAN}, 0.1}, box, epsilon, cache, out), Error);
+  EXPECT_THROW(sphereContacts({{0, 0, 0}, 0.0}, box, epsilon, cache, out), Error);
+}
+
 }  // namespace
 }  // namespace delta::contactdetection

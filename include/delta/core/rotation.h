@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cmath>
+
 #include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
 
@@ -43,11 +45,24 @@ struct Quaternion {
   Quaternion conjugate() const noexcept { return {w, -x, -y, -z}; }
 };
 
+namespace detail {
+/// (w, x, y, z) / |(w, x, y, z)|, or the identity for a zero (or NaN) one.
+inline Quaternion normalizedOrIdentity(double w, double x, double y, double z) noexcept {
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!(n > 0.0)) return Quaternion{};
+  return {w / n, x / n, y / n, z / n};
+}
+}  // namespace detail
+
 /// The rotation `a` after `b` (first `b`, then `a`), renormalised (the identity should the product
 /// come out zero, which unit factors never give).
 ///
 /// Threading: a pure function.
-Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept;
+inline Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept {
+  return detail::normalizedOrIdentity(
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w);
+}
 
 /// A rigid motion p ↦ R p + t, with the rotation kept as a unit quaternion. Compose with `*`
 /// (`a * b` applies b first); the inverse undoes it. Default-constructed it is the identity.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "delta/core/contact_point.h"
+#include "delta/core/sphere.h"
 #include "delta/core/vec3.h"
 #include "delta/query/overlap.h"
 
@@ -194,16 +195,30 @@ struct PointForce {
   double volume = 0.0;  ///< the volume law's overlap V; 0 in the point law
 };
 
+/// What the law gives a pair besides its points' forces.
+///
+/// Threading: a value type; no shared state.
+struct PairForceSummary {
+  TangentialSpring spring;    ///< to keep for the next step (zero without friction)
+  double normalForce = 0.0;   ///< Σ of the normal components |Fᵢ|
+  double deepest = 0.0;       ///< δ_max (the volume law: the largest V/|S|)
+  double springEnergy = 0.0;  ///< ½·k·δ_max² (the volume law: Σ ½·κ·V²)
+  bool sliding = false;       ///< the tangential force is at the Coulomb limit
+};
+
 /// The law applied to one pair's contact points.
 ///
 /// Threading: a value type; no shared state.
-struct PairForces {
+struct PairForces : PairForceSummary {
   std::vector<PointForce> points;  ///< one per contact point, in input order
-  TangentialSpring spring;         ///< to keep for the next step (zero without friction)
-  double normalForce = 0.0;        ///< Σ of the normal components |Fᵢ|
-  double deepest = 0.0;            ///< δ_max (the volume law: the largest V/|S|)
-  double springEnergy = 0.0;       ///< ½·k·δ_max² (the volume law: Σ ½·κ·V²)
-  bool sliding = false;            ///< the tangential force is at the Coulomb limit
+};
+
+/// The law applied to a pair of one contact point, held without a buffer (a World's sphere
+/// pairs, whose forces it keeps in one array rather than a buffer a pair).
+///
+/// Threading: a value type; no shared state.
+struct OnePointForces : PairForceSummary {
+  PointForce point;
 };
 
 /// The forces on the first body of a pair at its contact points (found by
@@ -226,6 +241,71 @@ PairForces pairForces(std::span<const ContactPoint> points, const BodyMotion& fi
 void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
                 const BodyMotion& second, double effectiveMass, const TangentialSpring& previous,
                 double timeStep, const ContactLaw& law, PairForces& result);
+
+/// The dashpots of a pair of effective mass m_eff: c = 2ζ√(k·m_eff) and c_t = 2ζ√(k_t·m_eff).
+///
+/// Threading: a value type; no shared state.
+struct PairDamping {
+  double normal = 0.0;
+  double tangential = 0.0;
+};
+/// A pair's PairDamping, as pairForces computes it.
+///
+/// Threading: a pure function.
+PairDamping pairDamping(const ContactLaw& law, double effectiveMass) noexcept;
+
+/// A pair of spheres for sphereSphereForces: the spheres, their motions, the pair's dashpots
+/// (pairDamping of its effective mass: the same for every pair of two shapes), its spring from
+/// the step before, and where its forces go.
+///
+/// Threading: a value type; `result` is the caller's.
+struct SpherePair {
+  const Sphere* first = nullptr;
+  const Sphere* second = nullptr;
+  const BodyMotion* firstMotion = nullptr;
+  const BodyMotion* secondMotion = nullptr;
+  PairDamping damping;
+  const TangentialSpring* previous = nullptr;  ///< null: none (a new contact)
+  OnePointForces* result = nullptr;
+};
+
+/// The point law of pairs of spheres, straight from their centres (a World's sphere particles):
+/// for each pair, the one point and its forces that pairForces gives for sphereSphereContacts'
+/// point (narrow_phase.h: x halfway between the surfaces on the line of centres, the direction
+/// from the second centre toward the first, +x for concentric ones), computed with one square
+/// root and one division for the point (equal to rounding rather than bit for bit), into
+/// `*pairs[i].result` with touching[i] = true; touching[i] = false (the result untouched) where
+/// the gap between the surfaces is 2ε or more. A pair's answer does not depend on the others
+/// in the call. Unscaled: centres more than about 1e154 apart are apart. `touching` must be as
+/// long as `pairs`.
+///
+/// Threading: a pure function on its arguments; the results must be distinct.
+void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, const ContactLaw& law,
+                        std::span<bool> touching) noexcept;
+
+/// A pair of one contact point for onePointForces: the point (its direction a unit vector, its
+/// gap below 2ε, as the sphere queries give them), the bodies' motions, the pair's dashpots, its
+/// spring from the step before, and where its forces go.
+///
+/// Threading: a value type; `result` is the caller's.
+struct OnePointPair {
+  const ContactPoint* point = nullptr;
+  const BodyMotion* firstMotion = nullptr;
+  const BodyMotion* secondMotion = nullptr;
+  PairDamping damping;
+  const TangentialSpring* previous = nullptr;  ///< null: none (a new contact)
+  OnePointForces* result = nullptr;
+};
+
+/// The point law of pairs of one contact point each (a World's spheres against the obstacles):
+/// for each, what pairForces gives its point, equal to rounding (the general law's sums of one
+/// term left out), into `*pairs[i].result` (its point a copy of `*pairs[i].point`, which may be
+/// the result's own). A pair's answer does not depend on the others in the call, and is the
+/// same arithmetic as sphereSphereForces' once the point is known.
+///
+/// Threading: a pure function on its arguments; the results must be distinct.
+void onePointForces(std::span<const OnePointPair> pairs, double timeStep,
+                    const ContactLaw& law) noexcept;
 
 /// The volume law's κ = k / (π·r_min²)² for a pair whose smaller equivalent radius (of the sphere
 /// of the same volume) is `smallestRadius`. Not validated.

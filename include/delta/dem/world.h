@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
@@ -18,6 +19,7 @@
 #include "delta/dem/particle_shape.h"
 #include "delta/mesh/mesh.h"
 #include "delta/query/query_mesh.h"
+#include "delta/query/sphere_contacts.h"
 
 /// The Discrete Element Method case study: rigid triangulated (or spherical) particles and
 /// obstacles, the seed's spring–dashpot contact law, and explicit time stepping (World); and its
@@ -240,11 +242,15 @@ struct Energies {
 /// self-intersecting meshes (delta::Error naming them).
 ///
 /// Sphere particles (ParticleShape::sphere) go through the same broad phase, contact law and
-/// integrator; only the narrow phase differs (narrow_phase.h): sphere–sphere pairs analytically
-/// (sphereSphereContacts), sphere–mesh particle pairs with sphereMeshContacts, and sphere–obstacle
-/// pairs with one contactdetection::sphereContacts call per obstacle over all spheres near it
-/// (finishSphereMeshContacts per pair). The gap is always between the sphere's surface and the
-/// other surface, so a sphere and a triangulated particle of the same surface behave alike.
+/// integrator; only the narrow phase differs (narrow_phase.h): sphere–mesh particle pairs with
+/// sphereMeshContacts, sphere–obstacle pairs with contactdetection::sphereContacts through a
+/// cache of the triangles near each sphere (query/sphere_contacts.h: SphereContactCache, skin
+/// ε/2; the same contacts, bit for bit) and finishSphereMeshContacts. A pair of two spheres, and
+/// a sphere with one contact point on an obstacle (most), has the one-point law in batches
+/// (contact_model.h: sphereSphereForces, onePointForces; the general law's values to rounding),
+/// its point and forces held in one array: no per-pair buffers, and the pairs' square roots and
+/// divisions overlap. The gap is always between the sphere's surface and the other surface, so a
+/// sphere and a triangulated particle of the same surface behave alike.
 ///
 /// Friction keeps one tangential and one torsion spring per touching pair from one step to the
 /// next (keyed by the pair's indices); a pair that loses contact for a step forgets them.
@@ -323,8 +329,13 @@ class World {
   std::span<const Obstacle> obstacles() const noexcept { return obstacles_; }
   /// The contact points of the last force evaluation (after the last step), sorted by pair
   /// (particle pairs by their indices, then particle–obstacle pairs) and within a pair as found.
-  /// In a DistributedWorld's part, `first` and `second` are the particles' ids.
-  std::span<const Contact> contacts() const noexcept { return contacts_; }
+  /// In a DistributedWorld's part, `first` and `second` are the particles' ids. The records are
+  /// made from what the evaluation kept the first time they are asked for after it, so a step
+  /// whose contacts nobody reads writes none (a tenth of a sphere step). The span lasts until
+  /// the World is stepped or changed.
+  ///
+  /// Threading: as the class; concurrent calls make the records once (a lock).
+  std::span<const Contact> contacts() const;
   const StepStatistics& statistics() const noexcept { return statistics_; }
   double time() const noexcept { return time_; }
   std::size_t stepCount() const noexcept { return stepCount_; }
@@ -389,7 +400,6 @@ class World {
     PairContacts contacts;  ///< after filter(h)
     /// The volume law's: the overlap's regions (empty where the meshes do not overlap).
     std::vector<contactdetection::OverlapRegion> regions;
-    std::size_t rawPoints = 0;
     PairForces forces;
   };
   // A DistributedWorld keeps its process's part of a simulation in a World: the particles it
@@ -431,13 +441,22 @@ class World {
   void evaluateForces(bool halfStepVelocities, Exchange* exchange);
   /// Each pair's contact points (the point law) or overlap regions (the volume law).
   void detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes);
+  /// The law of the pairs of two spheres (spherePairs_), detection and forces at once: their
+  /// routes_ and onePoints_.
+  void sphereSphereLaw(std::span<const Interaction> pairs);
+  /// The law of the obstacle pairs with one contact point (held in onePoints_), in batches.
+  void onePointLaw(std::span<const Interaction> pairs);
   /// Carries the contact caches of the pairs still found over to this evaluation's pairs (new
   /// ones empty, those of pairs gone dropped) and points cacheOf_ at them.
   void routeContactCaches(std::span<const Interaction> pairs);
   /// Each pair's forces from its contacts, with the velocities predicted to the positions' time
   /// when `halfStepVelocities`.
-  void applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
-                       bool halfStepVelocities);
+  void applyContactLaw(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes);
+  /// Each particle's and obstacle's motion for the contact law (motions_, obstacleMotions_),
+  /// with the particles' velocities predicted to the positions' time when `halfStepVelocities`.
+  void predictMotions(bool halfStepVelocities);
+  /// m₁m₂/(m₁+m₂) of a particle pair, m₁ against an obstacle.
+  double effectiveMass(const Interaction& pair) const noexcept;
   /// Sends the forces on ghosts to their owners; returns theirs on this process's particles,
   /// sorted by pair.
   std::vector<GhostForce> exchangeGhostForces(std::span<const Interaction> pairs,
@@ -447,6 +466,11 @@ class World {
   /// imported ghost forces in their places), the contact records, springs and statistics.
   void sumForces(std::span<const Interaction> pairs, std::span<const PairOutcome> outcomes,
                  std::span<const GhostForce> imported);
+  /// The contact records of the last evaluation's pairs into contacts_ (contacts()).
+  void makeContacts() const;
+  /// Pair p's point forces of this evaluation, wherever its route keeps them.
+  std::span<const PointForce> pointForces(std::size_t p,
+                                          std::span<const PairOutcome> outcomes) const;
   /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
   /// finite.
   void requireFiniteParticles(Exchange* exchange) const;
@@ -466,10 +490,6 @@ class World {
   bool neighbourListHolds() noexcept;
   /// Makes the neighbour list from spheres_ and placedObstacles_.
   void makeNeighbourList();
-  /// Each sphere–obstacle pair's contacts in the obstacle's prepared frame (empty for the
-  /// other pairs), viewing sphereObstacleFound_.
-  std::vector<std::span<const ContactPoint>> sphereObstacleContacts(
-      std::span<const Interaction> pairs);
   Sphere boundingSphere(const Particle& particle) const noexcept;
   /// v += dt/2·(F/m + g), L += dt/2·τ, ω from L: steps 1 and 4 of the class comment.
   void halfKick();
@@ -477,6 +497,9 @@ class World {
   /// Steps 1 and 2 of the class comment, particle by particle in one pass; the obstacles moved.
   void kickAndDrift();
   Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation) const noexcept;
+  /// ω = R·I⁻¹·Rᵀ·L of the particle's shape at `orientation`, for the angular momentum given.
+  Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation,
+                         const Vec3& angularMomentum) const noexcept;
   Particle& particleAt(std::size_t index, const char* operation);
 
   Parameters parameters_;
@@ -493,17 +516,45 @@ class World {
   ContactCaches spareCaches_;  ///< routeContactCaches' scratch (the caches of pairs gone)
   /// Each pair's cache for this evaluation (null: none), for detectContacts.
   std::vector<contactdetection::ContactCache*> cacheOf_;
+  /// Each sphere–obstacle pair's cache (query/sphere_contacts.h), keyed and sorted likewise.
+  using SphereCaches = std::vector<std::pair<std::uint64_t, contactdetection::SphereContactCache>>;
+  SphereCaches sphereObstacleCaches_, spareSphereCaches_;
+  std::vector<contactdetection::SphereContactCache*> sphereCacheOf_;
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
   std::vector<QueryMesh> placed_;
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now
   std::vector<Sphere> spheres_;             ///< each particle's bounding sphere (findPairs)
   NeighbourList neighbours_;
-  std::vector<Interaction> pairs_;  ///< this evaluation's pairs (findPairs; scratch)
-  /// Per obstacle, the sphere particles' contacts with it of this evaluation (scratch).
-  std::vector<std::vector<ContactPoint>> sphereObstacleFound_;
+  std::vector<Interaction> pairs_;           ///< this evaluation's pairs (findPairs; scratch)
+  std::vector<BodyMotion> motions_;          ///< each particle's, for the contact law (scratch)
+  std::vector<BodyMotion> obstacleMotions_;  ///< each obstacle's (scratch)
+  /// Where each pair's forces of this evaluation are (detectContacts): a pair of two spheres,
+  /// and a sphere with one contact point on an obstacle, has its forces at once, held in
+  /// onePoints_ (one array, read in order, rather than a buffer a pair); the others in their
+  /// PairOutcome.
+  enum class PairRoute : std::uint8_t { general, onePoint, apart };
+  struct RoutedPair {
+    PairRoute route = PairRoute::general;
+    std::size_t rawPoints = 0;  ///< triangle (or sphere) pairs within 2ε, before filter(h)
+  };
+  std::vector<RoutedPair> routes_;
+  /// The pairs of two spheres, then the obstacle pairs of one point (scratch).
+  std::vector<std::size_t> spherePairs_;
+  std::vector<OnePointForces> onePoints_;  ///< the onePoint pairs' (scratch)
   /// Each pair's contacts and forces of this evaluation (scratch, kept for its buffers).
   std::vector<PairOutcome> outcomes_;
-  std::vector<Contact> contacts_;
+  /// The last evaluation's contact records, made by contacts() when contactsPending_ (then
+  /// from pairs_, routes_, onePoints_ and outcomes_, which stay as that evaluation left them).
+  mutable std::vector<Contact> contacts_;
+  mutable bool contactsPending_ = false;
+  /// Guards the making of contacts_; a copied World gets its own.
+  struct ContactsLock {
+    std::mutex mutex;
+    ContactsLock() = default;
+    ContactsLock(const ContactsLock&) noexcept {}
+    ContactsLock& operator=(const ContactsLock&) noexcept { return *this; }
+  };
+  mutable ContactsLock contactsLock_;
   /// Tangential springs of touching pairs, keyed (first id << 32 | second id or obstacle),
   /// sorted.
   std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings_;

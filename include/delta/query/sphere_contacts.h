@@ -1,5 +1,8 @@
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -73,6 +76,63 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
 /// Threading: as the overload above.
 std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const QueryMesh& mesh,
                                          double epsilon);
+
+/// What sphereContacts(sphere, mesh, ε, cache, out) keeps of one sphere against one prepared
+/// mesh from a call to the next (temporal coherence: a DEM sphere resting on a wall is met step
+/// after step): the triangles whose gap to the sphere was below 2ε + `skin` where the sphere was
+/// when it was made, with those gaps. Until the centre has moved by about the skin (in the
+/// mesh's prepared frame), no other triangle can have come within 2ε, so the tree is not
+/// descended: only the kept triangles whose gap when kept, less the move since, is still under
+/// 2ε go to the kernel (a sphere on a floor of two triangles runs one kernel, not two).
+///
+/// Threading: a value type; one cache belongs to one sphere and mesh, used by one thread at a
+/// time.
+class SphereContactCache {
+ public:
+  /// A kept triangle: its prepared (sorted) index, and the kernel's gap when made.
+  struct KeptTriangle {
+    std::uint32_t index;
+    double gap;
+  };
+
+  /// An empty cache (made at the first call) that keeps triangles within 2ε + `skin`; a skin
+  /// that is not finite and positive makes every call a fresh query.
+  explicit SphereContactCache(double skin = 0.0) noexcept : skin_(skin) {}
+
+  double skin() const noexcept { return skin_; }
+  /// The triangles it holds.
+  std::size_t size() const noexcept { return triangles_.size(); }
+  /// How many calls made it anew, and how many it answered; for statistics.
+  std::size_t made() const noexcept { return made_; }
+  std::size_t reused() const noexcept { return reused_; }
+
+ private:
+  friend void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
+                             SphereContactCache& cache, std::vector<ContactPoint>& out);
+  double skin_ = 0.0;
+  bool valid_ = false;
+  std::shared_ptr<const void> meshData_;  ///< the prepared mesh it was made for, held
+  double epsilon_ = 0.0;
+  double radius_ = 0.0;
+  Vec3 center_;             ///< where the centre was (the mesh's prepared frame) when made
+  double budget_ = 0.0;     ///< how far the centre may move: the skin less rounding
+  double allowance_ = 0.0;  ///< the rounding allowed for: 2⁻³⁶ of the coordinates
+  std::vector<KeptTriangle> triangles_;  ///< by increasing index (the contacts' order)
+  std::size_t made_ = 0, reused_ = 0;
+};
+
+/// The contacts of one sphere (its centre in the mesh's prepared frame, as for the many-sphere
+/// overload; `first` = 0) into `out` (cleared first): sphereContacts(span(&sphere, 1), mesh, ε),
+/// the same contacts bit for bit, through `cache`: made (a descent of the tree to 2ε + skin)
+/// when empty, made for another mesh, ε or radius, or when the centre has moved by more than
+/// its skin allows since; otherwise only the kept triangles that may still be within 2ε go to
+/// the kernel.
+///
+/// Throws as the overload above.
+///
+/// Threading: runs on the calling thread; the cache and `out` are the caller's.
+void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
+                    SphereContactCache& cache, std::vector<ContactPoint>& out);
 
 /// A sphere kernel's answer (kernels::sphereSphere or sphereTriangle) as the ContactPoint
 /// conventions above have it: x midway between P and Q, `distance` the gap or, where they

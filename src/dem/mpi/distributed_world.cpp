@@ -304,6 +304,7 @@ void DistributedWorld::start() {
   for (const ParticleShape& shape : part_.shapes())
     largestRadius_ = std::max(largestRadius_, shape.boundingRadius());
   part_.contacts_.clear();
+  part_.contactsPending_ = false;
   part_.forcesCurrent_ = false;  // the first step evaluates with the ghosts
   try {
     rebalance();
@@ -325,7 +326,7 @@ void DistributedWorld::step() {
   load_.particles = part_.owned_;
   load_.ghosts = part_.particles_.size() - part_.owned_;
   load_.neighbours = neighbours_.size();
-  load_.contacts = part_.contacts().size();
+  load_.contacts = statistics.contactPoints;
   ++load_.steps;
   load_.contactDetectionSeconds += statistics.contactDetectionSeconds;
   load_.communicationSeconds += statistics.communicationSeconds;
@@ -579,6 +580,7 @@ std::optional<World> DistributedWorld::gatherWorld(int root) const {
     (record.withObstacle ? whole.obstacleSprings_ : whole.particleSprings_)
         .push_back({record.key, record.spring});
   whole.contacts_ = std::move(contacts);
+  whole.contactsPending_ = false;
   whole.elasticEnergy_ = elastic;
   whole.placed_.clear();
   return whole;
