@@ -104,13 +104,25 @@ Vec3 rotatedApply(const Quaternion& q, const Mat3& m, const Vec3& v) noexcept {
   return q.rotate(m * q.conjugate().rotate(v));
 }
 
-/// The rotation by the vector ω·dt (angle |ω|·dt about ω), composed before q.
+/// The rotation by the vector ω·dt (angle |ω|·dt about ω), composed before q: the quaternion
+/// (cos h, ω·sin(h)/|ω|), h = |ω|·dt/2. A step turns a particle by little (h ≤ 2⁻⁶): there the
+/// Taylor series of cos h and sin(h)/h in h², whose first terms left out are below 10⁻¹⁹ of
+/// theirs, give them within rounding without a square root, a division or a call.
 Quaternion turned(const Quaternion& q, const Vec3& angularVelocity, double timeStep) noexcept {
-  const double rate = length(angularVelocity);
-  if (!(rate > 0.0)) return q;
+  const double rate2 = lengthSquared(angularVelocity);
+  if (!(rate2 > 0.0)) return q;
+  const double h2 = 0.25 * rate2 * timeStep * timeStep;
+  if (h2 <= 0x1p-12) {
+    const double cosine =
+        1.0 - h2 * (1.0 / 2 - h2 * (1.0 / 24 - h2 * (1.0 / 720 - h2 * (1.0 / 40320))));
+    const double sinc = 1.0 - h2 * (1.0 / 6 - h2 * (1.0 / 120 - h2 * (1.0 / 5040)));
+    const Vec3 axis = angularVelocity * (0.5 * timeStep * sinc);
+    return Quaternion{cosine, axis.x, axis.y, axis.z} * q;  // renormalises
+  }
+  const double rate = std::sqrt(rate2);
   const double half = 0.5 * rate * timeStep;
   const Vec3 axis = angularVelocity * (std::sin(half) / rate);
-  return Quaternion{std::cos(half), axis.x, axis.y, axis.z} * q;  // renormalises
+  return Quaternion{std::cos(half), axis.x, axis.y, axis.z} * q;
 }
 
 /// The box of `box` after a rigid motion (its eight corners moved).
