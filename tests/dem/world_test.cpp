@@ -204,10 +204,15 @@ TEST(DemWorld, SameResultsForOneAndTwoThreads) {
     world.run(600);
     Scenario settling = settle(12, 3);
     settling.world.run(1500);
+    // Spheres: their pairs' law in batches of 64 pairs a chunk, a cache each on the walls.
+    Scenario spheres = settle(300, 4, ParticleKind::Sphere);
+    spheres.world.run(10000);
     omp_set_num_threads(before);
     std::vector<Particle> state(world.particles().begin(), world.particles().end());
     state.insert(state.end(), settling.world.particles().begin(), settling.world.particles().end());
+    state.insert(state.end(), spheres.world.particles().begin(), spheres.world.particles().end());
     EXPECT_GT(settling.world.statistics().pairsInContact, 0u);
+    EXPECT_GT(spheres.world.statistics().pairsInContact, 100u);
     return state;
   };
   const std::vector<Particle> one = runWith(1), two = runWith(2);
