@@ -39,7 +39,12 @@ using Clock = std::chrono::steady_clock;
 /// Threads under load (World::advance): steps run on the calling thread alone after a step held
 /// up by other processes, and the shortest step judged (a shorter one is all noise).
 constexpr std::size_t kSerialSteps = 64;
-constexpr double kSteadyStep = 2e-4;
+/// ... doubling while the cores stay busy, up to this many.
+constexpr std::size_t kLongestSerial = 1024;
+/// Threaded steps are judged together until they have taken this long (seconds): a step of a
+/// few hundred microseconds is too short to judge (a stall lasts a scheduler's time slice), and
+/// its thread's CPU clock is a system call.
+constexpr double kJudgedWall = 1e-3;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -943,20 +948,19 @@ void World::requireFiniteParticles(Exchange* exchange) const {
 }
 
 void World::advance(Exchange* exchange) {
-  // Threads under load (world.h): a step whose calling thread ran for less than 60% of it, the
-  // rest put aside by the operating system or waiting for workers that were, was held up by
-  // other processes on every core; the next steps run on the calling thread alone, a step on
-  // the threads now and then to see whether the cores are free again. One process only (a
-  // DistributedWorld's steps wait for other ranks).
+  // Threads under load (world.h): threaded steps whose calling thread ran for less than 60% of
+  // them, the rest put aside by the operating system or waiting for workers that were, were
+  // held up by other processes on every core; the next steps run on the calling thread alone,
+  // a few on the threads now and then to see whether the cores are free again. One process only
+  // (a DistributedWorld's steps wait for other ranks).
   std::optional<delta::detail::SerialLoops> alone;
   if (serialSteps_ > 0) {
     alone.emplace();
     --serialSteps_;
   }
-  // Judged only after a step long enough to judge (its thread's CPU clock is a system call).
-  const bool probing =
-      !alone && exchange == nullptr && threadCount() > 1 && statistics_.totalSeconds > kSteadyStep;
-  const double cpuStart = probing ? delta::detail::threadCpuSeconds() : 0.0;
+  const bool judging = !alone && exchange == nullptr && threadCount() > 1;
+  if (judging && !loadWindow_.open)
+    loadWindow_ = {true, Clock::now(), delta::detail::threadCpuSeconds()};
   const Clock::time_point start = Clock::now();
   double communication = 0.0;
   const auto refreshGhosts = [&] {
@@ -990,9 +994,16 @@ void World::advance(Exchange* exchange) {
   time_ += parameters_.timeStep;
   ++stepCount_;
   statistics_.totalSeconds = secondsSince(start);
-  if (probing && statistics_.totalSeconds > kSteadyStep &&
-      delta::detail::threadCpuSeconds() - cpuStart < 0.6 * statistics_.totalSeconds)
-    serialSteps_ = kSerialSteps;
+  if (!judging) return;
+  const double wall = secondsSince(loadWindow_.start);
+  if (wall < kJudgedWall) return;
+  loadWindow_.open = false;
+  if (delta::detail::threadCpuSeconds() - loadWindow_.cpuStart < 0.6 * wall) {
+    serialSteps_ = serialPeriod_;
+    serialPeriod_ = std::min(2 * serialPeriod_, kLongestSerial);
+  } else {
+    serialPeriod_ = kSerialSteps;
+  }
 }
 
 void World::run(std::size_t steps) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -212,14 +213,16 @@ struct Energies {
 /// several processes (DistributedWorld) makes its list anew every step, and so does a World
 /// whose particles or obstacles were set or added since the last step.
 ///
-/// Threads under load: a step whose calling thread ran for less than 60% of its wall time (the
-/// rest put aside by the operating system, or waiting for a worker that was: every core busy
-/// with other processes; steps shorter than 0.2 ms are not judged) is followed by 64 steps on
-/// the calling thread alone (detail::SerialLoops), then one on the threads again. The results
-/// are the same bits either way; a two-thread run on a machine whose cores are all busy then
-/// steps about as fast as a one-thread run, where short steps of many parallel loops each
-/// waiting for a descheduled worker took 1.6 times as long. Not in a DistributedWorld (its
-/// steps wait for other ranks).
+/// Threads under load: threaded steps are judged together, a millisecond's worth at a time (one
+/// long step, or several short ones: a stall lasts a scheduler's time slice, longer than a
+/// sphere step). When the calling thread ran for less than 60% of their wall time (the rest put
+/// aside by the operating system, or waiting for a worker that was: every core busy with other
+/// processes), the next 64 steps run on the calling thread alone (detail::SerialLoops), then
+/// the threads are judged again; while the cores stay busy the steps alone double, up to 1024.
+/// The results are the same bits either way; a two-thread run on a machine whose cores are all
+/// busy then steps about as fast as a one-thread run, where short steps of many parallel loops
+/// each waiting for a descheduled worker took 1.6 to 1.8 times as long. Not in a
+/// DistributedWorld (its steps wait for other ranks).
 ///
 /// Contact caches: under the point law each pair of two meshes (particle–particle, or particle
 /// and obstacle) keeps a contactdetection::ContactCache (query/contacts.h) with a skin of ε/2
@@ -564,8 +567,18 @@ class World {
   double time_ = 0.0;
   std::size_t stepCount_ = 0;
   bool forcesCurrent_ = false;
-  /// Steps still to run on the calling thread alone (threads under load: World::advance).
+  /// Steps still to run on the calling thread alone (threads under load: World::advance), and
+  /// how many the next judgement of busy cores gives (64, doubling to 1024 while they stay busy).
   std::size_t serialSteps_ = 0;
+  std::size_t serialPeriod_ = 64;
+  /// The threaded steps being judged together: when they began, and the calling thread's CPU
+  /// clock then.
+  struct LoadWindow {
+    bool open = false;
+    std::chrono::steady_clock::time_point start;
+    double cpuStart = 0.0;
+  };
+  LoadWindow loadWindow_;
 };
 
 }  // namespace delta::dem
