@@ -77,11 +77,4 @@ Mat3 Quaternion::matrix() const noexcept {
            2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}};
 }
 
-Vec3 Quaternion::rotate(const Vec3& v) const noexcept {
-  // v' = v + 2 u × (u × v + w v), u = (x, y, z): 15 multiplications, no matrix.
-  const Vec3 u{x, y, z};
-  const Vec3 t = cross(u, v) * 2.0;
-  return v + t * w + cross(u, t);
-}
-
 }  // namespace delta

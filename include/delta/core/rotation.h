@@ -39,7 +39,12 @@ struct Quaternion {
   Mat3 matrix() const noexcept;
 
   /// Rotates a vector (same as `matrix() * v`, to round-off).
-  Vec3 rotate(const Vec3& v) const noexcept;
+  Vec3 rotate(const Vec3& v) const noexcept {
+    // v' = v + 2 u × (u × v + w v), u = (x, y, z): 15 multiplications, no matrix.
+    const Vec3 u{x, y, z};
+    const Vec3 t = cross(u, v) * 2.0;
+    return v + t * w + cross(u, t);
+  }
 
   /// The inverse rotation (for a unit quaternion).
   Quaternion conjugate() const noexcept { return {w, -x, -y, -z}; }
