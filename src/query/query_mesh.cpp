@@ -469,6 +469,11 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
       data->corners[k][c] = renumbered[v];
     }
   data->vertices.shrink_to_fit();
+  const Vec3 centre = data->bounds.center();
+  double farthest = 0.0;
+  for (const Vec3& vertex : data->vertices)
+    farthest = std::max(farthest, distanceSquared(vertex, centre));
+  data->radius = std::sqrt(farthest) * (1.0 + 0x1p-40);  // above the rounding of |v − c|
   const auto triangleAt = [&data = *data](std::size_t k) { return data.triangle(k); };
   data->lanes = detail::floatTriangles(data->size(), triangleAt, data->bounds.center());
   // Boxes grow by far more than the rounding of a box distance or a point–triangle distance

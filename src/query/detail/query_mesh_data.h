@@ -223,6 +223,9 @@ struct QueryMeshData {
   bool closed = false;
   double orientation = 1.0;  ///< −1 for an inside-out closed mesh
   Aabb bounds;
+  /// The farthest vertex from bounds.center(), rounded up: a moved mesh's points move at most
+  /// as far as that ball's (the contact caches' bound).
+  double radius = 0.0;
   double slack = 0.0;
 
   /// The number of triangles.
