@@ -104,9 +104,16 @@ bool isotropic(const Mat3& m) noexcept {
          m(2, 1) == 0.0 && m(0, 0) == m(1, 1) && m(1, 1) == m(2, 2);
 }
 
+/// The general case of rotatedApply, out of line: a sphere's steps, which never take it, stay
+/// short enough to inline.
+[[gnu::noinline]] Vec3 rotatedApplyTurning(const Quaternion& q, const Mat3& m,
+                                           const Vec3& v) noexcept {
+  return q.rotate(m * q.conjugate().rotate(v));
+}
+
 Vec3 rotatedApply(const Quaternion& q, const Mat3& m, const Vec3& v) noexcept {
   if (isotropic(m)) return v * m(0, 0);
-  return q.rotate(m * q.conjugate().rotate(v));
+  return rotatedApplyTurning(q, m, v);
 }
 
 /// The rotation by the vector ω·dt (angle |ω|·dt about ω), composed before q: the quaternion
