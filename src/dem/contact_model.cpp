@@ -220,6 +220,14 @@ struct LawLanes {
   }
 }
 
+/// Lane k's motions, dashpots and spring from `pair`.
+void takeLaw(LawLanes& lanes, std::size_t k, const OnePointLaw& pair) noexcept {
+  lanes.first[k] = pair.firstMotion;
+  lanes.second[k] = pair.secondMotion;
+  lanes.damping[k] = pair.damping;
+  lanes.previous[k] = pair.previous ? pair.previous->displacement : Vec3{};
+}
+
 /// Lane k's forces into `result` (its point set by the caller).
 void laneForces(const LawLanes& lanes, std::size_t k, const ContactLaw& law,
                 OnePointForces& result) noexcept {
@@ -262,16 +270,13 @@ void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, cons
       lanes.x[k] = first.center - n * first.radius - half[k];
       lanes.n[k] = n;
       lanes.gap[k] = gap;
-      lanes.first[k] = lane[k]->firstMotion;
-      lanes.second[k] = lane[k]->secondMotion;
-      lanes.damping[k] = lane[k]->damping;
-      lanes.previous[k] = lane[k]->previous ? lane[k]->previous->displacement : Vec3{};
+      takeLaw(lanes, k, lane[k]->law);
     }
     pointLaw(lanes, timeStep, law);
     for (std::size_t k = 0; k < count; ++k) {
       touching[base + k] = lanes.gap[k] < shell;
       if (!touching[base + k]) continue;
-      OnePointForces& result = *lane[k]->result;
+      OnePointForces& result = *lane[k]->law.result;
       ContactPoint& point = result.point.point;
       point.x = lanes.x[k];
       point.normal = half[k];
@@ -297,16 +302,13 @@ void onePointForces(std::span<const OnePointPair> pairs, double timeStep,
       lanes.x[k] = point.x;
       lanes.n[k] = point.direction;
       lanes.gap[k] = point.overlap ? -point.distance : point.distance;
-      lanes.first[k] = lane[k]->firstMotion;
-      lanes.second[k] = lane[k]->secondMotion;
-      lanes.damping[k] = lane[k]->damping;
-      lanes.previous[k] = lane[k]->previous ? lane[k]->previous->displacement : Vec3{};
+      takeLaw(lanes, k, lane[k]->law);
     }
     pointLaw(lanes, timeStep, law);
     for (std::size_t k = 0; k < count; ++k) {
-      ContactPoint& point = lane[k]->result->point.point;
+      ContactPoint& point = lane[k]->law.result->point.point;
       if (&point != lane[k]->point) point = *lane[k]->point;
-      laneForces(lanes, k, law, *lane[k]->result);
+      laneForces(lanes, k, law, *lane[k]->law.result);
     }
   }
 }

@@ -621,69 +621,81 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
   onePointLaw(pairs);
 }
 
-void World::onePointLaw(std::span<const Interaction> pairs) {
-  spherePairs_.clear();  // now the obstacle pairs of one point
-  for (std::size_t p = statistics_.particlePairsTested; p < pairs.size(); ++p)
-    if (routes_[p].route == PairRoute::onePoint) spherePairs_.push_back(p);
-  parallelFor(0, spherePairs_.size(), kSphereGrain, [&](std::size_t begin, std::size_t end) {
-    SpringCursor springs(obstacleSprings_);  // in increasing key order
-    std::uint32_t dampedShape = std::numeric_limits<std::uint32_t>::max();
-    PairDamping damping;
-    OnePointPair batch[kSphereGrain];
+/// What a run of the batched one-point law carries from pair to pair: the springs' cursor (the
+/// pairs come in increasing key order), and the dashpots of the last pair of shapes met (a pile
+/// of one or a few sphere shapes takes the square roots once).
+struct World::LawRun {
+  explicit LawRun(const Springs& kept) noexcept : springs(kept) {}
+  SpringCursor springs;
+  std::uint64_t dampedShapes = std::numeric_limits<std::uint64_t>::max();
+  PairDamping damping;
+};
+
+namespace {
+
+/// The pairs `indices` (increasing) in parallel runs, each in batches of up to kSphereGrain:
+/// `element(p, run)` makes pair p's batch element, `law(batch, from)` runs a batch whose first
+/// pair is indices[from].
+template <class Element, class LawRun, class MakeElement, class Law>
+void inBatches(std::span<const std::size_t> indices, const Springs& springs,
+               const MakeElement& element, const Law& law) {
+  parallelFor(0, indices.size(), kSphereGrain, [&](std::size_t begin, std::size_t end) {
+    LawRun run(springs);
+    Element batch[kSphereGrain];
     for (std::size_t from = begin; from < end; from += kSphereGrain) {
       const std::size_t count = std::min(kSphereGrain, end - from);
-      for (std::size_t k = 0; k < count; ++k) {
-        const std::size_t p = spherePairs_[from + k];
-        const Interaction& pair = pairs[p];
-        if (particles_[pair.first].shape != dampedShape) {
-          damping = pairDamping(law_, effectiveMass(pair));
-          dampedShape = particles_[pair.first].shape;
-        }
-        batch[k] = {&onePoints_[p].point.point,     &motions_[pair.first],
-                    &obstacleMotions_[pair.second], damping,
-                    springs.find(pair.key),         &onePoints_[p]};
-      }
-      onePointForces(std::span<const OnePointPair>(batch, count), parameters_.timeStep, law_);
+      for (std::size_t k = 0; k < count; ++k)
+        batch[k] = element(indices[from + k], run);
+      law(std::span<const Element>(batch, count), from);
     }
   });
 }
 
+}  // namespace
+
+[[gnu::always_inline]] inline OnePointLaw World::pairLaw(const Interaction& pair, std::size_t p,
+                                                         LawRun& run) noexcept {
+  const std::uint64_t shapes = std::uint64_t{particles_[pair.first].shape} << 32 |
+                               (pair.withObstacle ? std::numeric_limits<std::uint32_t>::max()
+                                                  : particles_[pair.second].shape);
+  if (shapes != run.dampedShapes) {
+    run.damping = pairDamping(law_, effectiveMass(pair));
+    run.dampedShapes = shapes;
+  }
+  return {&motions_[pair.first],
+          pair.withObstacle ? &obstacleMotions_[pair.second] : &motions_[pair.second], run.damping,
+          run.springs.find(pair.key), &onePoints_[p]};
+}
+
+void World::onePointLaw(std::span<const Interaction> pairs) {
+  spherePairs_.clear();  // now the obstacle pairs of one point
+  for (std::size_t p = statistics_.particlePairsTested; p < pairs.size(); ++p)
+    if (routes_[p].route == PairRoute::onePoint) spherePairs_.push_back(p);
+  inBatches<OnePointPair, LawRun>(
+      spherePairs_, obstacleSprings_,
+      [&](std::size_t p, LawRun& run) {
+        return OnePointPair{&onePoints_[p].point.point, pairLaw(pairs[p], p, run)};
+      },
+      [&](std::span<const OnePointPair> batch, std::size_t) {
+        onePointForces(batch, parameters_.timeStep, law_);
+      });
+}
+
 void World::sphereSphereLaw(std::span<const Interaction> pairs) {
-  // In runs of kSphereGrain pairs, each one batch of the law (contact_model.h).
-  parallelFor(0, spherePairs_.size(), kSphereGrain, [&](std::size_t begin, std::size_t end) {
-    SpringCursor springs(particleSprings_);  // in increasing key order
-    // The dashpots of the last pair of shapes met (a pile of one or a few sphere shapes).
-    std::uint64_t dampedShapes = std::numeric_limits<std::uint64_t>::max();
-    PairDamping damping;
-    SpherePair batch[kSphereGrain];
-    bool touching[kSphereGrain];
-    for (std::size_t from = begin; from < end; from += kSphereGrain) {
-      const std::size_t count = std::min(kSphereGrain, end - from);
-      for (std::size_t k = 0; k < count; ++k) {
-        const std::size_t p = spherePairs_[from + k];
+  inBatches<SpherePair, LawRun>(
+      spherePairs_, particleSprings_,
+      [&](std::size_t p, LawRun& run) {
         const Interaction& pair = pairs[p];
-        const std::uint64_t shapes =
-            std::uint64_t{particles_[pair.first].shape} << 32 | particles_[pair.second].shape;
-        if (shapes != dampedShapes) {
-          damping = pairDamping(law_, effectiveMass(pair));
-          dampedShapes = shapes;
-        }
-        const TangentialSpring* spring = springs.find(pair.key);
-        batch[k] = {&spheres_[pair.first],
-                    &spheres_[pair.second],
-                    &motions_[pair.first],
-                    &motions_[pair.second],
-                    damping,
-                    spring,
-                    &onePoints_[p]};
-      }
-      sphereSphereForces(std::span<const SpherePair>(batch, count), parameters_.timeStep, law_,
-                         std::span<bool>(touching, count));
-      for (std::size_t k = 0; k < count; ++k)
-        routes_[spherePairs_[from + k]] = {touching[k] ? PairRoute::onePoint : PairRoute::apart,
-                                           touching[k] ? 1u : 0u};
-    }
-  });
+        return SpherePair{&spheres_[pair.first], &spheres_[pair.second], pairLaw(pair, p, run)};
+      },
+      [&](std::span<const SpherePair> batch, std::size_t from) {
+        bool touching[kSphereGrain];
+        sphereSphereForces(batch, parameters_.timeStep, law_,
+                           std::span<bool>(touching, batch.size()));
+        for (std::size_t k = 0; k < batch.size(); ++k)
+          routes_[spherePairs_[from + k]] = {touching[k] ? PairRoute::onePoint : PairRoute::apart,
+                                             touching[k] ? 1u : 0u};
+      });
 }
 
 void World::predictMotions(bool halfStepVelocities) {

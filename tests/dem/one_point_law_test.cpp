@@ -130,9 +130,10 @@ std::vector<SpherePair> spherePairs(const std::vector<SphereCase>& cases, const 
   std::vector<SpherePair> pairs;
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const SphereCase& c = cases[i];
-    pairs.push_back({&c.first, &c.second, &c.firstMotion, &c.secondMotion,
-                     pairDamping(law, c.effectiveMass), c.newContact ? nullptr : &c.spring,
-                     &results[i]});
+    pairs.push_back({&c.first,
+                     &c.second,
+                     {&c.firstMotion, &c.secondMotion, pairDamping(law, c.effectiveMass),
+                      c.newContact ? nullptr : &c.spring, &results[i]}});
   }
   return pairs;
 }
@@ -184,7 +185,7 @@ TEST(DemOnePointLaw, ConcentricAndTouchingSpheres) {
   BodyMotion still;
   Sphere a{{1, 2, 3}, 0.01}, b{{1, 2, 3}, 0.02};
   OnePointForces result;
-  SpherePair pair{&a, &b, &still, &still, pairDamping(law, 0.01), nullptr, &result};
+  SpherePair pair{&a, &b, {&still, &still, pairDamping(law, 0.01), nullptr, &result}};
   bool touching = false;
   sphereSphereForces(std::span<const SpherePair>(&pair, 1), 1e-4, law,
                      std::span<bool>(&touching, 1));
@@ -197,7 +198,7 @@ TEST(DemOnePointLaw, ConcentricAndTouchingSpheres) {
   Sphere c{{0, 0, 0}, 0.5}, d{{0, 0, -1.0 - 2 * law.epsilon}, 0.5};
   result = OnePointForces{};
   result.deepest = 42.0;
-  pair = {&c, &d, &still, &still, pairDamping(law, 0.01), nullptr, &result};
+  pair = {&c, &d, {&still, &still, pairDamping(law, 0.01), nullptr, &result}};
   sphereSphereForces(std::span<const SpherePair>(&pair, 1), 1e-4, law,
                      std::span<bool>(&touching, 1));
   EXPECT_EQ(touching, !sphereSphereContacts(c, d, law.epsilon).points.empty());
@@ -234,10 +235,11 @@ TEST(DemOnePointLaw, APairsAnswerDoesNotDependOnItsBatch) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SphereCase& c = cases[i];
     batched[i].point.point = points[i];
-    batch.push_back({&batched[i].point.point, &c.firstMotion, &c.secondMotion,
-                     pairDamping(law, c.effectiveMass), &c.spring, &batched[i]});
-    each.push_back({&points[i], &c.firstMotion, &c.secondMotion, pairDamping(law, c.effectiveMass),
-                    &c.spring, &oneByOne[i]});
+    const PairDamping damping = pairDamping(law, c.effectiveMass);
+    batch.push_back({&batched[i].point.point,
+                     {&c.firstMotion, &c.secondMotion, damping, &c.spring, &batched[i]}});
+    each.push_back(
+        {&points[i], {&c.firstMotion, &c.secondMotion, damping, &c.spring, &oneByOne[i]}});
   }
   onePointForces(batch, 1e-4, law);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -270,7 +272,7 @@ TEST(DemOnePointLaw, GivenPointsAgreeWithTheGeneralLawToRounding) {
       second[i] = {random.inBox(1.0), random.inBox(0.1), random.inBox(1.0)};
       springs[i].displacement = random.inBox(random.uniform(0.0, 1.0) < 0.5 ? 1e-6 : 1e-3);
       pairs.push_back(
-          {&points[i], &first[i], &second[i], pairDamping(law, 0.02), &springs[i], &results[i]});
+          {&points[i], {&first[i], &second[i], pairDamping(law, 0.02), &springs[i], &results[i]}});
     }
     onePointForces(pairs, 1e-4, law);
     std::size_t sliding = 0;

@@ -254,14 +254,13 @@ struct PairDamping {
 /// Threading: a pure function.
 PairDamping pairDamping(const ContactLaw& law, double effectiveMass) noexcept;
 
-/// A pair of spheres for sphereSphereForces: the spheres, their motions, the pair's dashpots
-/// (pairDamping of its effective mass: the same for every pair of two shapes), its spring from
-/// the step before, and where its forces go.
+/// What the batched one-point law (sphereSphereForces, onePointForces) reads of a pair besides
+/// its geometry: the bodies' motions, the pair's dashpots (pairDamping of its effective mass:
+/// the same for every pair of two shapes), its spring from the step before, and where its
+/// forces go.
 ///
 /// Threading: a value type; `result` is the caller's.
-struct SpherePair {
-  const Sphere* first = nullptr;
-  const Sphere* second = nullptr;
+struct OnePointLaw {
   const BodyMotion* firstMotion = nullptr;
   const BodyMotion* secondMotion = nullptr;
   PairDamping damping;
@@ -269,12 +268,21 @@ struct SpherePair {
   OnePointForces* result = nullptr;
 };
 
+/// A pair of spheres for sphereSphereForces.
+///
+/// Threading: a value type.
+struct SpherePair {
+  const Sphere* first = nullptr;
+  const Sphere* second = nullptr;
+  OnePointLaw law;
+};
+
 /// The point law of pairs of spheres, straight from their centres (a World's sphere particles):
 /// for each pair, the one point and its forces that pairForces gives for sphereSphereContacts'
 /// point (narrow_phase.h: x halfway between the surfaces on the line of centres, the direction
 /// from the second centre toward the first, +x for concentric ones), computed with one square
 /// root and one division for the point (equal to rounding rather than bit for bit), into
-/// `*pairs[i].result` with touching[i] = true; touching[i] = false (the result untouched) where
+/// `*pairs[i].law.result` with touching[i] = true; touching[i] = false (the result untouched) where
 /// the gap between the surfaces is 2ε or more. A pair's answer does not depend on the others
 /// in the call. Unscaled: centres more than about 1e154 apart are apart. `touching` must be as
 /// long as `pairs`.
@@ -284,23 +292,18 @@ void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, cons
                         std::span<bool> touching) noexcept;
 
 /// A pair of one contact point for onePointForces: the point (its direction a unit vector, its
-/// gap below 2ε, as the sphere queries give them), the bodies' motions, the pair's dashpots, its
-/// spring from the step before, and where its forces go.
+/// gap below 2ε, as the sphere queries give them).
 ///
-/// Threading: a value type; `result` is the caller's.
+/// Threading: a value type.
 struct OnePointPair {
   const ContactPoint* point = nullptr;
-  const BodyMotion* firstMotion = nullptr;
-  const BodyMotion* secondMotion = nullptr;
-  PairDamping damping;
-  const TangentialSpring* previous = nullptr;  ///< null: none (a new contact)
-  OnePointForces* result = nullptr;
+  OnePointLaw law;
 };
 
 /// The point law of pairs of one contact point each (a World's spheres against the obstacles):
 /// for each, what pairForces gives its point, equal to rounding (the general law's sums of one
-/// term left out), into `*pairs[i].result` (its point a copy of `*pairs[i].point`, which may be
-/// the result's own). A pair's answer does not depend on the others in the call, and is the
+/// term left out), into `*pairs[i].law.result` (its point a copy of `*pairs[i].point`, which
+/// may be the result's own). A pair's answer does not depend on the others in the call, and is the
 /// same arithmetic as sphereSphereForces' once the point is known.
 ///
 /// Threading: a pure function on its arguments; the results must be distinct.

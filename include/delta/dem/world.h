@@ -449,6 +449,10 @@ class World {
   void sphereSphereLaw(std::span<const Interaction> pairs);
   /// The law of the obstacle pairs with one contact point (held in onePoints_), in batches.
   void onePointLaw(std::span<const Interaction> pairs);
+  struct LawRun;  // world.cpp
+  /// What the batched one-point law reads of pair p (its motions, dashpots, spring) and where
+  /// its forces go (onePoints_[p]).
+  OnePointLaw pairLaw(const Interaction& pair, std::size_t p, LawRun& run) noexcept;
   /// Carries the contact caches of the pairs still found over to this evaluation's pairs (new
   /// ones empty, those of pairs gone dropped) and points cacheOf_ at them.
   void routeContactCaches(std::span<const Interaction> pairs);
