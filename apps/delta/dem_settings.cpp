@@ -9,7 +9,7 @@
 
 #include "delta/core/error.h"
 #include "delta/dem/contact_model.h"
-#include "delta/io/detail/file_read.h"
+#include "delta/io/regular_file.h"
 
 #include "motion_options.h"
 
@@ -119,7 +119,7 @@ DemSettings readDemConfig(const std::string& path) {
   constexpr std::uintmax_t kMaxConfigBytes = std::uintmax_t{1} << 20;
   std::string contents;
   try {
-    contents = io::detail::readSmallRegularFile(path, kMaxConfigBytes, "a DEM config");
+    contents = io::readSmallRegularFile(path, kMaxConfigBytes, "a DEM config");
   } catch (const Error& error) {
     throw Error("cannot read config '" + path + "': " + error.what());
   }

@@ -72,8 +72,12 @@ bool withinReach(const Vec3& x, const Aabb& box, double reach) {
 }
 
 }  // namespace
+}  // namespace delta::dem
 
-namespace detail {
+namespace delta::detail {
+
+// The builder is the Bisection's friend (bisection.h) and uses the helpers above.
+using namespace dem;
 
 /// Builds a Bisection's tree level by level, so that each level's nodes share their collective
 /// calls (see the header for the calls).
@@ -428,7 +432,9 @@ void BisectionBuilder::searchRound(std::span<Search*> searches, std::span<const 
   }
 }
 
-}  // namespace detail
+}  // namespace delta::detail
+
+namespace delta::dem {
 
 Bisection::Bisection() : nodes_(1), regions_(1, allSpace()) {}
 

@@ -14,7 +14,7 @@
 #include "delta/core/error.h"
 #include "delta/core/memory.h"
 #include "delta/io/atomic_file.h"
-#include "delta/io/detail/file_read.h"
+#include "delta/io/regular_file.h"
 #include "delta/mesh/mass_properties.h"
 
 namespace delta::dem {
@@ -497,7 +497,7 @@ void saveCheckpoint(const std::filesystem::path& path, const World& world, std::
 Checkpoint loadCheckpoint(const std::filesystem::path& path) {
   std::string bytes;
   try {
-    const io::detail::RegularFile file(path);
+    const io::RegularFile file(path);
     requireMemory(static_cast<double>(file.size()), "reading DEM checkpoint");
     bytes = file.readAll();
   } catch (const Error& error) {

@@ -12,9 +12,7 @@
 #include "delta/mesh/primitives.h"
 #include "delta/mesh/topology.h"
 
-namespace delta::dem {
-
-namespace detail {
+namespace delta::detail {
 /// A particle's mesh, checked and moved to its centre of mass, and its mass properties.
 struct PreparedShape {
   Mesh body;
@@ -22,7 +20,9 @@ struct PreparedShape {
   double density;
   double sphereRadius = 0.0;  ///< > 0: a sphere shape of this radius; `body` is for display
 };
-}  // namespace detail
+}  // namespace delta::detail
+
+namespace delta::dem {
 
 namespace {
 
@@ -79,19 +79,6 @@ ParticleShape ParticleShape::sphere(double radius, double density, int displaySu
                                              properties, density, radius});
 }
 
-ParticleShape detail::restoredShape(const Mesh& body, double density,
-                                    const MassProperties& properties, double sphereRadius) {
-  requireDensity(density);
-  for (const double value : {properties.volume, properties.mass})
-    if (!std::isfinite(value) || !(value > 0.0))
-      throw Error("particle shape: volume and mass must be finite and positive (not " +
-                  toString(value) + ")");
-  if (!std::isfinite(sphereRadius) || sphereRadius < 0.0)
-    throw Error("particle shape: sphere radius = " + toString(sphereRadius) +
-                " must be finite and non-negative");
-  return ParticleShape(detail::PreparedShape{body, properties, density, sphereRadius});
-}
-
 ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
     : mesh_(prepared.body),
       queryMesh_(mesh_),
@@ -106,3 +93,20 @@ ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
       kind_(prepared.sphereRadius > 0.0 ? ParticleKind::Sphere : ParticleKind::Mesh) {}
 
 }  // namespace delta::dem
+
+namespace delta {
+
+dem::ParticleShape detail::restoredShape(const Mesh& body, double density,
+                                         const MassProperties& properties, double sphereRadius) {
+  dem::requireDensity(density);
+  for (const double value : {properties.volume, properties.mass})
+    if (!std::isfinite(value) || !(value > 0.0))
+      throw Error("particle shape: volume and mass must be finite and positive (not " +
+                  toString(value) + ")");
+  if (!std::isfinite(sphereRadius) || sphereRadius < 0.0)
+    throw Error("particle shape: sphere radius = " + toString(sphereRadius) +
+                " must be finite and non-negative");
+  return dem::ParticleShape(PreparedShape{body, properties, density, sphereRadius});
+}
+
+}  // namespace delta

@@ -23,12 +23,13 @@
 #include "delta/core/format.h"
 #include "delta/core/mat3.h"
 #include "delta/io/atomic_file.h"
-#include "delta/io/detail/file_read.h"
-#include "delta/io/detail/isolated_import.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/text_scan.h"
-#include "delta/io/detail/vertex_join.h"
+#include "delta/io/regular_file.h"
 #include "delta/io/vtk.h"
+
+#include "detail/isolated_import.h"
+#include "detail/mesh_readers.h"
+#include "detail/text_scan.h"
+#include "detail/vertex_join.h"
 
 namespace delta::io {
 namespace {
@@ -73,7 +74,7 @@ constexpr unsigned kAssimpWallSeconds = 120;
 /// after a long name, an OFF keyword after a block of comments, the binary STL header).
 constexpr std::uintmax_t kHeadBytes = 4096;
 
-detail::TriangleSoup readOwnFormat(detail::MeshFormat format, const detail::RegularFile& file,
+detail::TriangleSoup readOwnFormat(detail::MeshFormat format, const RegularFile& file,
                                    std::string_view head) {
   // From the head alone, so that a sparse file of gigabytes named .ply is not read whole to say
   // that it does not start with "ply".
@@ -344,7 +345,7 @@ const char* toString(CoordinatePrecision precision) noexcept {
 
 LoadedMesh loadWithStatistics(const fs::path& path) {
   try {
-    const detail::RegularFile file(path);
+    const RegularFile file(path);
     if (file.size() == 0) throw Error("file is empty");
     const std::string head = file.read(0, kHeadBytes);
     const std::string extension = lowerCaseExtension(path);

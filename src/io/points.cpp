@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/file_read.h"
+#include "delta/io/regular_file.h"
 
 namespace delta::io {
 namespace {
@@ -65,7 +65,7 @@ Vec3 parseLine(std::string_view line, std::size_t number) {
 
 std::vector<Vec3> loadPoints(const std::filesystem::path& path) {
   try {
-    const detail::RegularFile file(path);
+    const RegularFile file(path);
     std::vector<Vec3> points;
     std::string line;  // a line cut across two chunks
     std::size_t number = 1;

@@ -447,7 +447,7 @@ void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
 /// fraction of the way. Local coordinates: the rounding is that of the numbers near the overlap.
 std::pair<Vec3, double> crossingPoint(const Vec3& p0, const Vec3& p1,
                                       const std::array<Vec3, 3>& t) noexcept {
-  const Vec3 normal = kernels::detail::accurateNormal(t[0], t[1], t[2]);
+  const Vec3 normal = detail::accurateNormal(t[0], t[1], t[2]);
   const double d0 = dot(p0 - t[0], normal), d1 = dot(p1 - t[0], normal);
   double lambda = 0.5;
   if (d0 != d1) lambda = std::clamp(d0 / (d0 - d1), 0.0, 1.0);

@@ -1,6 +1,6 @@
 // assimp's readers run in a child process (io/detail/isolated_import.h): files that crash assimp
 // in-process give a delta::Error, and this process survives.
-#include "delta/io/detail/isolated_import.h"
+#include "io/detail/isolated_import.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Δ's own mesh readers (io/detail/mesh_readers.h): exact coordinates, every format variant, the
 // reader chosen by content, and files that are not regular or lie about their size.
-#include "delta/io/detail/mesh_readers.h"
+#include "io/detail/mesh_readers.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/soup_builder.h"
 #include "delta/io/mesh_io.h"
 
+#include "io/detail/soup_builder.h"
 #include "io/test_files.h"
 
 namespace delta::io {

@@ -22,9 +22,13 @@ struct BisectionReduction {
   std::function<void(std::span<double>)> maximum;     ///< each value → its maximum over them
 };
 
-namespace detail {
+}  // namespace delta::dem
+
+namespace delta::detail {
 class BisectionBuilder;
-}
+}  // namespace delta::detail
+
+namespace delta::dem {
 
 /// Recursive coordinate bisection (Berger and Bokhari 1987): all of space cut by axis-aligned
 /// planes into `parts` boxes, its parts' regions, holding about equally many points. Made for a

@@ -9,18 +9,20 @@
 #include "delta/query/query_mesh.h"
 
 namespace delta::dem {
-
 class ParticleShape;
+}  // namespace delta::dem
 
-namespace detail {
+namespace delta::detail {
 struct PreparedShape;
 /// A shape exactly as it was saved (dem/checkpoint.h): `body` already in the body frame and the
 /// mass properties as stored, not derived again (moving a mesh to its centre of mass a second
 /// time would change the last bits). `sphereRadius` > 0 makes a sphere shape shown as `body`.
 /// Throws delta::Error for a density, volume, mass or radius that is not finite and positive.
-ParticleShape restoredShape(const Mesh& body, double density, const MassProperties& properties,
-                            double sphereRadius);
-}  // namespace detail
+dem::ParticleShape restoredShape(const Mesh& body, double density, const MassProperties& properties,
+                                 double sphereRadius);
+}  // namespace delta::detail
+
+namespace delta::dem {
 
 /// What a particle's contacts are computed against: its triangles, or an exact sphere.
 ///

@@ -52,8 +52,8 @@ struct LoadedMesh {
 };
 
 /// Loads every triangle of the file at `path`: OFF, PLY, OBJ and STL with Δ's own readers, in
-/// double precision (io/detail/mesh_readers.h), any other format assimp reads (glTF, 3DS, X, ...)
-/// through assimp:
+/// double precision (src/io/detail/mesh_readers.h), any other format assimp reads (glTF, 3DS, X,
+/// ...) through assimp:
 /// - the reader is chosen by the file's content (a `ply` line, a binary STL of its announced
 ///   size, `solid` ... `facet`, an OFF keyword, an OBJ statement), then by the extension (.off,
 ///   .ply, .obj, .stl, case-insensitive, so that such a file gets its reader's error), else

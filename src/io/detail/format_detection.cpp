@@ -2,10 +2,11 @@
 #include <string_view>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+#include "text_scan.h"
+
+namespace delta::detail {
 namespace {
 
 /// The first line of `head` that is neither blank nor a comment ('#' to the end of the line),
@@ -86,4 +87,4 @@ void requireFormatStart(MeshFormat format, std::string_view head, std::uintmax_t
   }
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

@@ -1,4 +1,4 @@
-#include "delta/io/detail/isolated_import.h"
+#include "isolated_import.h"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -24,7 +24,7 @@
 #endif
 #endif
 
-namespace delta::io::detail {
+namespace delta::detail {
 namespace {
 
 constexpr char kSoup = 'S';
@@ -187,7 +187,7 @@ TriangleSoup parseAnswer(const std::string& answer) {
   soup.statistics.sourceVertices = static_cast<std::size_t>(header.sourceVertices);
   soup.statistics.pointsSkipped = static_cast<std::size_t>(header.pointsSkipped);
   soup.statistics.linesSkipped = static_cast<std::size_t>(header.linesSkipped);
-  soup.statistics.precision = CoordinatePrecision::single;
+  soup.statistics.precision = io::CoordinatePrecision::single;
   return soup;
 }
 
@@ -246,4 +246,4 @@ TriangleSoup runIsolated(const std::function<TriangleSoup()>& import,
   return parseAnswer(answer);
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

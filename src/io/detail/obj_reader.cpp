@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/reader_support.h"
-#include "delta/io/detail/soup_builder.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+#include "reader_support.h"
+#include "soup_builder.h"
+#include "text_scan.h"
+
+namespace delta::detail {
 namespace {
 
 /// A statement continued with a backslash at the ends of its lines, joined (rare, so it may
@@ -106,4 +107,4 @@ TriangleSoup readObj(std::string_view text) {
   return reader.finish();
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

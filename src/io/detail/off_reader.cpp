@@ -9,12 +9,13 @@
 #include <vector>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/reader_support.h"
-#include "delta/io/detail/soup_builder.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+#include "reader_support.h"
+#include "soup_builder.h"
+#include "text_scan.h"
+
+namespace delta::detail {
 namespace {
 
 constexpr std::uint64_t kMaxCount = std::numeric_limits<std::uint32_t>::max();
@@ -224,4 +225,4 @@ TriangleSoup readOff(std::string_view text) {
   return soup.finish(false);
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

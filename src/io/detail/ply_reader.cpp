@@ -11,12 +11,13 @@
 #include <vector>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/reader_support.h"
-#include "delta/io/detail/soup_builder.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+#include "reader_support.h"
+#include "soup_builder.h"
+#include "text_scan.h"
+
+namespace delta::detail {
 namespace {
 
 enum class PlyEncoding { ascii, littleEndian, bigEndian };
@@ -432,4 +433,4 @@ TriangleSoup readPly(std::string_view bytes) {
   return BinaryBody(header, layout, binaryBody(lines.rest())).read();
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

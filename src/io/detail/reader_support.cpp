@@ -1,11 +1,12 @@
-#include "delta/io/detail/reader_support.h"
+#include "reader_support.h"
 
 #include <cmath>
 
 #include "delta/core/error.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "text_scan.h"
+
+namespace delta::detail {
 
 void failAtLine(std::size_t line, const std::string& what) {
   throw Error("line " + std::to_string(line) + ": " + what);
@@ -35,4 +36,4 @@ void requireVertexIndex(std::uint64_t index, std::uint64_t count, std::size_t li
                          std::to_string(count) + " vertices");
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

@@ -1,11 +1,11 @@
-#include "delta/io/detail/soup_builder.h"
+#include "soup_builder.h"
 
 #include <cmath>
 #include <limits>
 
 #include "delta/core/error.h"
 
-namespace delta::io::detail {
+namespace delta::detail {
 namespace {
 
 constexpr std::size_t kEarClippingLimit = 4096;
@@ -151,8 +151,8 @@ TriangleSoup SoupBuilder::finish(bool pointsIfNoFaces) {
     for (std::uint32_t& corner : triangle)
       corner = newIndex[corner];
   soup.statistics.sourceVertices = soup.positions.size();
-  soup.statistics.precision = CoordinatePrecision::exact;
+  soup.statistics.precision = io::CoordinatePrecision::exact;
   return soup;
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

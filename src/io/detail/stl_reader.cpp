@@ -8,12 +8,13 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
-#include "delta/io/detail/mesh_readers.h"
-#include "delta/io/detail/reader_support.h"
-#include "delta/io/detail/soup_builder.h"
-#include "delta/io/detail/text_scan.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+#include "reader_support.h"
+#include "soup_builder.h"
+#include "text_scan.h"
+
+namespace delta::detail {
 namespace {
 
 constexpr std::size_t kHeaderBytes = 84;    // 80-byte comment + 32-bit triangle count
@@ -202,4 +203,4 @@ TriangleSoup readStl(std::string_view bytes) {
   return AsciiStl(bytes).read();
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

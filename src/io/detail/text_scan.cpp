@@ -1,4 +1,4 @@
-#include "delta/io/detail/text_scan.h"
+#include "text_scan.h"
 
 #include <charconv>
 #include <limits>
@@ -6,7 +6,7 @@
 
 #include "delta/core/error.h"
 
-namespace delta::io::detail {
+namespace delta::detail {
 namespace {
 
 constexpr bool isLineEnd(char c) noexcept {
@@ -107,4 +107,4 @@ std::string excerpt(std::string_view text) {
   return std::string(text.substr(0, kLimit)) + "...";
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

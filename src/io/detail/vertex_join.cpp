@@ -1,11 +1,11 @@
-#include "delta/io/detail/vertex_join.h"
+#include "vertex_join.h"
 
 #include <bit>
 #include <limits>
 
 #include "delta/core/error.h"
 
-namespace delta::io::detail {
+namespace delta::detail {
 namespace {
 
 constexpr std::uint32_t kEmptySlot = std::numeric_limits<std::uint32_t>::max();
@@ -75,4 +75,4 @@ JoinedVertices joinIdenticalVertices(std::span<const Vec3> vertices) {
   return joined;
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

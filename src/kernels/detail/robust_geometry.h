@@ -19,7 +19,7 @@
 #include "delta/core/vec3.h"
 #include "delta/kernels/point_triangle.h"
 
-namespace delta::kernels::detail {
+namespace delta::detail {
 
 inline constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
@@ -132,7 +132,7 @@ inline SegmentPoint closestOnSegment(const Vec3& p, const Vec3& s0, const Vec3& 
 /// needs only this of its vertex–face candidates: a vertex whose closest point is on an edge is
 /// an end of two edges, and the edge–edge candidates already cover that distance.
 inline bool closestOnLocalFace(const Vec3& p, const LocalTriangle& t,
-                               PointTriangleResult& result) noexcept {
+                               kernels::PointTriangleResult& result) noexcept {
   if (t.flat) return false;
   const Vec3* v = t.vertex;
   const Vec3 ap = p - v[0];
@@ -144,7 +144,8 @@ inline bool closestOnLocalFace(const Vec3& p, const LocalTriangle& t,
   const double sum = areaA + areaB + areaC;
   if (!(areaB >= 0.0 && sum > 0.0)) return false;
   const Vec3 foot = p - t.normal * (dot(t.normal, ap) / t.normalLengthSquared);
-  result = {lengthSquared(p - foot), foot, areaB / sum, areaC / sum, TriangleFeature::Face};
+  result = {lengthSquared(p - foot), foot, areaB / sum, areaC / sum,
+            kernels::TriangleFeature::Face};
   return true;
 }
 
@@ -160,8 +161,9 @@ inline bool closestOnLocalFace(const Vec3& p, const LocalTriangle& t,
 /// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
 /// in the triangle (to an ulp); for a needle of height h they carry the needle's conditioning, an
 /// error of ε·L/h (the point itself does not).
-inline PointTriangleResult closestOnLocalTriangle(const Vec3& p, const LocalTriangle& t) noexcept {
-  PointTriangleResult best;
+inline kernels::PointTriangleResult closestOnLocalTriangle(const Vec3& p,
+                                                           const LocalTriangle& t) noexcept {
+  kernels::PointTriangleResult best;
   if (closestOnLocalFace(p, t, best)) return best;
   // The nearest edge; edge i runs from vertex i to vertex i + 1.
   const Vec3* v = t.vertex;
@@ -174,21 +176,21 @@ inline PointTriangleResult closestOnLocalTriangle(const Vec3& p, const LocalTria
     switch (i) {
       case 0:  // a → b
         best.u = s.t, best.v = 0.0;
-        best.feature = s.t == 0.0   ? TriangleFeature::VertexA
-                       : s.t == 1.0 ? TriangleFeature::VertexB
-                                    : TriangleFeature::EdgeAB;
+        best.feature = s.t == 0.0   ? kernels::TriangleFeature::VertexA
+                       : s.t == 1.0 ? kernels::TriangleFeature::VertexB
+                                    : kernels::TriangleFeature::EdgeAB;
         break;
       case 1:  // b → c
         best.u = 1.0 - s.t, best.v = s.t;
-        best.feature = s.t == 0.0   ? TriangleFeature::VertexB
-                       : s.t == 1.0 ? TriangleFeature::VertexC
-                                    : TriangleFeature::EdgeBC;
+        best.feature = s.t == 0.0   ? kernels::TriangleFeature::VertexB
+                       : s.t == 1.0 ? kernels::TriangleFeature::VertexC
+                                    : kernels::TriangleFeature::EdgeBC;
         break;
       default:  // c → a
         best.u = 0.0, best.v = 1.0 - s.t;
-        best.feature = s.t == 0.0   ? TriangleFeature::VertexC
-                       : s.t == 1.0 ? TriangleFeature::VertexA
-                                    : TriangleFeature::EdgeCA;
+        best.feature = s.t == 0.0   ? kernels::TriangleFeature::VertexC
+                       : s.t == 1.0 ? kernels::TriangleFeature::VertexA
+                                    : kernels::TriangleFeature::EdgeCA;
         break;
     }
   }
@@ -242,4 +244,4 @@ inline SegmentPair closestOnSegments(const Vec3& p0, const Vec3& p1, const Vec3&
   return {p, q, s, t, lengthSquared(p - q)};
 }
 
-}  // namespace delta::kernels::detail
+}  // namespace delta::detail

@@ -3,9 +3,9 @@
 #include <cstdint>
 #include <functional>
 
-#include "delta/io/detail/mesh_readers.h"
+#include "mesh_readers.h"
 
-namespace delta::io::detail {
+namespace delta::detail {
 
 /// What a child process may use before it is stopped.
 struct IsolationLimits {
@@ -37,4 +37,4 @@ struct IsolationLimits {
 TriangleSoup runIsolated(const std::function<TriangleSoup()>& import,
                          const IsolationLimits& limits);
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

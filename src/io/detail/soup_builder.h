@@ -6,10 +6,11 @@
 #include <vector>
 
 #include "delta/core/vec3.h"
-#include "delta/io/detail/mesh_readers.h"
 #include "delta/mesh/mesh.h"
 
-namespace delta::io::detail {
+#include "mesh_readers.h"
+
+namespace delta::detail {
 
 /// Triangulates a polygon given by `corners`, indices into `vertices` (n >= 3; they need not be
 /// distinct), appending n − 2 triangles to `out`, oriented as the polygon is (corner order).
@@ -57,9 +58,9 @@ class SoupBuilder {
  private:
   std::vector<Vec3> vertices_;
   std::vector<TriangleIndices> triangles_;
-  LoadStatistics statistics_;
+  io::LoadStatistics statistics_;
   bool meshHasTriangles_ = false;
   bool anyFace_ = false;
 };
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

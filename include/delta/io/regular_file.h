@@ -6,7 +6,7 @@
 #include <string>
 
 /// Reading input files without trusting them: only regular files, never more than they hold.
-namespace delta::io::detail {
+namespace delta::io {
 
 /// An open regular file, closed on destruction.
 ///
@@ -47,4 +47,4 @@ class RegularFile {
 std::string readSmallRegularFile(const std::filesystem::path& path, std::uintmax_t limit,
                                  const std::string& what);
 
-}  // namespace delta::io::detail
+}  // namespace delta::io

@@ -21,7 +21,7 @@
 /// never a clamped index.
 ///
 /// Threading: every function may be called from several threads at once.
-namespace delta::io::detail {
+namespace delta::detail {
 
 /// Triangles of a file with the vertices they use, before vertices at identical positions are
 /// joined (detail::joinIdenticalVertices).
@@ -29,7 +29,7 @@ struct TriangleSoup {
   /// The vertices that triangles use, in the file's order; vertices no triangle uses are dropped.
   std::vector<Vec3> positions;
   std::vector<TriangleIndices> triangles;  ///< indices into `positions`, in the file's order
-  LoadStatistics statistics;  ///< sourceVertices is positions.size(); precision is exact
+  io::LoadStatistics statistics;  ///< sourceVertices is positions.size(); precision is exact
 };
 
 /// OFF: an optional `[ST][C][N][4][n]OFF` keyword, the vertex, face and edge counts, then one
@@ -99,4 +99,4 @@ void requireFormatStart(MeshFormat format, std::string_view head, std::uintmax_t
 MeshFormat detectMeshFormat(std::string_view head, std::uintmax_t size, std::string_view extension,
                             bool assimpReadsExtension);
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

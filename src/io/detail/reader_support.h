@@ -6,7 +6,7 @@
 #include <string_view>
 
 /// Messages and numbers shared by the mesh readers (mesh_readers.h).
-namespace delta::io::detail {
+namespace delta::detail {
 
 /// Throws delta::Error "line <line>: <what>".
 [[noreturn]] void failAtLine(std::size_t line, const std::string& what);
@@ -21,4 +21,4 @@ double parseCoordinate(std::string_view token, std::size_t line);
 void requireVertexIndex(std::uint64_t index, std::uint64_t count, std::size_t line,
                         const std::string& what);
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

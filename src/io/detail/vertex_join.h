@@ -6,7 +6,7 @@
 
 #include "delta/core/vec3.h"
 
-namespace delta::io::detail {
+namespace delta::detail {
 
 /// Vertices merged by exact position.
 struct JoinedVertices {
@@ -23,4 +23,4 @@ struct JoinedVertices {
 /// corners carry the facet's normal) and works across meshes.
 JoinedVertices joinIdenticalVertices(std::span<const Vec3> vertices);
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail

@@ -1,4 +1,4 @@
-#include "delta/io/detail/file_read.h"
+#include "delta/io/regular_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,7 +10,7 @@
 
 #include "delta/core/error.h"
 
-namespace delta::io::detail {
+namespace delta::io {
 namespace {
 
 std::string systemReason(int error) {
@@ -83,4 +83,4 @@ std::string readSmallRegularFile(const std::filesystem::path& path, std::uintmax
   return file.readAll();
 }
 
-}  // namespace delta::io::detail
+}  // namespace delta::io

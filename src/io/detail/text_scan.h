@@ -7,7 +7,7 @@
 #include <string_view>
 
 /// Small allocation-free helpers for the mesh readers (mesh_readers.h): lines, tokens, numbers.
-namespace delta::io::detail {
+namespace delta::detail {
 
 /// Walks a text line by line. A line ends at '\n', '\r' or '\f'; runs of line ends are skipped
 /// (as assimp's GetNextLine does), so an empty line is never returned.
@@ -68,4 +68,4 @@ void requireText(std::string_view text);
 /// `text` cut to at most 40 characters, for quoting a bad line in a message.
 std::string excerpt(std::string_view text);
 
-}  // namespace delta::io::detail
+}  // namespace delta::detail
