@@ -1,5 +1,6 @@
 #include "delta/core/parallel.h"
 
+#include <omp.h>
 #include <time.h>
 
 #include <atomic>
@@ -149,6 +150,10 @@ bool runOnPool(std::size_t chunks, int threads, void (*call)(const void*, std::s
   return Pool::instance().run(chunks, threads, call, body);
 }
 
+bool insideOpenMpRegion() noexcept {
+  return omp_in_parallel() != 0;
+}
+
 bool insideParallelLoop() noexcept {
   return tInsideLoop;
 }
@@ -175,6 +180,11 @@ SerialLoops::~SerialLoops() {
 }  // namespace delta::detail
 
 namespace delta {
+
+int threadCount() noexcept {
+  const int requested = omp_get_max_threads();
+  return requested < kMaxThreads ? requested : kMaxThreads;
+}
 
 int loopThreadIndex() noexcept {
   return detail::tThreadIndex;

@@ -68,7 +68,7 @@ class CancelScope {
 inline bool cancellable() noexcept {
   const std::function<bool()>* poll = detail::currentCancelPoll;
   return poll != nullptr && static_cast<bool>(*poll) && !detail::insideParallelLoop() &&
-         !omp_in_parallel();
+         !detail::insideOpenMpRegion();
 }
 
 /// Calls the poll of the calling thread's CancelScope (see there) when cancellable(); throws

@@ -1,7 +1,5 @@
 #pragma once
 
-#include <omp.h>
-
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -18,12 +16,13 @@ inline constexpr int kMaxThreads = 1024;
 /// omp_set_num_threads last set on this thread), capped at kMaxThreads.
 ///
 /// Threading: may be called from any thread.
-inline int threadCount() noexcept {
-  const int requested = omp_get_max_threads();
-  return requested < kMaxThreads ? requested : kMaxThreads;
-}
+int threadCount() noexcept;
 
 namespace detail {
+
+/// Whether the calling thread is inside an OpenMP parallel region (detail::insideOpenMpRegion();
+/// OpenMP is linked privately: a program using Δ needs it only for its own regions).
+bool insideOpenMpRegion() noexcept;
 
 /// Calls `call(body, chunk)` for every chunk in [0, chunks) on `threads` threads: the caller and
 /// threads − 1 workers of Δ's pool. False, having called nothing, when the pool is running
@@ -104,7 +103,7 @@ void parallelFor(std::size_t first, std::size_t last, std::size_t grain, const B
   const std::size_t chunks = (last - first + grain - 1) / grain;
   const int threads = threadCount();
   if (chunks == 1 || threads == 1 || detail::insideParallelLoop() || detail::serialLoops() ||
-      omp_in_parallel()) {
+      detail::insideOpenMpRegion()) {
     body(first, last);
     return;
   }
