@@ -28,14 +28,7 @@
 namespace delta::kernels {
 namespace {
 
-using test::kAllFamilies;
-using test::makeBatch;
-using test::makePairs;
-using test::name;
-using test::PairBatch;
-using test::PairFamily;
-using test::pairSize;
-using test::pasteable;
+using namespace test;  // the pair families and batches of triangle_pairs.h
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 constexpr double kTolerance = 1e-12;  // the contract, relative to the pair's size
