@@ -875,8 +875,10 @@ void World::makeContacts() const {
       // copies of the contacts (Python's arrays, checkpoints read back) compare byte for byte.
       Contact& contact = contacts_.emplace_back();
       contact.point = point.point;
-      contact.first = ids_[pair.first];
-      contact.second = pair.withObstacle ? pair.second : ids_[pair.second];
+      // The ids from the pair's key, made with the ids of its evaluation: a DistributedWorld
+      // renumbers its particles at the start of the next step.
+      contact.first = static_cast<std::uint32_t>(pair.key >> 32);
+      contact.second = static_cast<std::uint32_t>(pair.key);
       contact.withObstacle = pair.withObstacle;
       contact.depth = point.depth;
       contact.force = point.force;
