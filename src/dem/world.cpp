@@ -481,13 +481,13 @@ namespace {
 
 /// Carries the caches keyed like `caches` over to the pairs [begin, end) that `wanted` picks
 /// (sorted by key; new ones made with `skin`, those of pairs gone dropped into `spare`, whose
-/// capacity is kept), and points cacheOf[p] at pair p's.
+/// capacity is kept), and points cacheOf[p] at pair p's; `pairOf` is scratch.
 template <class Cache, class Pairs, class Wanted>
 void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const Wanted& wanted,
                  double skin, std::vector<std::pair<std::uint64_t, Cache>>& caches,
-                 std::vector<std::pair<std::uint64_t, Cache>>& spare,
-                 std::vector<Cache*>& cacheOf) {
-  std::vector<std::size_t> pairOf;
+                 std::vector<std::pair<std::uint64_t, Cache>>& spare, std::vector<Cache*>& cacheOf,
+                 std::vector<std::size_t>& pairOf) {
+  pairOf.clear();
   spare.clear();
   std::size_t old = 0;
   for (std::size_t p = begin; p < end; ++p) {
@@ -523,13 +523,15 @@ void World::routeContactCaches(std::span<const Interaction> pairs) {
     return !sphere(pair.first) && (pair.withObstacle || !sphere(pair.second));
   };
   const std::size_t particlePairs = statistics_.particlePairsTested;
-  routeCaches(pairs, 0, particlePairs, meshes, skin, particleCaches_, spareCaches_, cacheOf_);
+  std::vector<std::size_t> pairOf;  // one allocation for the three
+  routeCaches(pairs, 0, particlePairs, meshes, skin, particleCaches_, spareCaches_, cacheOf_,
+              pairOf);
   routeCaches(pairs, particlePairs, pairs.size(), meshes, skin, obstacleCaches_, spareCaches_,
-              cacheOf_);
+              cacheOf_, pairOf);
   routeCaches(
       pairs, particlePairs, pairs.size(),
       [&](const Interaction& pair) { return sphere(pair.first); }, skin, sphereObstacleCaches_,
-      spareSphereCaches_, sphereCacheOf_);
+      spareSphereCaches_, sphereCacheOf_, pairOf);
 }
 
 void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes) {
@@ -553,7 +555,6 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
     }
   }
   parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
-    // The sphere pairs' springs, in increasing key order; a sphere's points on an obstacle.
     std::vector<ContactPoint> sphereFound;  // a sphere's contacts on an obstacle, raw
     PairContacts onObstacle;                // and finished
     for (std::size_t p = begin; p < end; ++p) {
