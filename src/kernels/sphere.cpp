@@ -41,19 +41,26 @@ SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noex
           gap < 0.0};
 }
 
-SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept {
-  const Vec3& origin = triangle.a;
-  const detail::LocalTriangle local =
-      detail::makeLocalTriangle({}, triangle.b - origin, triangle.c - origin);
+namespace {
+
+/// The kernel on a triangle in its local frame (its first corner at the origin), with
+/// `longestEdge` = √(local.longestEdgeSquared).
+SphereContactResult sphereLocalTriangle(const Sphere& sphere, const Vec3& origin,
+                                        const detail::LocalTriangle& local,
+                                        double longestEdge) noexcept {
   const Vec3 center = sphere.center - origin;
   const PointTriangleResult closest = detail::closestOnLocalTriangle(center, local);
   const Vec3 away = center - closest.closest;
-  const double distance = safeLength(away);
+  // safeLength(away) and unit(away) from one scaled copy: the same bits, half the divisions.
+  const double largest = maxAbs(away);
+  const Vec3 scaled = largest > 0.0 ? away / largest : Vec3{};
+  const double scaledLength = length(scaled);
+  const double distance = largest > 0.0 ? largest * scaledLength : 0.0;
 
   Vec3 normal;
-  const double scale = maxAbs(center) + std::sqrt(local.longestEdgeSquared);
+  const double scale = maxAbs(center) + longestEdge;
   if (distance > kOnTriangleUlps * detail::kEpsilon * scale) {
-    normal = unit(away);
+    normal = scaled / scaledLength;
   } else if (!local.flat) {
     normal = unit(local.normal);
   } else if (local.longestEdgeSquared > 0.0) {
@@ -67,6 +74,47 @@ SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangl
   }
   const double gap = distance - sphere.radius;
   return {gap, sphere.center - normal * sphere.radius, closest.closest + origin, normal, gap < 0.0};
+}
+
+detail::LocalTriangle localTriangle(const Triangle& triangle) noexcept {
+  return detail::makeLocalTriangle({}, triangle.b - triangle.a, triangle.c - triangle.a);
+}
+
+}  // namespace
+
+SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept {
+  const detail::LocalTriangle local = localTriangle(triangle);
+  return sphereLocalTriangle(sphere, triangle.a, local, std::sqrt(local.longestEdgeSquared));
+}
+
+PreparedTriangle::PreparedTriangle(const Triangle& triangle) noexcept : origin_(triangle.a) {
+  const detail::LocalTriangle local = localTriangle(triangle);
+  b_ = local.vertex[1];
+  c_ = local.vertex[2];
+  edge_ = local.edge[1];
+  normal_ = local.normal;
+  normalLengthSquared_ = local.normalLengthSquared;
+  longestEdgeSquared_ = local.longestEdgeSquared;
+  longestEdge_ = std::sqrt(local.longestEdgeSquared);
+  flat_ = local.flat;
+}
+
+SphereContactResult sphereTriangle(const Sphere& sphere,
+                                   const PreparedTriangle& triangle) noexcept {
+  // The local triangle makeLocalTriangle({}, b − a, c − a) gives, with its edges as it forms
+  // them (0 − x is not −x for a zero: the signs of zeros stay as they were).
+  detail::LocalTriangle local;
+  local.vertex[0] = {};
+  local.vertex[1] = triangle.b_;
+  local.vertex[2] = triangle.c_;
+  local.edge[0] = triangle.b_ - Vec3{};
+  local.edge[1] = triangle.edge_;
+  local.edge[2] = Vec3{} - triangle.c_;
+  local.normal = triangle.normal_;
+  local.normalLengthSquared = triangle.normalLengthSquared_;
+  local.longestEdgeSquared = triangle.longestEdgeSquared_;
+  local.flat = triangle.flat_;
+  return sphereLocalTriangle(sphere, triangle.origin_, local, triangle.longestEdge_);
 }
 
 }  // namespace delta::kernels

@@ -225,8 +225,7 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
     const double nearer = reach + move + cache.allowance_;
     for (const SphereContactCache::KeptTriangle& kept : cache.triangles_) {
       if (!(kept.gap < nearer)) continue;
-      const kernels::SphereContactResult r =
-          kernels::sphereTriangle(sphere, data.triangle(kept.index));
+      const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, kept.triangle);
       if (r.gap < reach) out.push_back(sphereContactPoint(r, 0, data.order[kept.index]));
     }
     ++cache.reused_;
@@ -243,7 +242,8 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
   nearTriangles(sphere, data, scale, reach + skin, near);
   cache.triangles_.clear();
   for (const NearTriangle& triangle : near) {
-    cache.triangles_.push_back({triangle.index, triangle.result.gap});
+    cache.triangles_.push_back({triangle.index, triangle.result.gap,
+                                kernels::PreparedTriangle(data.triangle(triangle.index))});
     if (triangle.result.gap < reach)
       out.push_back(sphereContactPoint(triangle.result, 0, triangle.id));
   }

@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+
+#include "delta/core/format.h"
 
 #include "kernels/exact_distance.h"
 #include "kernels/triangle_pairs.h"
@@ -138,6 +142,49 @@ TEST(SphereContact, SphereTriangleMatchesExactDistanceOnEveryFamily) {
       }
     }
   }
+}
+
+bool sameBits(double x, double y) {
+  return std::bit_cast<std::uint64_t>(x) == std::bit_cast<std::uint64_t>(y);
+}
+
+bool sameBits(const Vec3& x, const Vec3& y) {
+  return sameBits(x.x, y.x) && sameBits(x.y, y.y) && sameBits(x.z, y.z);
+}
+
+/// A prepared triangle answers as the triangle itself, bit for bit, on every family (slivers,
+/// needles, zero-area and point triangles, huge offsets): centres at the other triangle's
+/// corners, on the triangle (its corners, edge midpoints, centroid: where the normal comes from
+/// the face or the longest edge) and just off it.
+TEST(SphereContact, PreparedTriangleGivesTheSameBitsOnEveryFamily) {
+  std::size_t compared = 0;
+  const auto expectSame = [&](const Sphere& sphere, const Triangle& t) {
+    const SphereContactResult plain = sphereTriangle(sphere, t);
+    const SphereContactResult prepared = sphereTriangle(sphere, PreparedTriangle(t));
+    ++compared;
+    return sameBits(plain.gap, prepared.gap) && sameBits(plain.p, prepared.p) &&
+           sameBits(plain.q, prepared.q) && sameBits(plain.normal, prepared.normal) &&
+           plain.overlap == prepared.overlap;
+  };
+  const Triangle special[] = {kUnit,
+                              {{0, 0, 0}, {2, 0, 0}, {1, 0, 0}},            // a segment
+                              {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}},            // a point
+                              {{0, -0.0, 0}, {-0.0, 1, 0}, {0, 0, -0.0}}};  // signed zeros
+  for (const Triangle& t : special)
+    for (const Vec3& centre : {t.a, t.b, t.c, (t.a + t.b) * 0.5, Vec3{0.25, 0.25, 0},
+                               Vec3{-0.0, -0.0, -0.0}, Vec3{0.5, -1, 0}, Vec3{1, 1, 4}})
+      EXPECT_TRUE(expectSame({centre, 0.5}, t)) << toString(centre);
+  for (const auto family : test::kAllFamilies) {
+    for (const auto& [a, b] : test::makePairs(family, test::scaledCount(300), 17)) {
+      const double size = test::pairSize(a, b);
+      const Vec3 centroid = (a.a + a.b + a.c) / 3.0;
+      for (const Vec3& centre : {b.a, b.b, b.c, a.a, a.b, (a.b + a.c) * 0.5, centroid,
+                                 centroid + (b.a - centroid) * 1e-9})
+        ASSERT_TRUE(expectSame({centre, 0.1 * size}, a)) << test::name(family) << "\n"
+                                                         << test::pasteable(a, b);
+    }
+  }
+  EXPECT_GT(compared, 1000u);
 }
 
 }  // namespace

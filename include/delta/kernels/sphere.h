@@ -37,4 +37,34 @@ SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noex
 /// Threading: a pure function; safe from any thread.
 SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept;
 
+/// A triangle made ready for many sphereTriangle calls: what the kernel computes of the
+/// triangle alone (its edges in a frame at its first corner, the accurate normal, whether it is
+/// flat), computed once. sphereTriangle(sphere, PreparedTriangle(t)) is sphereTriangle(sphere,
+/// t), bit for bit; it saves the triangle's part of the work (about a third of a call) where one
+/// triangle meets a sphere step after step (contactdetection::SphereContactCache).
+///
+/// Threading: a value type; no shared state.
+class PreparedTriangle {
+ public:
+  PreparedTriangle() = default;
+  explicit PreparedTriangle(const Triangle& triangle) noexcept;
+
+ private:
+  friend SphereContactResult sphereTriangle(const Sphere& sphere,
+                                            const PreparedTriangle& triangle) noexcept;
+  Vec3 origin_;                       ///< the first corner, a
+  Vec3 b_, c_;                        ///< b − a and c − a
+  Vec3 edge_;                         ///< (c − a) − (b − a), rounded as the kernel rounds it
+  Vec3 normal_;                       ///< (b − a) × (c − a), accurate
+  double normalLengthSquared_ = 0.0;  ///< |normal|²
+  double longestEdgeSquared_ = 0.0;   ///< the longest edge's squared length
+  double longestEdge_ = 0.0;          ///< its length
+  bool flat_ = true;                  ///< zero area within rounding
+};
+
+/// sphereTriangle on a prepared triangle: the same answer, bit for bit.
+///
+/// Threading: a pure function; safe from any thread.
+SphereContactResult sphereTriangle(const Sphere& sphere, const PreparedTriangle& triangle) noexcept;
+
 }  // namespace delta::kernels

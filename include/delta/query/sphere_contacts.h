@@ -89,10 +89,12 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
 /// time.
 class SphereContactCache {
  public:
-  /// A kept triangle: its prepared (sorted) index, and the kernel's gap when made.
+  /// A kept triangle: its prepared (sorted) index, the kernel's gap when made, and the
+  /// triangle made ready for the kernel (its frame and normal computed once, not each call).
   struct KeptTriangle {
     std::uint32_t index;
     double gap;
+    kernels::PreparedTriangle triangle;
   };
 
   /// An empty cache (made at the first call) that keeps triangles within 2ε + `skin`; a skin
