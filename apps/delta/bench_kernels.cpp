@@ -109,7 +109,7 @@ void run(const BenchOptions& options) {
     const std::optional<kernels::Isa> named = kernels::parseIsa(options.isa);
     if (!named)
       throw Error("--isa: unknown instruction set '" + options.isa +
-                  "' (scalar, sse2, avx2, avx512)");
+                  "' (scalar, sse2, avx2, avx512, neon, sve)");
     if (!kernels::isSupported(*named))
       throw Error("--isa: this CPU (or build) cannot run " + options.isa);
     isa = *named;
@@ -221,7 +221,8 @@ void addBenchCommand(CLI::App& app) {
                    "Triangle pairs to generate (1 to " + std::to_string(kMaxPairs) + ")")
       ->check(CLI::Range(std::size_t{1}, kMaxPairs));
   kernels->add_option("--isa", options->isa,
-                      "Instruction set for the SIMD solvers: scalar, sse2, avx2, avx512 "
+                      "Instruction set for the SIMD solvers: scalar, sse2, avx2, avx512 (x86-64), "
+                      "neon, sve (AArch64) "
                       "(default: the widest this CPU runs)");
   kernels->add_flag("--json", options->json, "Print one JSON object instead of a table");
   kernels->callback([options] { run(*options); });

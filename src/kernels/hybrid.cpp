@@ -15,16 +15,23 @@ static_assert(kHybridIterations == detail::HybridSchedule::kIterations);
 
 namespace {
 
-/// The narrowest table that computes as `kernels` does, bit for bit: AVX-512's and AVX2's fuse
-/// a·b + c into one rounding, SSE2's and the scalar's round twice, and within each pair the
-/// lanes compute alike. A lone pair on one scalar lane costs 0.4 µs, a whole register about
-/// 0.8 µs: the scalar table where it agrees, AVX2's eight lanes for AVX-512's sixteen.
+/// The narrowest table that computes as `kernels` does, bit for bit: on x86-64, AVX-512's and
+/// AVX2's fuse a·b + c into one rounding, SSE2's and the scalar's round twice, and within each
+/// pair the lanes compute alike. A lone pair on one scalar lane costs 0.4 µs, a whole register
+/// about 0.8 µs: the scalar table where it agrees, AVX2's eight lanes for AVX-512's sixteen. On
+/// AArch64 every table may fuse, each as its compiler saw fit: the table itself.
 const detail::BatchKernels& loneKernels(const detail::BatchKernels& kernels) noexcept {
-#if defined(DELTA_X86_ISAS)
-  if (&kernels == &detail::avx512BatchKernels()) return detail::avx2BatchKernels();
-  if (&kernels == &detail::avx2BatchKernels()) return kernels;
+#if defined(__x86_64__)
+  static const detail::BatchKernels* const avx512 =
+      isSupported(Isa::Avx512) ? &detail::batchKernels(Isa::Avx512) : nullptr;
+  static const detail::BatchKernels* const avx2 =
+      isSupported(Isa::Avx2) ? &detail::batchKernels(Isa::Avx2) : nullptr;
+  if (&kernels == avx512) return *avx2;
+  if (&kernels == avx2) return kernels;
+  return detail::batchKernels(Isa::Scalar);
+#else
+  return kernels;
 #endif
-  return detail::scalarBatchKernels();
 }
 
 /// Pairs gathered from the first stage's failures, in small SoA blocks on the stack, for the

@@ -5,30 +5,60 @@
 #include "delta/kernels/detail/batch_dispatch.h"
 #include "delta/kernels/detail/batch_views.h"
 
+#include "isa_list.h"  // generated: DELTA_ISAS, DELTA_ISA_RUNS_<name> (src/CMakeLists.txt)
+
+#if defined(__aarch64__)
+#include <sys/auxv.h>
+#include <sys/prctl.h>
+#endif
+
+// Each ISA's table, in its own translation unit (kernels/isa/batch_table.cpp).
+#define DELTA_DECLARE_TABLE(enumerator, name, lanes) \
+  namespace delta::detail::name {                    \
+  const BatchKernels& batchKernels() noexcept;       \
+  }
+DELTA_ISAS(DELTA_DECLARE_TABLE)
+#undef DELTA_DECLARE_TABLE
+
 namespace delta::kernels {
 namespace {
 
-constexpr Isa kAll[] = {Isa::Scalar, Isa::Sse2, Isa::Avx2, Isa::Avx512};
+constexpr Isa kAll[] = {Isa::Scalar, Isa::Sse2, Isa::Avx2, Isa::Avx512, Isa::Neon, Isa::Sve};
 
-bool cpuRuns(Isa isa) noexcept {
-#if defined(DELTA_X86_ISAS)
-  __builtin_cpu_init();  // harmless when libgcc has done it already
+/// The architecture an ISA belongs to (Scalar to every one).
+enum class Family { Any, X86, Arm };
+
+constexpr Family familyOf(Isa isa) noexcept {
   switch (isa) {
     case Isa::Scalar:
+      return Family::Any;
     case Isa::Sse2:
-      return true;  // the x86-64 baseline
     case Isa::Avx2:
-      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     case Isa::Avx512:
-      // GCC's check includes the OS's support for the register state (XGETBV).
-      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx2") &&
-             __builtin_cpu_supports("fma");
+      return Family::X86;
+    case Isa::Neon:
+    case Isa::Sve:
+      return Family::Arm;
   }
-  return false;
-#else
-  return isa == Isa::Scalar;  // only the scalar table is built off x86-64
+  return Family::Any;
+}
+
+/// Whether this build has `isa` and this CPU (and OS) runs it: the checks of each ISA's features,
+/// as src/CMakeLists.txt names them (GCC's x86 check includes the OS's support for the register
+/// state, XGETBV).
+bool cpuRuns(Isa isa) noexcept {
+#if defined(__x86_64__)
+  __builtin_cpu_init();  // harmless when libgcc has done it already
 #endif
+  switch (isa) {
+#define DELTA_RUNS(enumerator, name, lanes) \
+  case Isa::enumerator:                     \
+    return DELTA_ISA_RUNS_##name;
+    DELTA_ISAS(DELTA_RUNS)
+#undef DELTA_RUNS
+    default:
+      return false;  // not in this build
+  }
 }
 
 Isa chooseDefault() noexcept {
@@ -53,6 +83,10 @@ const char* name(Isa isa) noexcept {
       return "avx2";
     case Isa::Avx512:
       return "avx512";
+    case Isa::Neon:
+      return "neon";
+    case Isa::Sve:
+      return "sve";
   }
   return "?";
 }
@@ -68,11 +102,20 @@ int laneCount(Isa isa) noexcept {
     case Isa::Scalar:
       return 1;
     case Isa::Sse2:
+    case Isa::Neon:
       return 2;
     case Isa::Avx2:
       return 4;
     case Isa::Avx512:
       return 8;
+    case Isa::Sve:
+#if defined(__aarch64__) && defined(PR_SVE_GET_VL)
+      if (cpuRuns(Isa::Sve)) {
+        const int vl = prctl(PR_SVE_GET_VL);  // bytes, with flags above PR_SVE_VL_LEN_MASK
+        if (vl > 0) return (vl & PR_SVE_VL_LEN_MASK) / 8;
+      }
+#endif
+      return 2;
   }
   return 1;
 }
@@ -96,7 +139,7 @@ Isa defaultIsa() noexcept {
 Isa supportedIsaAtMost(Isa requested) noexcept {
   Isa result = Isa::Scalar;
   for (Isa isa : kAll)
-    if (isa <= requested && cpuRuns(isa)) result = isa;
+    if (familyOf(isa) == familyOf(requested) && isa <= requested && cpuRuns(isa)) result = isa;
   return result;
 }
 
@@ -106,16 +149,13 @@ namespace delta::detail {
 
 const BatchKernels& batchKernels(kernels::Isa isa) noexcept {
   switch (kernels::supportedIsaAtMost(isa)) {
-#if defined(DELTA_X86_ISAS)
-    case kernels::Isa::Sse2:
-      return sse2BatchKernels();
-    case kernels::Isa::Avx2:
-      return avx2BatchKernels();
-    case kernels::Isa::Avx512:
-      return avx512BatchKernels();
-#endif
+#define DELTA_TABLE(enumerator, name, lanes) \
+  case kernels::Isa::enumerator:             \
+    return name::batchKernels();
+    DELTA_ISAS(DELTA_TABLE)
+#undef DELTA_TABLE
     default:
-      return scalarBatchKernels();
+      return scalar::batchKernels();
   }
 }
 

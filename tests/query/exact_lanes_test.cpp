@@ -1,10 +1,8 @@
-// The exact point–triangle kernel's eight-lane copies (query/detail/exact_lanes.cpp: AVX-512, and
-// AVX2 in two runs of four) against the scalar kernel, bit for bit, on random and adversarial
-// triangles and points: slivers, needles, zero-area and repeated-vertex triangles, points on
-// vertices, edges and faces and just off them, far points, coordinates far from the origin and tiny
-// triangles.
-#include "query/detail/exact_lanes.h"
-
+// The exact point–triangle kernel in lanes (query/detail/exact_lanes.h: AVX-512's eight, AVX2's
+// four, NEON's two; each ISA's point table), against the scalar kernel, bit for bit, on random and
+// adversarial triangles and points: slivers, needles, zero-area and repeated-vertex triangles,
+// points on vertices, edges and faces and just off them, far points, coordinates far from the
+// origin and tiny triangles.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -19,8 +17,8 @@
 #include "delta/query/query_mesh.h"
 
 #include "kernels/triangle_pairs.h"
+#include "query/detail/point_kernels.h"
 
-#if defined(DELTA_X86_ISAS)
 namespace delta::detail {
 namespace {
 
@@ -118,18 +116,20 @@ void expectEveryLaneIsTheScalarKernel(Exact8 exact) {
     }
 }
 
-TEST(ExactLanes, EveryLaneIsTheScalarKernelBitForBit) {
-  if (kernels::supportedIsaAtMost(kernels::Isa::Avx512) != kernels::Isa::Avx512)
-    GTEST_SKIP() << "this CPU has no AVX-512";
-  expectEveryLaneIsTheScalarKernel(&exactDistancesSquared8);
-}
-
-TEST(ExactLanes, EveryAvx2LaneIsTheScalarKernelBitForBit) {
-  if (kernels::supportedIsaAtMost(kernels::Isa::Avx2) != kernels::Isa::Avx2)
-    GTEST_SKIP() << "this CPU has no AVX2";
-  expectEveryLaneIsTheScalarKernel(&exactDistancesSquared8Avx2);
+TEST(ExactLanes, EveryLaneOfEveryIsaIsTheScalarKernelBitForBit) {
+  std::size_t tested = 0;
+  for (const kernels::Isa isa : kernels::supportedIsas()) {
+    const Exact8 exact = pointKernels(isa).exact;
+    if (!exact) continue;  // no lanes: the scalar kernel itself
+    SCOPED_TRACE(kernels::name(isa));
+    expectEveryLaneIsTheScalarKernel(exact);
+    ++tested;
+  }
+#if defined(__AVX2__) || defined(__aarch64__)
+  EXPECT_GT(tested, 0u);  // built for a CPU with lanes: they ran
+#endif
+  if (tested == 0) GTEST_SKIP() << "no ISA with exact lanes on this CPU";
 }
 
 }  // namespace
 }  // namespace delta::detail
-#endif

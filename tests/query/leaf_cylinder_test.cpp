@@ -25,6 +25,7 @@
 
 #include "kernels/triangle_pairs.h"
 #include "query/detail/node_bounds.h"
+#include "query/detail/point_kernels.h"
 #include "query/detail/query_mesh_data.h"
 
 namespace delta::detail {
@@ -128,8 +129,9 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
   const QueryMeshData& data = query.data();
   EXPECT_GE(data.levels.size(), 2u) << name;
   if (data.levels.size() < 2) return;
-  const bool avx512 = kernels::supportedIsaAtMost(kernels::Isa::Avx512) == kernels::Isa::Avx512;
-  const bool avx2 = kernels::supportedIsaAtMost(kernels::Isa::Avx2) == kernels::Isa::Avx2;
+  const bool avx512 = kernels::isSupported(kernels::Isa::Avx512);
+  const bool avx2 = kernels::isSupported(kernels::Isa::Avx2);
+  const std::vector<kernels::Isa> isas = kernels::supportedIsas();
   std::mt19937_64 random(7);
   raised = 0;
   const std::size_t count = data.leafCylinders.size();
@@ -148,29 +150,29 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
         PlainBounds::leaves(boxes, cylinders, p, shrink, kInfinity, plain);
         ASSERT_LE(plain[slot], exact) << name << ", leaf " << leaf << ", p = " << toString(p);
         if (plain[slot] > boxOnly[slot]) ++raised;
-#if defined(DELTA_X86_ISAS)
-        if (avx512) {
-          double wide[kFanout];
-          Avx512Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, wide);
-          ASSERT_LE(wide[slot], exact)
-              << name << " (AVX-512), leaf " << leaf << ", p = " << toString(p);
-          // The same arithmetic but for contracted sums: apart by a few roundings of the
-          // coordinates, far within the shrink.
+        // Every ISA's leaf bounds (its point table's) are bounds too.
+        for (const kernels::Isa isa : isas) {
+          double bounds[kFanout];
+          pointKernels(isa).leaves(boxes, cylinders, p, shrink, kInfinity, bounds);
+          ASSERT_LE(bounds[slot], exact) << name << " (" << kernels::name(isa) << "), leaf " << leaf
+                                         << ", p = " << toString(p);
+          // The same arithmetic but for contracted sums (AVX2, AVX-512): apart by a few
+          // roundings of the coordinates, far within the shrink.
           const double reach = std::sqrt(std::max(plain[slot], exact));
-          ASSERT_NEAR(wide[slot], plain[slot], 1e-12 * (plain[slot] + exact) + shrink * reach)
-              << name << ", leaf " << leaf;
+          ASSERT_NEAR(bounds[slot], plain[slot], 1e-12 * (plain[slot] + exact) + shrink * reach)
+              << name << " (" << kernels::name(isa) << "), leaf " << leaf;
+          double boxes8[kFanout];  // and its boxes' distances, as the children's bounds
+          pointKernels(isa).children(boxes, p, kInfinity, boxes8);
+          ASSERT_LE(boxes8[slot], exact) << name << " (" << kernels::name(isa) << "), leaf " << leaf;
+          ASSERT_NEAR(boxes8[slot], boxOnly[slot], 1e-12 * (boxOnly[slot] + exact))
+              << name << " (" << kernels::name(isa) << "), leaf " << leaf;
         }
-        if (avx2) {  // the AVX-512 operations in halves: the same bits as they give
+        if (avx2 && avx512) {  // AVX2's are AVX-512's operations in halves: the same bits
           double halves[kFanout], wide[kFanout];
-          Avx2Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, halves);
-          ASSERT_LE(halves[slot], exact)
-              << name << " (AVX2), leaf " << leaf << ", p = " << toString(p);
-          if (avx512) {
-            Avx512Bounds::leaves(boxes, cylinders, p, shrink, kInfinity, wide);
-            ASSERT_EQ(halves[slot], wide[slot]) << name << ", leaf " << leaf;
-          }
+          pointKernels(kernels::Isa::Avx2).leaves(boxes, cylinders, p, shrink, kInfinity, halves);
+          pointKernels(kernels::Isa::Avx512).leaves(boxes, cylinders, p, shrink, kInfinity, wide);
+          ASSERT_EQ(halves[slot], wide[slot]) << name << ", leaf " << leaf;
         }
-#endif
       }
     }
   }

@@ -1,59 +1,43 @@
-// The exact point–triangle kernel in lanes (exact_lanes.cpp), written once and included once per
-// ISA, inside a namespace that first defines, for that ISA: Lanes (kWidth doubles), Mask, the
-// attributes DELTA_EXACT_TARGET (helpers: the ISA's target, always inlined) and
-// DELTA_EXACT_KERNEL_TARGET, and splat, load (aligned), store (aligned), fmadd, select (mask,
-// yes, no), compare<predicate>, both (the lanes set in both masks) and bits (lane i → bit i).
-// No include guard: it is meant to be included more than once.
+// The exact point–triangle kernel in lanes (exact_lanes.h), written once and included once per
+// ISA, inside a namespace that first defines, for that ISA: Lanes (kWidth doubles), Mask, and
+// splat, load (aligned), store (aligned), fmadd, select (mask, yes, no), both (the lanes set in
+// both masks), bits (lane i → bit i) and the ordered comparisons greaterOrEqual, greater, less,
+// lessOrEqual and equal (false where a lane is NaN). No include guard: it is meant to be
+// included once per ISA.
 
 struct Vec {
   Lanes x, y, z;
 };
 
-DELTA_EXACT_TARGET inline Vec minus(const Vec& a, const Vec& b) {
+[[gnu::always_inline]] inline Vec minus(const Vec& a, const Vec& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
-DELTA_EXACT_TARGET inline Vec plus(const Vec& a, const Vec& b) {
+[[gnu::always_inline]] inline Vec plus(const Vec& a, const Vec& b) {
   return {a.x + b.x, a.y + b.y, a.z + b.z};
 }
-DELTA_EXACT_TARGET inline Vec times(const Vec& a, const Lanes& s) {
+[[gnu::always_inline]] inline Vec times(const Vec& a, const Lanes& s) {
   return {a.x * s, a.y * s, a.z * s};
 }
-DELTA_EXACT_TARGET inline Lanes dot(const Vec& a, const Vec& b) {
+[[gnu::always_inline]] inline Lanes dot(const Vec& a, const Vec& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
-DELTA_EXACT_TARGET inline Vec cross(const Vec& a, const Vec& b) {
+[[gnu::always_inline]] inline Vec cross(const Vec& a, const Vec& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 /// Kahan's a·b − c·d (robust_geometry.h's differenceOfProducts).
-DELTA_EXACT_TARGET inline Lanes differenceOfProducts(const Lanes& a, const Lanes& b, const Lanes& c,
-                                                     const Lanes& d) {
+[[gnu::always_inline]] inline Lanes differenceOfProducts(const Lanes& a, const Lanes& b,
+                                                         const Lanes& c, const Lanes& d) {
   const Lanes cd = c * d;
   const Lanes roundingOfCd = fmadd(-c, d, cd);
   return fmadd(a, b, -cd) + roundingOfCd;
 }
-DELTA_EXACT_TARGET inline Vec select(Mask mask, const Vec& yes, const Vec& no) {
+[[gnu::always_inline]] inline Vec select(Mask mask, const Vec& yes, const Vec& no) {
   return {select(mask, yes.x, no.x), select(mask, yes.y, no.y), select(mask, yes.z, no.z)};
 }
-DELTA_EXACT_TARGET inline Mask greaterOrEqual(const Lanes& a, const Lanes& b) {
-  return compare<_CMP_GE_OQ>(a, b);
-}
-DELTA_EXACT_TARGET inline Mask greater(const Lanes& a, const Lanes& b) {
-  return compare<_CMP_GT_OQ>(a, b);
-}
-DELTA_EXACT_TARGET inline Mask less(const Lanes& a, const Lanes& b) {
-  return compare<_CMP_LT_OQ>(a, b);
-}
-DELTA_EXACT_TARGET inline Mask lessOrEqual(const Lanes& a, const Lanes& b) {
-  return compare<_CMP_LE_OQ>(a, b);
-}
-DELTA_EXACT_TARGET inline Mask equal(const Lanes& a, const Lanes& b) {
-  return compare<_CMP_EQ_OQ>(a, b);
-}
-
 /// robust_geometry.h's closestOnSegment, its squared distance: s0 + t·direction, t the clamped
 /// projection parameter (0 for a zero-length segment), exactly s1 at t = 1.
-DELTA_EXACT_TARGET inline Lanes segmentDistance(const Vec& p, const Vec& s0, const Vec& s1,
-                                                const Vec& direction) {
+[[gnu::always_inline]] inline Lanes segmentDistance(const Vec& p, const Vec& s0, const Vec& s1,
+                                                    const Vec& direction) {
   const Lanes zero = splat(0.0), one = splat(1.0);
   const Lanes squaredLength = dot(direction, direction);
   const Mask long_ = greater(squaredLength, zero);
@@ -66,15 +50,14 @@ DELTA_EXACT_TARGET inline Lanes segmentDistance(const Vec& p, const Vec& s0, con
   return dot(offset, offset);
 }
 
-DELTA_EXACT_TARGET inline Lanes lengthSquared(const Vec& v) {
+[[gnu::always_inline]] inline Lanes lengthSquared(const Vec& v) {
   return dot(v, v);
 }
 
 /// closestPointOnTriangle(point, mesh.triangle(sorted[i])).distanceSquared into out[i] for
 /// i < count (1 to kWidth), in one register of lanes.
-DELTA_EXACT_KERNEL_TARGET void distances(const QueryMeshData& mesh, const Vec3& point,
-                                         const std::uint32_t* sorted, std::size_t count,
-                                         double* out) noexcept {
+inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::uint32_t* sorted,
+                      std::size_t count, double* out) noexcept {
   // The lanes' triangles (the padding repeats the first: finite, and ignored).
   alignas(64) double corner[9][kWidth];
   for (std::size_t i = 0; i < kWidth; ++i) {

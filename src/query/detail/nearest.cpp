@@ -3,317 +3,45 @@
 #include <cmath>
 #include <limits>
 
-#include "delta/kernels/detail/batch_dispatch.h"
+#include "delta/kernels/isa.h"
+#include "delta/kernels/point_triangle.h"
 #include "delta/query/winding_number.h"
 
-#include "exact_lanes.h"
-#include "node_bounds.h"
+#include "isa_list.h"  // generated: DELTA_ISAS (src/CMakeLists.txt)
+#include "point_kernels.h"
 #include "query_mesh_data.h"
 
+// Each ISA's table, in its own translation unit (query/isa/point_table.cpp).
+#define DELTA_DECLARE_TABLE(enumerator, name, lanes) \
+  namespace delta::detail::name {                    \
+  const PointKernels& pointKernels() noexcept;       \
+  }
+DELTA_ISAS(DELTA_DECLARE_TABLE)
+#undef DELTA_DECLARE_TABLE
+
 namespace delta::detail {
-namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-
-/// A node waiting on the stack: its box's distance and, in one word, its level (high half) and
-/// index. (Two 32-bit fields stored apart and loaded as one 64-bit pair stalled every pop on
-/// store forwarding: an eighth of an ε-limited query.)
-struct Pending {
-  double bound;
-  std::uint64_t node;
-
-  std::uint32_t level() const noexcept { return static_cast<std::uint32_t>(node >> 32); }
-  std::uint32_t index() const noexcept { return static_cast<std::uint32_t>(node); }
-};
-
-std::uint64_t nodeKey(std::uint32_t level, std::uint32_t index) noexcept {
-  return std::uint64_t{level} << 32 | index;
-}
-
-/// (distance², id) order: the smaller distance, or the same distance and the smaller id.
-/// Before anything is found, only a distance strictly below the limit counts.
-bool better(double distanceSquared, std::uint32_t id, const Nearest& best) noexcept {
-  return distanceSquared < best.distanceSquared ||
-         (distanceSquared == best.distanceSquared && best.found() && id < best.triangle);
-}
-
-/// What a descent reads besides the tree: the sorted triangles in single precision, the point
-/// less their origin, and the ISA's bounds of a point against a leaf's eight triangles.
-struct Leaves {
-  FloatLeavesView triangles;
-  double point[3];
-  bool (*bounds)(const FloatLeavesView&, std::size_t, const double (&)[3], double, double (&)[8],
-                 double (&)[8]) noexcept;
-  /// The exact kernel's squared distances of up to eight sorted triangles at once, bit for bit
-  /// (exact_lanes.h), where the ISA has them; null: one scalar kernel at a time.
-  void (*exact)(const QueryMeshData&, const Vec3&, const std::uint32_t*, std::size_t,
-                double*) noexcept;
-};
-
-/// Triangles held back from the exact kernel: at most this many wait at once.
-constexpr std::size_t kDeferred = 32;
-
-/// A search's state. The exact kernel, which decides every answer, runs only on triangles whose
-/// lower bound is not above the least upper bound seen (`prune`): the vector bounds give both
-/// (kernels/detail/point_lanes.h), so a leaf's triangles tighten the pruning at once and their
-/// kernels wait until the descent ends, when almost all of them have fallen behind. (Running the
-/// kernel on each leaf's candidates as it came ran it 7 times a far point; most lost later.)
-///
-/// Why the answer is still the loop over all triangles: the winner's computed distance is at
-/// most every computed distance, so at most every upper bound, so at most `prune` at any time;
-/// its lower bound and its boxes' distances are at most that distance; so no box holding it is
-/// skipped and it waits with the others, all of which the kernel decides in the end.
-struct Search {
-  Nearest best;  ///< the best the exact kernel has found (the limit before)
-  double prune;  ///< min(best, the upper bounds of the triangles seen)
-  double lower[kDeferred];
-  std::uint32_t deferred[kDeferred];  ///< sorted triangle indices
-  std::size_t count = 0;
-};
-
-/// The exact kernel on sorted triangle `k`.
-[[gnu::always_inline]] inline void exactly(const QueryMeshData& mesh, const Vec3& point,
-                                           std::size_t k, Search& search) noexcept {
-  const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, mesh.triangle(k));
-  if (better(r.distanceSquared, mesh.order[k], search.best)) {
-    search.best.distanceSquared = r.distanceSquared;
-    search.best.triangle = mesh.order[k];
-    search.best.sorted = static_cast<std::uint32_t>(k);
-    search.best.closest = r;
-    search.prune = std::min(search.prune, r.distanceSquared);
+const PointKernels& pointKernels(kernels::Isa isa) noexcept {
+  switch (kernels::supportedIsaAtMost(isa)) {
+#define DELTA_TABLE(enumerator, name, lanes) \
+  case kernels::Isa::enumerator:             \
+    return name::pointKernels();
+    DELTA_ISAS(DELTA_TABLE)
+#undef DELTA_TABLE
+    default:
+      return scalar::pointKernels();
   }
 }
-
-/// The squared distances of the waiting triangles [first, first + count) (at most eight) in one
-/// eight-lane kernel; the best of them by (distance, id), whose closest point the scalar kernel
-/// then gives (the same bits: exact_lanes.h). Where a lane is not finite (coordinates near
-/// overflow) the scalar kernel answers them all instead.
-void exactlyEight(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
-                  std::size_t first, std::size_t count, Search& search) noexcept {
-  double distances[kFanout];
-  leaves.exact(mesh, point, search.deferred + first, count, distances);
-  bool finite = true;
-  for (std::size_t i = 0; i < count; ++i)
-    finite = finite && std::isfinite(distances[i]);
-  if (!finite) {
-    for (std::size_t i = 0; i < count; ++i)
-      exactly(mesh, point, search.deferred[first + i], search);
-    return;
-  }
-  std::uint32_t winner = kNone;
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::uint32_t k = search.deferred[first + i];
-    if (better(distances[i], mesh.order[k], search.best)) {
-      search.best.distanceSquared = distances[i];
-      search.best.triangle = mesh.order[k];
-      winner = k;
-    }
-  }
-  if (winner == kNone) return;
-  search.best.sorted = winner;
-  search.best.closest = kernels::closestPointOnTriangle(point, mesh.triangle(winner));
-  search.prune = std::min(search.prune, search.best.distanceSquared);
-}
-
-/// The kernel on the waiting triangles, nearest lower bound first, until the next is farther
-/// than the best: one at a time, or, where the ISA has the eight-lane kernel and three or more
-/// wait (most often the triangles around a vertex that a far point is nearest to, whose
-/// distances tie but for rounding), eight at a time, as long as the first of the eight is not
-/// farther than the best. The answer is the same: the best by (distance, id) of more triangles,
-/// whose lower bounds are not above it. (For one or two the scalar kernel is as fast.)
-void settle(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
-            Search& search) noexcept {
-  std::size_t kept = 0;  // those still not beyond the pruning bound, in ascending order
-  for (std::size_t c = 0; c < search.count; ++c) {
-    const double lower = search.lower[c];
-    if (!(lower <= search.prune)) continue;
-    const std::uint32_t k = search.deferred[c];
-    std::size_t at = kept++;
-    for (; at > 0 && search.lower[at - 1] > lower; --at) {
-      search.lower[at] = search.lower[at - 1];
-      search.deferred[at] = search.deferred[at - 1];
-    }
-    search.lower[at] = lower;
-    search.deferred[at] = k;
-  }
-  if (leaves.exact && kept > 2) {
-    for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared);
-         c += kFanout)
-      exactlyEight(mesh, leaves, point, c, std::min(kFanout, kept - c), search);
-  } else {
-    for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared); ++c)
-      exactly(mesh, point, search.deferred[c], search);
-  }
-  search.count = 0;
-}
-
-/// The triangles of leaf `leaf`: the vector bounds of the eight tighten the pruning with their
-/// upper bounds, and those whose lower bound is not beyond it wait (Search).
-template <typename Bounds>
-[[gnu::always_inline]] inline void visitLeaf(const QueryMeshData& mesh, const Leaves& leaves,
-                                             const Vec3& point, std::size_t leaf,
-                                             Search& search) noexcept {
-  double lower[kFanout], upper[kFanout];
-  if (!leaves.bounds(leaves.triangles, leaf * kFanout, leaves.point, search.prune, lower, upper))
-    return;
-  const std::size_t count = std::min(kFanout, mesh.size() - leaf * kFanout);
-  const unsigned present = (1u << count) - 1;  // not the padding
-  for (unsigned rest = Bounds::candidates(lower, upper, present, search.prune); rest != 0;
-       rest &= rest - 1) {
-    const auto i = static_cast<std::size_t>(std::countr_zero(rest));
-    if (search.count == kDeferred) settle(mesh, leaves, point, search);
-    search.lower[search.count] = lower[i];
-    search.deferred[search.count++] = static_cast<std::uint32_t>(leaf * kFanout + i);
-  }
-}
-
-/// Asks for every cache line of `block` (a node's octet of boxes or cylinders): a child pushed now
-/// is most often popped a few visits later (W1 −1.5% on Zen 5).
-template <typename Block>
-[[gnu::always_inline]] inline void prefetchBlock(const Block* block) noexcept {
-  const char* bytes = reinterpret_cast<const char*>(block);
-  for (std::size_t line = 0; line < sizeof(Block); line += 64)
-    __builtin_prefetch(bytes + line);
-}
-
-/// The descent, inlined into one function per instruction set below: the same source, with the
-/// node bounds of `Bounds` (PlainBounds, or Avx512Bounds where AVX-512 is at hand).
-template <typename Bounds>
-[[gnu::always_inline]] inline Nearest descend(const QueryMeshData& mesh, const Leaves& leaves,
-                                              const Vec3& point, double limitSquared) noexcept {
-  Search search;
-  search.best.distanceSquared = limitSquared;
-  search.prune = limitSquared;
-  // Nearest-first, depth first: children are pushed farthest first, and every entry is checked
-  // against the pruning bound again when it is popped. A node is skipped only when its box is
-  // strictly farther than the bound, so ties still reach the smaller id.
-  constexpr std::size_t kCapacity = 16 * kFanout;  // depth ≤ 11 for 2³² triangles
-  Pending stack[kCapacity];
-  std::size_t top = 0;
-  const std::uint32_t rootLevel = static_cast<std::uint32_t>(mesh.levels.size() - 1);
-  if (rootLevel == 0) {  // one leaf
-    visitLeaf<Bounds>(mesh, leaves, point, 0, search);
-    settle(mesh, leaves, point, search);
-    return search.best;
-  }
-  stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), nodeKey(rootLevel, 0)};
-  const double shrink = cylinderShrink(mesh, point);
-  while (top > 0) {
-    const Pending entry = stack[--top];
-    if (entry.bound > search.prune) continue;
-    double bounds[kFanout];
-    const std::uint32_t first = entry.index() * static_cast<std::uint32_t>(kFanout);
-    if (entry.level() == 1) {
-      // The children are leaves: visited here, nearest first, each checked against the bound as
-      // it tightens (the order the stack gave them, without pushing and popping each).
-      for (unsigned rest =
-               Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
-                              point, shrink, search.prune, bounds);
-           rest != 0;) {
-        std::uint32_t nearest = static_cast<std::uint32_t>(std::countr_zero(rest));
-        for (unsigned more = rest & (rest - 1); more != 0; more &= more - 1) {
-          const auto i = static_cast<std::uint32_t>(std::countr_zero(more));
-          if (bounds[i] < bounds[nearest]) nearest = i;
-        }
-        if (bounds[nearest] > search.prune) break;
-        visitLeaf<Bounds>(mesh, leaves, point, first + nearest, search);
-        rest &= ~(1u << nearest);
-      }
-      continue;
-    }
-    // The children not beyond the bound (never the empty slots) go onto the stack in descending
-    // order of distance, so the nearest is popped next. The mask is made without branches: a
-    // branch per child mispredicted often enough to cost 4% of an ε-limited query.
-    const unsigned near = Bounds::children(mesh.childOctets[entry.level() - 1][entry.index()],
-                                           point, search.prune, bounds);
-    const std::size_t base = top;
-    for (unsigned rest = near; rest != 0; rest &= rest - 1) {
-      const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
-      std::size_t at = top++;
-      for (; at > base && stack[at - 1].bound < bounds[i]; --at)
-        stack[at] = stack[at - 1];
-      stack[at] = {bounds[i], nodeKey(entry.level() - 1, first + i)};
-      prefetchBlock(&mesh.childOctets[entry.level() - 2][first + i]);
-      if (entry.level() == 2) prefetchBlock(&mesh.leafCylinders[first + i]);
-    }
-  }
-  settle(mesh, leaves, point, search);
-  return search.best;
-}
-
-Nearest descendBaseline(const QueryMeshData& mesh, const Leaves& leaves, const Vec3& point,
-                        double limitSquared) noexcept {
-  return descend<PlainBounds>(mesh, leaves, point, limitSquared);
-}
-
-#if defined(DELTA_X86_ISAS)
-// The AVX2 build of the descent (an AVX2 machine: Zen 2, ARCHER2's), with the same function-level
-// target as the AVX-512 one below. (The plain loops built for AVX2 stay scalar: GCC 12 does not
-// vectorise them.)
-[[gnu::target(DELTA_AVX2_TARGET)]] Nearest descendAvx2(const QueryMeshData& mesh,
-                                                       const Leaves& leaves, const Vec3& point,
-                                                       double limitSquared) noexcept {
-  return descend<Avx2Bounds>(mesh, leaves, point, limitSquared);
-}
-
-// A function-level target (not a translation unit built with -mavx512f): every inline function
-// it calls is inlined into it or stays a baseline out-of-line copy, so no AVX-512 code can reach
-// callers on other CPUs. (The answers do not depend on the ISA: the exact kernel is the library's
-// one out-of-line closestPointOnTriangle, and bounds only decide what it skips.)
-[[gnu::target(DELTA_AVX512_TARGET)]] Nearest descendAvx512(const QueryMeshData& mesh,
-                                                           const Leaves& leaves, const Vec3& point,
-                                                           double limitSquared) noexcept {
-  return descend<Avx512Bounds>(mesh, leaves, point, limitSquared);
-}
-#endif
-
-/// The descent and leaf bounds of `isa` (lowered to a supported one).
-struct Descent {
-  Nearest (*descend)(const QueryMeshData&, const Leaves&, const Vec3&, double) noexcept;
-  decltype(Leaves::bounds) bounds;
-  decltype(Leaves::exact) exact;
-};
-
-Descent descentFor(kernels::Isa isa) noexcept {
-  const kernels::Isa supported = kernels::supportedIsaAtMost(isa);
-  Descent descent{&descendBaseline, batchKernels(supported).pointTriangleBounds, nullptr};
-#if defined(DELTA_X86_ISAS)
-  if (supported == kernels::Isa::Avx2) {
-    descent.descend = &descendAvx2;
-    descent.exact = &exactDistancesSquared8Avx2;
-  }
-  if (supported == kernels::Isa::Avx512) {
-    descent.descend = &descendAvx512;
-    descent.exact = &exactDistancesSquared8;
-  }
-#endif
-  return descent;
-}
-
-/// The descent, its limit capped at the largest finite double: an empty slot of a node (the
-/// tree is not full) lies at +∞, and only a finite limit keeps it out. (An unlimited search
-/// from a point whose every distance overflowed once walked into them, past the end of the
-/// tree: the queries now refuse such points, coordinate_range.h, and this keeps the descent
-/// inside the tree whatever it is given. A NaN limit finds nothing.)
-Nearest nearestWith(const Descent& descent, const QueryMeshData& mesh, const Vec3& point,
-                    double limitSquared) noexcept {
-  const Vec3 local = point - mesh.lanes.origin;
-  return descent.descend(
-      mesh, {mesh.lanes.view(), {local.x, local.y, local.z}, descent.bounds, descent.exact}, point,
-      std::min(limitSquared, std::numeric_limits<double>::max()));
-}
-
-}  // namespace
 
 Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point,
                         double limitSquared) noexcept {
-  static const Descent descent = descentFor(kernels::defaultIsa());
-  return nearestWith(descent, mesh, point, limitSquared);
+  static const PointKernels& table = pointKernels(kernels::defaultIsa());
+  return table.nearest(mesh, point, limitSquared);
 }
 
 Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
                         kernels::Isa isa) noexcept {
-  return nearestWith(descentFor(isa), mesh, point, limitSquared);
+  return pointKernels(isa).nearest(mesh, point, limitSquared);
 }
 
 Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,

@@ -1,10 +1,11 @@
 #pragma once
 
-// The point queries' node bounds (query_mesh_data.h's boxes and leaf cylinders), in two builds of
-// the same arithmetic: plain loops for any ISA, and AVX-512 registers of eight lanes for the
-// descent's AVX-512 build (nearest.cpp). Each is a lower bound of the squared distance from the
-// point to every triangle below the node, as computed by the exact kernel; tests compare both
-// with it.
+// The point queries' node bounds (query_mesh_data.h's boxes and leaf cylinders), in builds of
+// the same arithmetic: plain loops for any ISA, and registers of eight lanes (AVX-512) or two of
+// four (AVX2) where the translation unit is compiled for them (the point tables,
+// query/isa/point_table.cpp). Each is a lower bound of the squared distance from the point to
+// every triangle below the node, as computed by the exact kernel; tests compare every ISA's with
+// it (through the tables).
 
 #include <algorithm>
 #include <bit>
@@ -14,21 +15,12 @@
 
 #include "query_mesh_data.h"
 
-#if defined(DELTA_X86_ISAS)
-// GCC 12 warns of the undefined pass-through registers inside its own AVX-512 intrinsics.
-#if defined(__clang__)
-#include <immintrin.h>
-#else
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#include <immintrin.h>
-#pragma GCC diagnostic pop
+#if defined(__AVX2__) && defined(__FMA__)
+#define DELTA_NODE_BOUNDS_AVX2
+#if defined(__AVX512F__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
+#define DELTA_NODE_BOUNDS_AVX512
 #endif
-/// The function-level target of the AVX-512 builds (no AVX-512 code reaches other callers).
-#define DELTA_AVX512_TARGET "avx512f,avx512dq,avx512vl,avx2,fma"
-/// The function-level target of the AVX2 builds.
-#define DELTA_AVX2_TARGET "avx2,fma"
+#include "intrinsics.h"
 #endif
 
 namespace delta::detail {
@@ -68,17 +60,16 @@ struct PlainBounds {
   }
 };
 
-#if defined(DELTA_X86_ISAS)
+#if defined(DELTA_NODE_BOUNDS_AVX512)
 
 /// The same bounds, each in one eight-lane register: GCC 12 made the plain loops two halves of
 /// four lanes, with a compare and a blend for each maximum. The same operations but for the
 /// contraction of the sums of squares (a distance one rounding closer; the slack covers it).
 struct Avx512Bounds {
-  [[gnu::target(DELTA_AVX512_TARGET)]] static __m512d widened(const float (&values)[kFanout]) {
+  static __m512d widened(const float (&values)[kFanout]) {
     return _mm512_cvtps_pd(_mm256_load_ps(values));
   }
-  [[gnu::target(DELTA_AVX512_TARGET)]] static __m512d boxes(const BoxOctet& boxes,
-                                                            const Vec3& point) {
+  static __m512d boxes(const BoxOctet& boxes, const Vec3& point) {
     const __m512d zero = _mm512_setzero_pd();
     const __m512d px = _mm512_set1_pd(point.x), py = _mm512_set1_pd(point.y),
                   pz = _mm512_set1_pd(point.z);
@@ -94,22 +85,17 @@ struct Avx512Bounds {
                                      zero);
     return _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
   }
-  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned notAbove(__m512d bounds, double prune,
-                                                                double (&out)[kFanout]) {
+  static unsigned notAbove(__m512d bounds, double prune, double (&out)[kFanout]) {
     _mm512_storeu_pd(out, bounds);
     return _mm512_cmp_pd_mask(bounds, _mm512_set1_pd(prune), _CMP_LE_OQ);
   }
-  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned children(const BoxOctet& octet,
-                                                                const Vec3& point, double prune,
-                                                                double (&out)[kFanout]) noexcept {
+  static unsigned children(const BoxOctet& octet, const Vec3& point, double prune,
+                           double (&out)[kFanout]) noexcept {
     return notAbove(boxes(octet, point), prune, out);
   }
   /// raiseByCylinders (query_mesh_data.h), lane for lane.
-  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned leaves(const BoxOctet& octet,
-                                                              const CylinderOctet& cylinders,
-                                                              const Vec3& point, double shrink,
-                                                              double prune,
-                                                              double (&out)[kFanout]) noexcept {
+  static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
+                         double shrink, double prune, double (&out)[kFanout]) noexcept {
     const __m512d box = boxes(octet, point);
     const __m512d half = _mm512_set1_pd(0.5), zero = _mm512_setzero_pd(),
                   by = _mm512_set1_pd(shrink);
@@ -144,10 +130,8 @@ struct Avx512Bounds {
         _mm512_fmadd_pd(_mm512_mul_pd(height, height), inverse, _mm512_mul_pd(across, across));
     return notAbove(_mm512_max_pd(cylinder, box), prune, out);  // the box where it is NaN
   }
-  [[gnu::target(DELTA_AVX512_TARGET)]] static unsigned candidates(double (&lower)[kFanout],
-                                                                  const double (&upper)[kFanout],
-                                                                  unsigned present,
-                                                                  double& prune) noexcept {
+  static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
+                             unsigned present, double& prune) noexcept {
     const __m512d above = _mm512_loadu_pd(upper);
     const __mmask8 below = _mm512_mask_cmp_pd_mask(static_cast<__mmask8>(present), above,
                                                    _mm512_set1_pd(prune), _CMP_LT_OQ);
@@ -156,18 +140,19 @@ struct Avx512Bounds {
            present;
   }
 };
+#endif
 
+#if defined(DELTA_NODE_BOUNDS_AVX2)
 /// The same bounds on AVX2: each of Avx512Bounds' eight-lane operations as two registers of four
 /// lanes (lanes 0–3, then 4–7), the same operations in the same order, so the same bounds.
 struct Avx2Bounds {
   /// Lanes H to H + 3 of `values`, widened.
   template <std::size_t H>
-  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d widened(const float (&values)[kFanout]) {
+  static __m256d widened(const float (&values)[kFanout]) {
     return _mm256_cvtps_pd(_mm_load_ps(values + H));
   }
   template <std::size_t H>
-  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d boxes(const BoxOctet& boxes,
-                                                          const Vec3& point) {
+  static __m256d boxes(const BoxOctet& boxes, const Vec3& point) {
     const __m256d zero = _mm256_setzero_pd();
     const __m256d px = _mm256_set1_pd(point.x), py = _mm256_set1_pd(point.y),
                   pz = _mm256_set1_pd(point.z);
@@ -183,25 +168,21 @@ struct Avx2Bounds {
     return _mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz)));
   }
   /// Stores both halves in `out`; the mask of the lanes not above `prune`.
-  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned notAbove(__m256d low, __m256d high,
-                                                              double prune,
-                                                              double (&out)[kFanout]) {
+  static unsigned notAbove(__m256d low, __m256d high, double prune, double (&out)[kFanout]) {
     _mm256_storeu_pd(out, low);
     _mm256_storeu_pd(out + 4, high);
     const __m256d limit = _mm256_set1_pd(prune);
     return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(low, limit, _CMP_LE_OQ))) |
            static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(high, limit, _CMP_LE_OQ))) << 4;
   }
-  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned children(const BoxOctet& octet,
-                                                              const Vec3& point, double prune,
-                                                              double (&out)[kFanout]) noexcept {
+  static unsigned children(const BoxOctet& octet, const Vec3& point, double prune,
+                           double (&out)[kFanout]) noexcept {
     return notAbove(boxes<0>(octet, point), boxes<4>(octet, point), prune, out);
   }
   /// Avx512Bounds::leaves of lanes H to H + 3.
   template <std::size_t H>
-  [[gnu::target(DELTA_AVX2_TARGET)]] static __m256d leafBounds(const BoxOctet& octet,
-                                                               const CylinderOctet& cylinders,
-                                                               const Vec3& point, double shrink) {
+  static __m256d leafBounds(const BoxOctet& octet, const CylinderOctet& cylinders,
+                            const Vec3& point, double shrink) {
     const __m256d box = boxes<H>(octet, point);
     const __m256d half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(),
                   by = _mm256_set1_pd(shrink);
@@ -236,18 +217,13 @@ struct Avx2Bounds {
         _mm256_fmadd_pd(_mm256_mul_pd(height, height), inverse, _mm256_mul_pd(across, across));
     return _mm256_max_pd(cylinder, box);  // the box where it is NaN
   }
-  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned leaves(const BoxOctet& octet,
-                                                            const CylinderOctet& cylinders,
-                                                            const Vec3& point, double shrink,
-                                                            double prune,
-                                                            double (&out)[kFanout]) noexcept {
+  static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
+                         double shrink, double prune, double (&out)[kFanout]) noexcept {
     return notAbove(leafBounds<0>(octet, cylinders, point, shrink),
                     leafBounds<4>(octet, cylinders, point, shrink), prune, out);
   }
-  [[gnu::target(DELTA_AVX2_TARGET)]] static unsigned candidates(double (&lower)[kFanout],
-                                                                const double (&upper)[kFanout],
-                                                                unsigned present,
-                                                                double& prune) noexcept {
+  static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
+                             unsigned present, double& prune) noexcept {
     const __m256d limit = _mm256_set1_pd(prune);
     unsigned below =
         static_cast<unsigned>(

@@ -68,11 +68,4 @@ struct BatchKernels {
                               double (&upper)[8]) noexcept;
 };
 
-/// The tables, one per translation unit compiled with that ISA's flags. Only call one whose ISA
-/// the CPU supports (delta::kernels::isSupported).
-const BatchKernels& scalarBatchKernels() noexcept;
-const BatchKernels& sse2BatchKernels() noexcept;
-const BatchKernels& avx2BatchKernels() noexcept;
-const BatchKernels& avx512BatchKernels() noexcept;
-
 }  // namespace delta::detail
