@@ -2,7 +2,8 @@
 # The whole test suite: set up (scripts/setup.sh); every test built with AddressSanitizer +
 # UndefinedBehaviorSanitizer; the readers Δ owns fuzzed (scripts/fuzz.sh, clang's libFuzzer under
 # ASan + UBSan, 15 s a reader); the threaded tests built with ThreadSanitizer (clang, LLVM
-# OpenMP); the library installed and the packages checked as users get them
+# OpenMP); the kernels' and queries' tests cross-built for AArch64 and run under qemu-user
+# (scripts/test_aarch64.sh: the NEON and SVE tables); the library installed and the packages checked as users get them
 # (scripts/test_packages.sh: CMake and pkg-config consumers of the static and shared library, the
 # wheel in a fresh venv), the immersed-boundary example built against the install and run; then
 # every test in the Release build (its ctest summary is the closing line CI reads). Fails on the
@@ -27,6 +28,9 @@ CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebIn
   -DDELTA_SANITIZE=thread -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \
   ctest -j"$jobs" -R "Thread|ParallelFor" --no-tests=error --output-on-failure)
+
+echo "== AArch64 (Debian's cross toolchain, tests under qemu-user): the kernels' and queries' tests"
+scripts/test_aarch64.sh build-aarch64
 
 echo "== install: the packages as users get them, and the examples against the installed copy"
 scripts/setup.sh build

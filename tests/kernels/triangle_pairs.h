@@ -90,8 +90,9 @@ inline const char* name(PairFamily family) {
   return "?";
 }
 
-/// True in builds much slower than an optimised one (sanitizers, or no optimisation): the
-/// randomised tests then run fewer pairs, `scaledCount(n)`, to stay within a few minutes.
+/// True in builds much slower than an optimised one (sanitizers, an emulator such as qemu, or no
+/// optimisation): the randomised tests then run fewer pairs, `scaledCount(n)`, to stay within a
+/// few minutes.
 // GCC defines __SANITIZE_*__; clang (the TSan build) answers __has_feature instead.
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
@@ -99,7 +100,7 @@ inline const char* name(PairFamily family) {
 #endif
 #endif
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || \
-    defined(DELTA_TESTS_SANITIZED) || !defined(__OPTIMIZE__)
+    defined(DELTA_TESTS_SANITIZED) || defined(DELTA_TESTS_EMULATED) || !defined(__OPTIMIZE__)
 inline constexpr bool kSlowBuild = true;
 #else
 inline constexpr bool kSlowBuild = false;

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The kernels' and queries' tests on AArch64, on this x86-64 machine: Debian's cross toolchain
+# builds Δ for arm64 (with its NEON and SVE tables) against Debian's arm64 libraries (multiarch),
+# and qemu-user runs the tests (its CPU has SVE, so the tests that run every supported ISA take
+# NEON's and SVE's paths, and the default is SVE). Idempotent; needs the meshes scripts/setup.sh
+# unpacks. Called by scripts/test.sh.
+#   scripts/test_aarch64.sh [BUILD_DIR]   (default BUILD_DIR: build-aarch64)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  g++-aarch64-linux-gnu qemu-user
+  libassimp-dev:arm64 libqhull-dev:arm64 zlib1g-dev:arm64 libgtest-dev:arm64 libcgal-dev:arm64
+)
+missing=()
+for package in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+    missing+=("$package")
+done
+if ((${#missing[@]})); then
+  echo "test_aarch64: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  dpkg --print-foreign-architectures | grep -qx arm64 || dpkg --add-architecture arm64
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build=${1:-build-aarch64}
+cmake -S . -B "$build" -G Ninja -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake \
+  -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DDELTA_BUILD_BENCH=OFF \
+  -DDELTA_BUILD_APPS=OFF -DDELTA_BUILD_PYTHON=OFF -DDELTA_WITH_MPI=OFF \
+  "-DDELTA_TEST_LAYERS=kernels;query" >/dev/null
+cmake --build "$build"
+# Every kernels' and queries' test but the slowest whole-algorithm checks on real meshes whose
+# arithmetic is the scalar code's (the same on both architectures, -ffp-contract=off): thread
+# counts, tie rules and winding-number signs, which the native builds run in full. (Under qemu
+# they took 250 of the 600 test-seconds.)
+(cd "$build" && ctest -j"$(nproc)" --output-on-failure --no-tests=error -E \
+  'WindingSign[.]|TieRule[.]|OneAndTwoThreads|AnyThreadCount|SignedAgreesWithTheWindingNumber|ASmallParticleOnALargeMesh|WhateverTheTriangleOrder')
