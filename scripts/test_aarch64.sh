@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The kernels' and queries' tests on AArch64, on this x86-64 machine: Debian's cross toolchain
 # builds Δ for arm64 (with its NEON and SVE tables) against Debian's arm64 libraries (multiarch),
-# and qemu-user runs the tests (its CPU has SVE, so the tests that run every supported ISA take
-# NEON's and SVE's paths, and the default is SVE). Idempotent; needs the meshes scripts/setup.sh
+# and qemu-user runs the tests (its default CPU has SVE, so the tests that run every supported ISA
+# take NEON's and SVE's paths, and the default is SVE; then the dispatch tests on a CPU without). Idempotent; needs the meshes scripts/setup.sh
 # unpacks. Called by scripts/test.sh.
 #   scripts/test_aarch64.sh [BUILD_DIR]   (default BUILD_DIR: build-aarch64)
 set -euo pipefail
@@ -37,3 +37,7 @@ cmake --build "$build"
 # they took 250 of the 600 test-seconds.)
 (cd "$build" && ctest -j"$(nproc)" --output-on-failure --no-tests=error -E \
   'WindingSign[.]|TieRule[.]|OneAndTwoThreads|AnyThreadCount|SignedAgreesWithTheWindingNumber|ASmallParticleOnALargeMesh|WhateverTheTriangleOrder')
+# And the dispatch on a CPU without SVE (a Cortex-A72, as in many Arm clusters): NEON is the
+# widest, and no SVE instruction is reached.
+(cd "$build" && QEMU_CPU=cortex-a72 ctest -j"$(nproc)" --output-on-failure --no-tests=error \
+  -R 'KernelDispatch|ExactLanes|NearestDescent|LeafCylinder|PointLanes')
