@@ -789,241 +789,317 @@ bool chainContains(const std::vector<Element>& elements, const std::vector<std::
 /// segments, and its edges' parts between the corners inside and the crossings, in order along
 /// each edge), split into connected cycles; a cycle that runs clockwise inside the triangle (a
 /// hole) joins the face around it. Appends them to `faces`, sets the segments' faces, and adds to
-/// `joins` the pairs of faces that share a part of an edge.
-void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
-                std::vector<std::pair<std::size_t, std::size_t>>& joins) {
-  const bool ofA = side.isA();
-  const std::vector<Piece>& pieces = side.pieces();
-  const std::vector<EdgeCrossing>& crossings = side.crossings();
-  const std::size_t count = pieces.size();
-  // Crossings and segments grouped by piece.
-  std::vector<std::uint32_t>& crossingStart = recycled<std::uint32_t, 1>();
-  std::vector<std::uint32_t>& segmentStart = recycled<std::uint32_t, 2>();
-  crossingStart.assign(count + 1, 0);
-  segmentStart.assign(count + 1, 0);
-  for (const EdgeCrossing& c : crossings)
-    ++crossingStart[static_cast<std::size_t>(c.piece) + 1];
-  const auto pieceOf = [&](const Segment& segment) {
-    return static_cast<std::size_t>(ofA ? segment.pieceA : segment.pieceB);
-  };
-  for (const Segment& segment : query.segments)
-    ++segmentStart[pieceOf(segment) + 1];
-  std::partial_sum(crossingStart.begin(), crossingStart.end(), crossingStart.begin());
-  std::partial_sum(segmentStart.begin(), segmentStart.end(), segmentStart.begin());
-  std::vector<std::uint32_t>& crossingOrder = recycled<std::uint32_t, 3>();
-  std::vector<std::uint32_t>& segmentOrder = recycled<std::uint32_t, 4>();
-  crossingOrder.resize(crossings.size());
-  segmentOrder.resize(query.segments.size());
-  {
-    std::vector<std::uint32_t>& fill = recycled<std::uint32_t, 5>();
-    fill.assign(crossingStart.begin(), crossingStart.end() - 1);
-    for (std::size_t c = 0; c < crossings.size(); ++c)
-      crossingOrder[fill[static_cast<std::size_t>(crossings[c].piece)]++] =
-          static_cast<std::uint32_t>(c);
-    fill.assign(segmentStart.begin(), segmentStart.end() - 1);
-    for (std::size_t s = 0; s < query.segments.size(); ++s)
-      segmentOrder[fill[pieceOf(query.segments[s])]++] = static_cast<std::uint32_t>(s);
+/// `joins` the pairs of faces that share a part of an edge. In phases: the crossings and
+/// segments grouped by piece; then, piece by piece, its chain's elements, a face per cycle, the
+/// holes joined, the faces handed over; last, the faces on either side of each edge joined.
+class FaceBuilder {
+ public:
+  FaceBuilder(Side& side, Query& query, std::vector<Face>& faces,
+              std::vector<std::pair<std::size_t, std::size_t>>& joins)
+      : side_(side),
+        query_(query),
+        faces_(faces),
+        joins_(joins),
+        ofA_(side.isA()),
+        pieces_(side.pieces()),
+        crossings_(side.crossings()),
+        count_(pieces_.size()) {}
+
+  void run() {
+    groupByPiece();
+    intervalStart_.resize(3 * count_ + 1);
+    for (std::size_t p = 0; p < count_; ++p) {
+      if (wholeInside(p)) {
+        addWhole(p);
+        continue;
+      }
+      collectElements(p);
+      facesOfCycles(p);
+      if (local_.size() > 1) joinHoles(p);
+      handOver(p);
+    }
+    intervalStart_[3 * count_] = static_cast<std::uint32_t>(intervalFaces_.size());
+    joinAcrossEdges();
   }
 
-  // Per piece and edge, the faces of the edge's inside intervals in order along it: the triangle
-  // across the edge sees the same intervals in the opposite order, and their faces join.
-  std::vector<std::uint32_t>& intervalStart = recycled<std::uint32_t, 6>();
-  std::vector<std::size_t>& intervalFaces = recycled<std::size_t, 5>();
-  intervalStart.resize(3 * count + 1);
-  std::vector<EndKey>& nodes = recycled<EndKey, 0>();
-  std::vector<Element>& elements = recycled<Element, 0>();
-  std::vector<const EdgeCrossing*>& along = recycled<const EdgeCrossing*, 0>();
-  std::vector<std::size_t>& faceOfRoot = recycled<std::size_t, 1>();
-  std::vector<std::size_t>& faceOf = recycled<std::size_t, 2>();
-  std::vector<Face>& local = recycled<Face, 1>();
-  std::vector<char>& touchesEdge = recycled<char, 0>();
-  UnionFind cycles;
-  const auto inconsistent = [] {
+ private:
+  [[noreturn]] static void inconsistent() {
     throw Error("overlap: a triangle's crossings along an edge do not alternate (internal error)");
-  };
-  for (std::size_t p = 0; p < count; ++p) {
-    const std::uint32_t sorted = pieces[p].sorted;
-    const PlacedTriangle& t = side.triangle(sorted);
-    if (crossingStart[p] == crossingStart[p + 1] && segmentStart[p] == segmentStart[p + 1] &&
-        side.state(t.slots[0]).inside == 1 && side.state(t.slots[1]).inside == 1 &&
-        side.state(t.slots[2]).inside == 1) {
-      // Wholly inside (most triangles of a deep overlap): one face, its whole boundary, one
-      // interval an edge.
-      Face whole{{}, ofA};
-      whole.integrals.add(t.local[0], t.local[1], t.local[2]);
-      for (std::size_t i = 0; i < 3; ++i) {
-        intervalStart[3 * p + i] = static_cast<std::uint32_t>(intervalFaces.size());
-        intervalFaces.push_back(faces.size());
-      }
-      faces.push_back(whole);
-      continue;
+  }
+
+  std::size_t pieceOf(const Segment& segment) const noexcept {
+    return static_cast<std::size_t>(ofA_ ? segment.pieceA : segment.pieceB);
+  }
+
+  /// Phase 1: the crossings and the segments in order of their pieces (counting sorts).
+  void groupByPiece() {
+    crossingStart_.assign(count_ + 1, 0);
+    segmentStart_.assign(count_ + 1, 0);
+    for (const EdgeCrossing& c : crossings_)
+      ++crossingStart_[static_cast<std::size_t>(c.piece) + 1];
+    for (const Segment& segment : query_.segments)
+      ++segmentStart_[pieceOf(segment) + 1];
+    std::partial_sum(crossingStart_.begin(), crossingStart_.end(), crossingStart_.begin());
+    std::partial_sum(segmentStart_.begin(), segmentStart_.end(), segmentStart_.begin());
+    crossingOrder_.resize(crossings_.size());
+    segmentOrder_.resize(query_.segments.size());
+    std::vector<std::uint32_t>& fill = recycled<std::uint32_t, 5>();
+    fill.assign(crossingStart_.begin(), crossingStart_.end() - 1);
+    for (std::size_t c = 0; c < crossings_.size(); ++c)
+      crossingOrder_[fill[static_cast<std::size_t>(crossings_[c].piece)]++] =
+          static_cast<std::uint32_t>(c);
+    fill.assign(segmentStart_.begin(), segmentStart_.end() - 1);
+    for (std::size_t s = 0; s < query_.segments.size(); ++s)
+      segmentOrder_[fill[pieceOf(query_.segments[s])]++] = static_cast<std::uint32_t>(s);
+  }
+
+  /// Whether piece `p` lies wholly inside (most triangles of a deep overlap): no crossing, no
+  /// segment, every corner inside.
+  bool wholeInside(std::size_t p) const {
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    return crossingStart_[p] == crossingStart_[p + 1] && segmentStart_[p] == segmentStart_[p + 1] &&
+           side_.state(t.slots[0]).inside == 1 && side_.state(t.slots[1]).inside == 1 &&
+           side_.state(t.slots[2]).inside == 1;
+  }
+
+  /// A whole piece: one face, its whole boundary, one interval an edge.
+  void addWhole(std::size_t p) {
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    Face whole{{}, ofA_};
+    whole.integrals.add(t.local[0], t.local[1], t.local[2]);
+    for (std::size_t i = 0; i < 3; ++i) {
+      intervalStart_[3 * p + i] = static_cast<std::uint32_t>(intervalFaces_.size());
+      intervalFaces_.push_back(faces_.size());
     }
-    nodes.clear();
-    elements.clear();
-    const auto node = [&](const EndKey& key) {
-      for (std::size_t n = 0; n < nodes.size(); ++n)
-        if (nodes[n] == key) return n;
-      nodes.push_back(key);
-      return nodes.size() - 1;
-    };
-    for (std::uint32_t k = segmentStart[p]; k < segmentStart[p + 1]; ++k) {
-      const Segment& segment = query.segments[segmentOrder[k]];
-      if (ofA)
-        elements.push_back({node(segment.startKey), node(segment.endKey), segment.start,
-                            segment.end, segmentOrder[k]});
+    faces_.push_back(whole);
+  }
+
+  /// The node of `key` in the piece's chain (added where new).
+  std::size_t node(const EndKey& key) {
+    for (std::size_t n = 0; n < nodes_.size(); ++n)
+      if (nodes_[n] == key) return n;
+    nodes_.push_back(key);
+    return nodes_.size() - 1;
+  }
+
+  /// Phase 2: the elements of piece `p`'s chain: its segments (oriented as the piece's side
+  /// sees them), then along each edge in order the parts inside, between the corners inside and
+  /// the crossings.
+  void collectElements(std::size_t p) {
+    const std::uint32_t sorted = pieces_[p].sorted;
+    const PlacedTriangle& t = side_.triangle(sorted);
+    nodes_.clear();
+    elements_.clear();
+    for (std::uint32_t k = segmentStart_[p]; k < segmentStart_[p + 1]; ++k) {
+      const Segment& segment = query_.segments[segmentOrder_[k]];
+      if (ofA_)
+        elements_.push_back({node(segment.startKey), node(segment.endKey), segment.start,
+                             segment.end, segmentOrder_[k]});
       else
-        elements.push_back({node(segment.endKey), node(segment.startKey), segment.end,
-                            segment.start, segmentOrder[k]});
+        elements_.push_back({node(segment.endKey), node(segment.startKey), segment.end,
+                             segment.start, segmentOrder_[k]});
     }
     for (std::size_t i = 0; i < 3; ++i) {
       const std::size_t i1 = (i + 1) % 3;
-      along.clear();
-      for (std::uint32_t k = crossingStart[p]; k < crossingStart[p + 1]; ++k)
-        if (crossings[crossingOrder[k]].edge == i) along.push_back(&crossings[crossingOrder[k]]);
-      std::sort(along.begin(), along.end(),
-                [](const EdgeCrossing* x, const EdgeCrossing* y) { return x->lambda < y->lambda; });
-      int inside = side.state(t.slots[i]).inside;
-      // Crossings closer than their rounding may come out of order: within such a cluster, take
-      // the one that keeps inside/outside alternating.
-      for (std::size_t k = 0; k < along.size(); ++k) {
-        if (inside + along[k]->sigma == 0 || inside + along[k]->sigma == 1) {
-          inside += along[k]->sigma;
-          continue;
-        }
-        std::size_t swap = k + 1;
-        while (swap < along.size() && along[swap]->lambda - along[k]->lambda < 0x1p-30 &&
-               along[swap]->sigma == along[k]->sigma)
-          ++swap;
-        if (swap == along.size() || along[swap]->lambda - along[k]->lambda >= 0x1p-30)
-          inconsistent();
-        std::rotate(along.begin() + static_cast<std::ptrdiff_t>(k),
-                    along.begin() + static_cast<std::ptrdiff_t>(swap),
-                    along.begin() + static_cast<std::ptrdiff_t>(swap) + 1);
-        inside += along[k]->sigma;
-      }
-      inside = side.state(t.slots[i]).inside;
-      EndKey previous = vertexKey(side.corner(sorted, i));
+      sortAlongEdge(p, i);
+      int inside = side_.state(t.slots[i]).inside;
+      EndKey previous = vertexKey(side_.corner(sorted, i));
       Vec3 previousPoint = t.local[i];
-      for (const EdgeCrossing* c : along) {
+      for (const EdgeCrossing* c : along_) {
         if (inside == 1)
-          elements.push_back(
+          elements_.push_back(
               {node(previous), node(c->key), previousPoint, c->point, kNoSegment, i});
         inside += c->sigma;
         previous = c->key;
         previousPoint = c->point;
       }
-      if (inside != side.state(t.slots[i1]).inside) inconsistent();
+      if (inside != side_.state(t.slots[i1]).inside) inconsistent();
       if (inside == 1)
-        elements.push_back({node(previous), node(vertexKey(side.corner(sorted, i1))), previousPoint,
-                            t.local[i1], kNoSegment, i});
+        elements_.push_back({node(previous), node(vertexKey(side_.corner(sorted, i1))),
+                             previousPoint, t.local[i1], kNoSegment, i});
     }
-    // The cycles, and a face per cycle.
-    cycles.reset(nodes.size());
-    for (const Element& e : elements)
-      cycles.join(e.from, e.to);
-    faceOfRoot.assign(nodes.size(), kNoSegment);
-    faceOf.resize(elements.size());
-    local.clear();
-    touchesEdge.clear();
-    for (std::size_t e = 0; e < elements.size(); ++e) {
-      const std::size_t root = cycles.find(elements[e].from);
-      if (faceOfRoot[root] == kNoSegment) {
-        faceOfRoot[root] = local.size();
-        local.push_back({{}, ofA});
-        touchesEdge.push_back(false);
+  }
+
+  /// The crossings of piece `p`'s edge `i` into `along_`, in order along it. Crossings closer
+  /// than their rounding may come out of order: within such a cluster, the one that keeps
+  /// inside/outside alternating is taken.
+  void sortAlongEdge(std::size_t p, std::size_t i) {
+    along_.clear();
+    for (std::uint32_t k = crossingStart_[p]; k < crossingStart_[p + 1]; ++k)
+      if (crossings_[crossingOrder_[k]].edge == i) along_.push_back(&crossings_[crossingOrder_[k]]);
+    std::sort(along_.begin(), along_.end(),
+              [](const EdgeCrossing* x, const EdgeCrossing* y) { return x->lambda < y->lambda; });
+    int inside = side_.state(side_.triangle(pieces_[p].sorted).slots[i]).inside;
+    for (std::size_t k = 0; k < along_.size(); ++k) {
+      if (inside + along_[k]->sigma == 0 || inside + along_[k]->sigma == 1) {
+        inside += along_[k]->sigma;
+        continue;
       }
-      faceOf[e] = faceOfRoot[root];
-      local[faceOf[e]].integrals.add(t.local[0], elements[e].p, elements[e].q);
-      if (elements[e].segment == kNoSegment) touchesEdge[faceOf[e]] = true;
+      std::size_t swap = k + 1;
+      while (swap < along_.size() && along_[swap]->lambda - along_[k]->lambda < 0x1p-30 &&
+             along_[swap]->sigma == along_[k]->sigma)
+        ++swap;
+      if (swap == along_.size() || along_[swap]->lambda - along_[k]->lambda >= 0x1p-30)
+        inconsistent();
+      std::rotate(along_.begin() + static_cast<std::ptrdiff_t>(k),
+                  along_.begin() + static_cast<std::ptrdiff_t>(swap),
+                  along_.begin() + static_cast<std::ptrdiff_t>(swap) + 1);
+      inside += along_[k]->sigma;
     }
-    // Holes (cycles inside the triangle that run clockwise) join the face around them.
-    if (local.size() > 1) {
-      const Vec3 normal = cross(t.local[1] - t.local[0], t.local[2] - t.local[0]);
-      std::size_t axis = 0;
-      for (std::size_t k = 1; k < 3; ++k)
-        if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
-      std::vector<std::size_t>& target = recycled<std::size_t, 3>();
-      target.resize(local.size());
-      std::iota(target.begin(), target.end(), std::size_t{0});
-      for (std::size_t h = 0; h < local.size(); ++h) {
-        if (touchesEdge[h] || !(dot(local[h].integrals.area, normal) < 0.0)) continue;
-        Vec3 point;
-        for (std::size_t e = 0; e < elements.size(); ++e)
-          if (faceOf[e] == h) {
-            point = elements[e].p;
-            break;
-          }
-        std::size_t best = kNoSegment;
-        double bestArea = std::numeric_limits<double>::infinity();
-        for (std::size_t f = 0; f < local.size(); ++f) {
-          const double area = dot(local[f].integrals.area, normal);
-          if (f == h || !(area > 0.0) || !(area < bestArea)) continue;
-          if (!chainContains(elements, faceOf, f, point, axis)) continue;
-          best = f;
-          bestArea = area;
+  }
+
+  /// Phase 3: the chain's cycles, a face per cycle (`local_`, `faceOf_` of each element), and
+  /// which faces touch the triangle's edges.
+  void facesOfCycles(std::size_t p) {
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    cycles_.reset(nodes_.size());
+    for (const Element& e : elements_)
+      cycles_.join(e.from, e.to);
+    faceOfRoot_.assign(nodes_.size(), kNoSegment);
+    faceOf_.resize(elements_.size());
+    local_.clear();
+    touchesEdge_.clear();
+    for (std::size_t e = 0; e < elements_.size(); ++e) {
+      const std::size_t root = cycles_.find(elements_[e].from);
+      if (faceOfRoot_[root] == kNoSegment) {
+        faceOfRoot_[root] = local_.size();
+        local_.push_back({{}, ofA_});
+        touchesEdge_.push_back(false);
+      }
+      faceOf_[e] = faceOfRoot_[root];
+      local_[faceOf_[e]].integrals.add(t.local[0], elements_[e].p, elements_[e].q);
+      if (elements_[e].segment == kNoSegment) touchesEdge_[faceOf_[e]] = true;
+    }
+  }
+
+  /// Phase 4: the holes (cycles inside the triangle that run clockwise) join the smallest face
+  /// around them.
+  void joinHoles(std::size_t p) {
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    const Vec3 normal = cross(t.local[1] - t.local[0], t.local[2] - t.local[0]);
+    std::size_t axis = 0;
+    for (std::size_t k = 1; k < 3; ++k)
+      if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
+    std::vector<std::size_t>& target = recycled<std::size_t, 3>();
+    target.resize(local_.size());
+    std::iota(target.begin(), target.end(), std::size_t{0});
+    for (std::size_t h = 0; h < local_.size(); ++h) {
+      if (touchesEdge_[h] || !(dot(local_[h].integrals.area, normal) < 0.0)) continue;
+      Vec3 point;
+      for (std::size_t e = 0; e < elements_.size(); ++e)
+        if (faceOf_[e] == h) {
+          point = elements_[e].p;
+          break;
         }
-        if (best != kNoSegment) target[h] = best;
+      std::size_t best = kNoSegment;
+      double bestArea = std::numeric_limits<double>::infinity();
+      for (std::size_t f = 0; f < local_.size(); ++f) {
+        const double area = dot(local_[f].integrals.area, normal);
+        if (f == h || !(area > 0.0) || !(area < bestArea)) continue;
+        if (!chainContains(elements_, faceOf_, f, point, axis)) continue;
+        best = f;
+        bestArea = area;
       }
-      for (std::size_t h = 0; h < local.size(); ++h)
-        if (target[h] != h) local[target[h]].integrals.add(local[h].integrals);
-      for (std::size_t& f : faceOf)
-        f = target[f];
+      if (best != kNoSegment) target[h] = best;
     }
-    // Into the query's faces; the segments learn theirs, the edge parts join their twins.
+    for (std::size_t h = 0; h < local_.size(); ++h)
+      if (target[h] != h) local_[target[h]].integrals.add(local_[h].integrals);
+    for (std::size_t& f : faceOf_)
+      f = target[f];
+  }
+
+  /// Phase 5: the piece's faces (those still holding an element) into the query's; each segment
+  /// learns its face, and each part of an edge is recorded, in order along its edge.
+  void handOver(std::size_t p) {
     std::vector<std::size_t>& global = recycled<std::size_t, 4>();
-    global.assign(local.size(), kNoSegment);
-    for (std::size_t f = 0; f < local.size(); ++f) {
+    global.assign(local_.size(), kNoSegment);
+    for (std::size_t f = 0; f < local_.size(); ++f) {
       bool used = false;
-      for (const std::size_t g : faceOf)
+      for (const std::size_t g : faceOf_)
         used |= g == f;
       if (!used) continue;
-      global[f] = faces.size();
-      faces.push_back(local[f]);
+      global[f] = faces_.size();
+      faces_.push_back(local_[f]);
     }
     std::size_t edge = 0;
-    intervalStart[3 * p] = static_cast<std::uint32_t>(intervalFaces.size());
-    for (std::size_t e = 0; e < elements.size(); ++e) {
-      const std::size_t face = global[faceOf[e]];
-      const Element& element = elements[e];
+    intervalStart_[3 * p] = static_cast<std::uint32_t>(intervalFaces_.size());
+    for (std::size_t e = 0; e < elements_.size(); ++e) {
+      const std::size_t face = global[faceOf_[e]];
+      const Element& element = elements_[e];
       if (element.segment != kNoSegment) {
-        Segment& segment = query.segments[element.segment];
-        (ofA ? segment.faceA : segment.faceB) = face;
+        Segment& segment = query_.segments[element.segment];
+        (ofA_ ? segment.faceA : segment.faceB) = face;
         continue;
       }
       while (edge < element.edge)  // the edges' parts come in order of edges, each along it
-        intervalStart[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces.size());
-      intervalFaces.push_back(face);
+        intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
+      intervalFaces_.push_back(face);
     }
     while (edge < 2)
-      intervalStart[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces.size());
+      intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
   }
-  intervalStart[3 * count] = static_cast<std::uint32_t>(intervalFaces.size());
-  const auto intervalsOf = [&](std::size_t p, std::size_t i) {
-    return std::pair{intervalStart[3 * p + i], intervalStart[3 * p + i + 1]};
-  };
-  for (std::size_t p = 0; p < count; ++p) {
-    const std::uint32_t sorted = pieces[p].sorted;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const auto [from, to] = intervalsOf(p, i);
-      if (from == to) continue;
-      const std::uint32_t across = side.across(sorted, i);
-      const std::int32_t twin =
-          across == detail::Pseudonormals::kNone ? kAbsent : side.pieceSlot(across);
-      if (twin == kAbsent) inconsistent();
-      const auto other = static_cast<std::size_t>(twin);
-      if (other < p) continue;  // joined from there
-      std::size_t shared = 3;
-      for (std::size_t j = 0; j < 3; ++j)
-        if (side.corner(across, j) == side.corner(sorted, (i + 1) % 3) &&
-            side.corner(across, (j + 1) % 3) == side.corner(sorted, i))
-          shared = j;
-      if (shared == 3) inconsistent();
-      const auto [twinFrom, twinTo] = intervalsOf(other, shared);
-      if (twinTo - twinFrom != to - from) inconsistent();
-      for (std::uint32_t j = 0; j < to - from; ++j)
-        joins.emplace_back(intervalFaces[from + j], intervalFaces[twinTo - 1 - j]);
+
+  /// Phase 6: per piece and edge, the triangle across the edge sees the same intervals in the
+  /// opposite order, and their faces join.
+  void joinAcrossEdges() {
+    const auto intervalsOf = [&](std::size_t p, std::size_t i) {
+      return std::pair{intervalStart_[3 * p + i], intervalStart_[3 * p + i + 1]};
+    };
+    for (std::size_t p = 0; p < count_; ++p) {
+      const std::uint32_t sorted = pieces_[p].sorted;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const auto [from, to] = intervalsOf(p, i);
+        if (from == to) continue;
+        const std::uint32_t across = side_.across(sorted, i);
+        const std::int32_t twin =
+            across == detail::Pseudonormals::kNone ? kAbsent : side_.pieceSlot(across);
+        if (twin == kAbsent) inconsistent();
+        const auto other = static_cast<std::size_t>(twin);
+        if (other < p) continue;  // joined from there
+        std::size_t shared = 3;
+        for (std::size_t j = 0; j < 3; ++j)
+          if (side_.corner(across, j) == side_.corner(sorted, (i + 1) % 3) &&
+              side_.corner(across, (j + 1) % 3) == side_.corner(sorted, i))
+            shared = j;
+        if (shared == 3) inconsistent();
+        const auto [twinFrom, twinTo] = intervalsOf(other, shared);
+        if (twinTo - twinFrom != to - from) inconsistent();
+        for (std::uint32_t j = 0; j < to - from; ++j)
+          joins_.emplace_back(intervalFaces_[from + j], intervalFaces_[twinTo - 1 - j]);
+      }
     }
   }
+
+  Side& side_;
+  Query& query_;
+  std::vector<Face>& faces_;
+  std::vector<std::pair<std::size_t, std::size_t>>& joins_;
+  const bool ofA_;
+  const std::vector<Piece>& pieces_;
+  const std::vector<EdgeCrossing>& crossings_;
+  const std::size_t count_;
+  // The scratch, kept from call to call on this thread (recycled).
+  std::vector<std::uint32_t>& crossingStart_ = recycled<std::uint32_t, 1>();
+  std::vector<std::uint32_t>& segmentStart_ = recycled<std::uint32_t, 2>();
+  std::vector<std::uint32_t>& crossingOrder_ = recycled<std::uint32_t, 3>();
+  std::vector<std::uint32_t>& segmentOrder_ = recycled<std::uint32_t, 4>();
+  /// Per piece and edge, where its intervals' faces start in intervalFaces_.
+  std::vector<std::uint32_t>& intervalStart_ = recycled<std::uint32_t, 6>();
+  std::vector<std::size_t>& intervalFaces_ = recycled<std::size_t, 5>();
+  // The piece at hand: its chain's nodes and elements, the crossings along one edge, its faces.
+  std::vector<EndKey>& nodes_ = recycled<EndKey, 0>();
+  std::vector<Element>& elements_ = recycled<Element, 0>();
+  std::vector<const EdgeCrossing*>& along_ = recycled<const EdgeCrossing*, 0>();
+  std::vector<std::size_t>& faceOfRoot_ = recycled<std::size_t, 1>();
+  std::vector<std::size_t>& faceOf_ = recycled<std::size_t, 2>();
+  std::vector<Face>& local_ = recycled<Face, 1>();
+  std::vector<char>& touchesEdge_ = recycled<char, 0>();
+  UnionFind cycles_;
+};
+
+void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
+                std::vector<std::pair<std::size_t, std::size_t>>& joins) {
+  FaceBuilder(side, query, faces, joins).run();
 }
 
 void checkMesh(const QueryMesh& mesh, const char* which) {
