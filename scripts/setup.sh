@@ -23,17 +23,8 @@ packages=(
   doxygen  # the API reference (the docs target) and the test Docs.NoWarnings
   libopenmpi-dev openmpi-bin  # MPI: the distributed DEM (delta::mpi, `delta dem` under mpirun)
 )
-missing=()
-for package in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
-    missing+=("$package")
-done
-if ((${#missing[@]})); then
-  echo "setup: installing ${missing[*]}"
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+source scripts/install_missing.sh
+install_missing "${packages[@]}"
 
 # Real meshes, into the ignored folder data/: CGAL's data set and assimp's test models.
 if [ ! -f data/meshes/armadillo.off ]; then

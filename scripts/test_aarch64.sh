@@ -12,18 +12,10 @@ packages=(
   g++-aarch64-linux-gnu qemu-user
   libassimp-dev:arm64 libqhull-dev:arm64 zlib1g-dev:arm64 libgtest-dev:arm64 libcgal-dev:arm64
 )
-missing=()
-for package in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
-    missing+=("$package")
-done
-if ((${#missing[@]})); then
-  echo "test_aarch64: installing ${missing[*]}"
-  export DEBIAN_FRONTEND=noninteractive
-  dpkg --print-foreign-architectures | grep -qx arm64 || dpkg --add-architecture arm64
-  apt-get update -qq
-  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+# The arm64 packages come from the same Debian mirror once dpkg knows the architecture.
+dpkg --print-foreign-architectures | grep -qx arm64 || dpkg --add-architecture arm64
+source scripts/install_missing.sh
+install_missing "${packages[@]}"
 
 build=${1:-build-aarch64}
 cmake -S . -B "$build" -G Ninja -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake \
