@@ -49,7 +49,7 @@ namespace delta::test {
 /// for pairs 50 sizes apart, where d itself carries rounding of 1e-16 × d).
 inline constexpr double kCertifiedFraction = 2e-15;
 
-namespace exact_detail {
+namespace detail {
 
 using Predicates = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Rational = CGAL::Simple_cartesian<CGAL::Gmpq>;
@@ -198,12 +198,12 @@ double certifiedSquaredDistance(const Compute& compute, double size) {
   return CGAL::to_double(compute(Rational{}));
 }
 
-}  // namespace exact_detail
+}  // namespace detail
 
 /// Whether the two solid triangles share a point, decided exactly (touching counts). Zero-area
 /// triangles are the union of their edges.
 inline bool exactIntersect(const Triangle& first, const Triangle& second) {
-  using namespace exact_detail;
+  using namespace detail;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   const auto a = corners(first), b = corners(second);
   if (!flatA && !flatB)
@@ -230,7 +230,7 @@ inline bool exactIntersect(const Triangle& first, const Triangle& second) {
 /// The exact squared distance of the two solid triangles (0 when they intersect) in exact rational
 /// arithmetic, rounded to double once, at the end. About 300 µs a pair.
 inline double exactSquaredDistanceRational(const Triangle& first, const Triangle& second) {
-  using namespace exact_detail;
+  using namespace detail;
   if (exactIntersect(first, second)) return 0.0;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   CGAL::Gmpq best = candidate<Rational>(0, first, flatA, second, flatB);
@@ -243,7 +243,7 @@ inline double exactSquaredDistanceRational(const Triangle& first, const Triangle
 /// within kCertifiedFraction × (pairSize + distance) of the exact distance (an interval filter,
 /// with exact rational arithmetic where the intervals are too wide).
 inline double exactSquaredDistance(const Triangle& first, const Triangle& second) {
-  using namespace exact_detail;
+  using namespace detail;
   if (exactIntersect(first, second)) return 0.0;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
@@ -284,7 +284,7 @@ inline double exactSquaredDistance(const Triangle& first, const Triangle& second
 /// kCertifiedFraction × (longest edge + distance) of the exact distance (interval filter, exact
 /// rational fallback, as for two triangles).
 inline double exactSquaredDistance(const Vec3& p, const Triangle& triangle) {
-  using namespace exact_detail;
+  using namespace detail;
   const bool flat = degenerate(triangle);
   return certifiedSquaredDistance(
       [&](auto kernel) { return pointTriangle<decltype(kernel)>(p, triangle, flat); },
@@ -293,7 +293,7 @@ inline double exactSquaredDistance(const Vec3& p, const Triangle& triangle) {
 
 /// The squared distance between two segments (either may have zero length), certified likewise.
 inline double exactSquaredDistance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
-  using namespace exact_detail;
+  using namespace detail;
   return certifiedSquaredDistance(
       [&](auto kernel) { return segmentSegment<decltype(kernel)>(p0, p1, q0, q1); },
       std::max(distance(p0, p1), distance(q0, q1)));
@@ -302,7 +302,7 @@ inline double exactSquaredDistance(const Vec3& p0, const Vec3& p1, const Vec3& q
 /// CGAL's own Triangle_3–Triangle_3 squared distance in exact rationals (about 300 µs a pair),
 /// for non-degenerate triangles only; the tests cross-check the oracle above with it.
 inline double cgalTriangleSquaredDistance(const Triangle& first, const Triangle& second) {
-  using namespace exact_detail;
+  using namespace detail;
   auto triangle = [](const Triangle& t) {
     return Rational::Triangle_3(point<Rational>(t.a), point<Rational>(t.b), point<Rational>(t.c));
   };
