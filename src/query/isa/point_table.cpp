@@ -250,17 +250,19 @@ template <typename Bounds>
   return search.best;
 }
 
-// The table's entries: [[gnu::flatten]] inlines everything they call but the library's own
-// functions (closestPointOnTriangle), even at -O0, so no function this ISA's flags compiled is
-// left out of line for another object to share (ISA.NoSharedCodeBetweenInstructionSets).
+// The table's entries. No function this ISA's flags compiled may be left out of line for
+// another object to share (ISA.NoSharedCodeBetweenInstructionSets checks every build): the
+// bounds' entries inline all they call ([[gnu::flatten]]); the descent's helpers are local or
+// always inlined, and the library's small inline functions it calls are inlined by the optimiser
+// (these objects are optimised in every build type). Flattening the descent too cost 2% of W1
+// (settle's body inlined into every call site of the loop).
 
 /// The descent, its limit capped at the largest finite double: an empty slot of a node (the
 /// tree is not full) lies at +∞, and only a finite limit keeps it out. (An unlimited search
 /// from a point whose every distance overflowed once walked into them, past the end of the
 /// tree: the queries now refuse such points, coordinate_range.h, and this keeps the descent
 /// inside the tree whatever it is given. A NaN limit finds nothing.)
-[[gnu::flatten]] Nearest nearest(const QueryMeshData& mesh, const Vec3& point,
-                                 double limitSquared) noexcept {
+Nearest nearest(const QueryMeshData& mesh, const Vec3& point, double limitSquared) noexcept {
   const Vec3 local = point - mesh.lanes.origin;
   return descend<Bounds>(mesh, {mesh.lanes.view(), {local.x, local.y, local.z}}, point,
                          std::min(limitSquared, std::numeric_limits<double>::max()));
