@@ -1236,22 +1236,13 @@ const MeshComponents& QueryMeshData::components() const {
 
 namespace delta::contactdetection {
 
-Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
-  checkMesh(first, "first");
-  checkMesh(second, "second");
-  detail::checkPlacedPair(first, second, "overlap");
-  Overlap result;
-  Query query(first, second);
-  Side &a = query.a, &b = query.b;
-  if (!meet(a.box(), b.box())) return result;
-  // The reference point: the middle of the boxes' common part (the integrals' origin, near the
-  // overlap so that they keep their accuracy far from the world's origin).
-  Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
-  query.reference = common.center();
-  a.setReference(query.reference, b.box());
-  b.setReference(query.reference, a.box());
+namespace {
 
-  // Every pair of triangles whose boxes meet: both trees descended together in A's frame.
+/// Phase 2: every pair of triangles whose boxes meet, both trees descended together in A's frame,
+/// then per leaf pair the triangles whose world boxes meet (single precision, conservative): only
+/// these are placed and crossed (crossPair).
+void crossMeetingTriangles(Query& query, const QueryMesh& first, const QueryMesh& second) {
+  Side &a = query.a, &b = query.b;
   const detail::QueryMeshData &dataA = a.data(), &dataB = b.data();
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
@@ -1260,8 +1251,6 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
   std::vector<detail::LeafPair>& leafPairs = recycled<detail::LeafPair, 0>();
   detail::leafPairsWithin(dataA, dataB, secondTree, reach, leafPairs);
-  // Per leaf pair, the triangles whose world boxes meet (single precision, conservative): only
-  // these are placed and crossed.
   for (const detail::LeafPair& pair : leafPairs) {
     const LeafBoxes& boxesB = b.leafBoxes(pair.second);
     if (boxesB.nearOther == 0) continue;
@@ -1287,28 +1276,41 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
       }
     }
   }
-  classify(a, b);
-  classify(b, a);
+}
 
-  // The faces of both, and the regions: faces joined across edges and along segments.
-  std::vector<Face>& faces = recycled<Face, 0>();
+/// What a region adds up: its faces' integrals (B's volume terms in them, B's area vector apart),
+/// its curves' length, its face count.
+struct Sums {
+  Integrals integrals;
+  Vec3 areaB, areaMomentB;
+  double curveLength = 0.0;
+  std::size_t faces = 0;
+
+  void add(const Sums& sums) {
+    integrals.add(sums.integrals);
+    areaB += sums.areaB;
+    curveLength += sums.curveLength;
+    faces += sums.faces;
+  }
+};
+
+/// Phase 4: the faces of both sides, and the regions, faces joined across edges and along
+/// segments (into `regions`); `faces` gets the faces.
+void joinRegions(Query& query, std::vector<Face>& faces, UnionFind& regions) {
   std::vector<std::pair<std::size_t, std::size_t>>& joins =
       recycled<std::pair<std::size_t, std::size_t>, 0>();
-  buildFaces(a, query, faces, joins);
-  buildFaces(b, query, faces, joins);
-  UnionFind regions;
+  buildFaces(query.a, query, faces, joins);
+  buildFaces(query.b, query, faces, joins);
   regions.reset(faces.size());
   for (const auto& [x, y] : joins)
     regions.join(x, y);
   for (const Segment& segment : query.segments)
     regions.join(segment.faceA, segment.faceB);
+}
 
-  struct Sums {
-    Integrals integrals;
-    Vec3 areaB, areaMomentB;
-    double curveLength = 0.0;
-    std::size_t faces = 0;
-  };
+/// Phase 5: the sums of each region, at its root.
+std::vector<Sums>& sumRegions(const Query& query, const std::vector<Face>& faces,
+                              UnionFind& regions) {
   std::vector<Sums>& byRoot = recycled<Sums, 0>();
   byRoot.resize(faces.size());
   for (std::size_t f = 0; f < faces.size(); ++f) {
@@ -1327,9 +1329,30 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   }
   for (const Segment& segment : query.segments)
     byRoot[regions.find(segment.faceA)].curveLength += length(segment.end - segment.start);
+  return byRoot;
+}
 
-  // A region whose volume is within the rounding of its terms encloses nothing: surfaces that
-  // touch, or faces that lie on one another (the perturbation puts them a zero distance apart).
+/// A region's report from its sums, about the query's reference point.
+OverlapRegion regionOf(const Query& query, const Sums& sums) {
+  OverlapRegion region;
+  const Integrals& integrals = sums.integrals;
+  region.volume = integrals.volume;
+  const Vec3 offset = integrals.volumeMoment * (1.0 / integrals.volume);
+  region.centroid = query.reference + offset;
+  region.areaVector = integrals.area;
+  region.areaVectorB = sums.areaB;
+  region.moment = integrals.areaMoment - cross(offset, integrals.area);
+  region.curveLength = sums.curveLength;
+  region.triangles = sums.faces;
+  return region;
+}
+
+/// Phase 6: the regions into `result`, largest first, and their total. A region whose volume is
+/// within the rounding of its terms encloses nothing (surfaces that touch, or faces that lie on
+/// one another: the perturbation puts them a zero distance apart): counted as touching. Returns,
+/// per root, its region's index in result.regions (kNoSegment for none).
+std::vector<std::size_t>& reportRegions(const Query& query, const std::vector<Sums>& byRoot,
+                                        Overlap& result) {
   constexpr double kRoundingFactor = 1024.0 * std::numeric_limits<double>::epsilon();
   std::vector<std::pair<std::size_t, Sums>>& kept = recycled<std::pair<std::size_t, Sums>, 0>();
   std::vector<Sums>& cavities = recycled<Sums, 1>();
@@ -1347,44 +1370,56 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     return x.second.integrals.volume > y.second.integrals.volume ||
            (x.second.integrals.volume == y.second.integrals.volume && x.first < y.first);
   });
-  const auto finish = [&](const Sums& sums) {
-    OverlapRegion region;
-    const Integrals& integrals = sums.integrals;
-    region.volume = integrals.volume;
-    const Vec3 offset = integrals.volumeMoment * (1.0 / integrals.volume);
-    region.centroid = query.reference + offset;
-    region.areaVector = integrals.area;
-    region.areaVectorB = sums.areaB;
-    region.moment = integrals.areaMoment - cross(offset, integrals.area);
-    region.curveLength = sums.curveLength;
-    region.triangles = sums.faces;
-    return region;
-  };
   Sums total;
   std::vector<std::size_t>& regionOfRoot = recycled<std::size_t, 1>();
-  regionOfRoot.assign(faces.size(), kNoSegment);
-  const auto addTo = [](Sums& into, const Sums& sums) {
-    into.integrals.add(sums.integrals);
-    into.areaB += sums.areaB;
-    into.curveLength += sums.curveLength;
-    into.faces += sums.faces;
-  };
+  regionOfRoot.assign(byRoot.size(), kNoSegment);
   for (const auto& [root, sums] : kept) {
     regionOfRoot[root] = result.regions.size();
-    result.regions.push_back(finish(sums));
-    addTo(total, sums);
+    result.regions.push_back(regionOf(query, sums));
+    total.add(sums);
   }
   for (const Sums& cavity : cavities)
-    addTo(total, cavity);
-  if (!kept.empty() && total.integrals.volume > 0.0) result.total = finish(total);
+    total.add(cavity);
+  if (!kept.empty() && total.integrals.volume > 0.0) result.total = regionOf(query, total);
+  return regionOfRoot;
+}
+
+}  // namespace
+
+/// In phases: the meshes checked and placed about a reference point (1); the triangles whose
+/// boxes meet crossed, their intersection segments found (2); every triangle's corners classified
+/// inside or outside the other mesh (3); the faces inside and the regions they join into (4);
+/// each region's integrals summed (5); the regions reported, with their curves if asked (6).
+Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
+  checkMesh(first, "first");
+  checkMesh(second, "second");
+  detail::checkPlacedPair(first, second, "overlap");
+  Overlap result;
+  Query query(first, second);
+  Side &a = query.a, &b = query.b;
+  if (!meet(a.box(), b.box())) return result;
+  // The reference point: the middle of the boxes' common part (the integrals' origin, near the
+  // overlap so that they keep their accuracy far from the world's origin).
+  Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
+  query.reference = common.center();
+  a.setReference(query.reference, b.box());
+  b.setReference(query.reference, a.box());
+
+  crossMeetingTriangles(query, first, second);
+  classify(a, b);
+  classify(b, a);
+  std::vector<Face>& faces = recycled<Face, 0>();
+  UnionFind regions;
+  joinRegions(query, faces, regions);
+  const std::vector<Sums>& byRoot = sumRegions(query, faces, regions);
+  const std::vector<std::size_t>& regionOfRoot = reportRegions(query, byRoot, result);
 
   result.segments = query.segments.size();
   if (options.curves && !query.segments.empty()) {
     std::vector<std::size_t>& regionOfSegment = recycled<std::size_t, 8>();
     regionOfSegment.resize(query.segments.size());
-    for (std::size_t s = 0; s < query.segments.size(); ++s) {
+    for (std::size_t s = 0; s < query.segments.size(); ++s)
       regionOfSegment[s] = regionOfRoot[regions.find(query.segments[s].faceA)];
-    }
     result.curves = chainCurves(query, regionOfSegment);
   }
   return result;
