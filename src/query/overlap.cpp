@@ -613,34 +613,44 @@ bool insideByRay(Side& side, Side& other, const Vec3& from) {
 /// takes a corner outside the other's box as outside, or one exact ray test. A connected piece
 /// of the mesh that nothing crosses is wholly inside or outside: one ray test from its
 /// representative vertex, where its box meets the other's.
-void classify(Side& side, Side& other) {
-  const auto inconsistent = [&] {
-    throw Error(std::string("overlap: the ") + (side.isA() ? "first" : "second") +
+class Classifier {
+ public:
+  Classifier(Side& side, Side& other) : side_(side), other_(other), otherBox_(other.box()) {}
+
+  void run() {
+    walkFromCrossings();
+    classifyUncrossedComponents();
+  }
+
+ private:
+  [[noreturn]] void inconsistent() const {
+    throw Error(std::string("overlap: the ") + (side_.isA() ? "first" : "second") +
                 " mesh's vertices are inside and outside the other along one edge: a mesh is "
                 "not closed or crosses itself");
-  };
-  const Aabb& otherBox = other.box();
-  // Decides the corners of triangle k from one another along its edges; false while none is known.
-  const auto resolve = [&](std::uint32_t k) {
-    const std::array<std::int32_t, 3> slots = side.placed(k).slots;
-    const std::int32_t pieceSlot = side.pieceSlot(k);
+  }
+
+  /// Decides the corners of triangle k from one another along its edges (the parity of the
+  /// crossings on each, or a corner outside the other's box); false while none is known.
+  bool resolve(std::uint32_t k) {
+    const std::array<std::int32_t, 3> slots = side_.placed(k).slots;
+    const std::int32_t pieceSlot = side_.pieceSlot(k);
     const std::array<int, 3> parity =
         pieceSlot == kAbsent ? std::array<int, 3>{}
-                             : side.pieces()[static_cast<std::size_t>(pieceSlot)].parity;
+                             : side_.pieces()[static_cast<std::size_t>(pieceSlot)].parity;
     bool known = false;
     for (const std::int32_t slot : slots)
-      known |= side.state(slot).inside != -1;
+      known |= side_.state(slot).inside != -1;
     if (!known)
       for (const std::int32_t slot : slots)
-        if (!otherBox.contains(side.state(slot).world)) {
-          side.state(slot).inside = 0;
+        if (!otherBox_.contains(side_.state(slot).world)) {
+          side_.state(slot).inside = 0;
           known = true;
         }
     if (!known) return false;
     for (int round = 0; round < 2; ++round)
       for (std::size_t i = 0; i < 3; ++i) {
-        std::int8_t& from = side.state(slots[i]).inside;
-        std::int8_t& to = side.state(slots[(i + 1) % 3]).inside;
+        std::int8_t& from = side_.state(slots[i]).inside;
+        std::int8_t& to = side_.state(slots[(i + 1) % 3]).inside;
         if (from != -1) {
           const int expected = from + parity[i];
           if (expected != 0 && expected != 1) inconsistent();
@@ -655,77 +665,98 @@ void classify(Side& side, Side& other) {
         }
       }
     return true;
-  };
-  std::vector<std::uint32_t>& queue = recycled<std::uint32_t, 1>();
-  std::vector<std::uint32_t>& pending = recycled<std::uint32_t, 2>();
-  const std::size_t crossed = side.pieces().size();
-  for (std::size_t p = 0; p < crossed; ++p) {
-    const std::uint32_t k = side.pieces()[p].sorted;
-    side.placed(k).visited = true;
-    queue.push_back(k);
   }
-  const auto expand = [&](std::uint32_t k) {
-    const std::array<std::int32_t, 3> slots = side.placed(k).slots;
-    const std::int32_t pieceSlot = side.pieceSlot(k);
+
+  /// Triangle k (its corners decided) is a piece if a part of it is inside; the walk goes on
+  /// across its edges with a part inside.
+  void expand(std::uint32_t k, std::vector<std::uint32_t>& queue) {
+    const std::array<std::int32_t, 3> slots = side_.placed(k).slots;
+    const std::int32_t pieceSlot = side_.pieceSlot(k);
     const std::array<int, 3> crossings =
         pieceSlot == kAbsent ? std::array<int, 3>{}
-                             : side.pieces()[static_cast<std::size_t>(pieceSlot)].crossings;
+                             : side_.pieces()[static_cast<std::size_t>(pieceSlot)].crossings;
     bool inside = false;
     for (std::size_t i = 0; i < 3; ++i) {
-      const bool part = crossings[i] > 0 || side.state(slots[i]).inside == 1 ||
-                        side.state(slots[(i + 1) % 3]).inside == 1;
+      const bool part = crossings[i] > 0 || side_.state(slots[i]).inside == 1 ||
+                        side_.state(slots[(i + 1) % 3]).inside == 1;
       inside |= part;
       if (!part) continue;
-      const std::uint32_t across = side.across(k, i);
+      const std::uint32_t across = side_.across(k, i);
       if (across == detail::Pseudonormals::kNone) continue;
-      PlacedTriangle& neighbour = side.placed(across);
+      PlacedTriangle& neighbour = side_.placed(across);
       if (neighbour.visited) continue;
       neighbour.visited = true;
       queue.push_back(across);
     }
-    if (inside) side.piece(k);
-  };
-  while (true) {
-    while (!queue.empty()) {
-      const std::uint32_t k = queue.back();
-      queue.pop_back();
-      if (resolve(k))
-        expand(k);
-      else
-        pending.push_back(k);
-    }
-    if (pending.empty()) break;
-    // The walk may since have decided a corner of some of these; where it has not decided any,
-    // one ray test, and the walk goes on from there.
-    bool decided = false;
-    for (const std::uint32_t k : pending)
-      for (const std::int32_t slot : side.placed(k).slots)
-        decided |= side.state(slot).inside != -1;
-    if (!decided) {
-      const std::int32_t slot = side.placed(pending.back()).slots[0];
-      side.state(slot).inside = insideByRay(side, other, side.state(slot).world) ? 1 : 0;
-    }
-    queue.insert(queue.end(), pending.begin(), pending.end());
-    pending.clear();
+    if (inside) side_.piece(k);
   }
-  // Connected pieces of the mesh that nothing crosses.
-  const detail::MeshComponents& components = side.data().components();
-  if (components.count() == 1 && crossed > 0) return;
-  std::vector<std::uint32_t>& reached = recycled<std::uint32_t, 3>();
-  reached.assign(components.count(), 0);
-  for (std::size_t p = 0; p < crossed; ++p)
-    reached[components.ofVertex[side.corner(side.pieces()[p].sorted, 0)]] = 1;
-  for (std::size_t c = 0; c < components.count(); ++c) {
-    if (reached[c] || !meet(side.toWorld(components.boxes[c]), otherBox)) continue;
-    const std::int32_t slot = side.vertex(components.representative[c]);
-    if (!insideByRay(side, other, side.state(slot).world)) continue;
-    for (std::uint32_t t = components.offsets[c]; t < components.offsets[c + 1]; ++t) {
-      const std::uint32_t k = components.triangles[t];
-      for (const std::int32_t corner : side.placed(k).slots)
-        side.state(corner).inside = 1;
-      side.piece(k);
+
+  /// Phase 1: the walk from the crossed triangles across the edges with a part inside; where it
+  /// stalls on triangles none of whose corners is decided, one ray test, and on.
+  void walkFromCrossings() {
+    std::vector<std::uint32_t>& queue = recycled<std::uint32_t, 1>();
+    std::vector<std::uint32_t>& pending = recycled<std::uint32_t, 2>();
+    crossed_ = side_.pieces().size();
+    for (std::size_t p = 0; p < crossed_; ++p) {
+      const std::uint32_t k = side_.pieces()[p].sorted;
+      side_.placed(k).visited = true;
+      queue.push_back(k);
+    }
+    while (true) {
+      while (!queue.empty()) {
+        const std::uint32_t k = queue.back();
+        queue.pop_back();
+        if (resolve(k))
+          expand(k, queue);
+        else
+          pending.push_back(k);
+      }
+      if (pending.empty()) break;
+      // The walk may since have decided a corner of some of these; where it has not decided
+      // any, one ray test, and the walk goes on from there.
+      bool decided = false;
+      for (const std::uint32_t k : pending)
+        for (const std::int32_t slot : side_.placed(k).slots)
+          decided |= side_.state(slot).inside != -1;
+      if (!decided) {
+        const std::int32_t slot = side_.placed(pending.back()).slots[0];
+        side_.state(slot).inside = insideByRay(side_, other_, side_.state(slot).world) ? 1 : 0;
+      }
+      queue.insert(queue.end(), pending.begin(), pending.end());
+      pending.clear();
     }
   }
+
+  /// Phase 2: the connected pieces of the mesh that nothing crosses, each wholly inside or
+  /// outside: one ray test from its representative vertex, where its box meets the other's.
+  void classifyUncrossedComponents() {
+    const detail::MeshComponents& components = side_.data().components();
+    if (components.count() == 1 && crossed_ > 0) return;
+    std::vector<std::uint32_t>& reached = recycled<std::uint32_t, 3>();
+    reached.assign(components.count(), 0);
+    for (std::size_t p = 0; p < crossed_; ++p)
+      reached[components.ofVertex[side_.corner(side_.pieces()[p].sorted, 0)]] = 1;
+    for (std::size_t c = 0; c < components.count(); ++c) {
+      if (reached[c] || !meet(side_.toWorld(components.boxes[c]), otherBox_)) continue;
+      const std::int32_t slot = side_.vertex(components.representative[c]);
+      if (!insideByRay(side_, other_, side_.state(slot).world)) continue;
+      for (std::uint32_t t = components.offsets[c]; t < components.offsets[c + 1]; ++t) {
+        const std::uint32_t k = components.triangles[t];
+        for (const std::int32_t corner : side_.placed(k).slots)
+          side_.state(corner).inside = 1;
+        side_.piece(k);
+      }
+    }
+  }
+
+  Side& side_;
+  Side& other_;
+  const Aabb& otherBox_;
+  std::size_t crossed_ = 0;  ///< the pieces the crossings made, before the walk added more
+};
+
+void classify(Side& side, Side& other) {
+  Classifier(side, other).run();
 }
 
 /// A connected part of one triangle's part inside the other mesh (a triangle crossed by two
