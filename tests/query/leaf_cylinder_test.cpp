@@ -163,7 +163,8 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
               << name << " (" << kernels::name(isa) << "), leaf " << leaf;
           double boxes8[kFanout];  // and its boxes' distances, as the children's bounds
           pointKernels(isa).children(boxes, p, kInfinity, boxes8);
-          ASSERT_LE(boxes8[slot], exact) << name << " (" << kernels::name(isa) << "), leaf " << leaf;
+          ASSERT_LE(boxes8[slot], exact)
+              << name << " (" << kernels::name(isa) << "), leaf " << leaf;
           ASSERT_NEAR(boxes8[slot], boxOnly[slot], 1e-12 * (boxOnly[slot] + exact))
               << name << " (" << kernels::name(isa) << "), leaf " << leaf;
         }
