@@ -1,5 +1,5 @@
-// The nearest-triangle descent under every instruction set (query/detail/nearest.cpp: a
-// baseline and an AVX-512 build of one descent, each with its ISA's leaf bounds): the same
+// The nearest-triangle descent under every instruction set (query/isa/point_table.cpp: one
+// descent built once per ISA, each with its ISA's node and leaf bounds and exact lanes): the same
 // answer as a loop over every triangle, bit for bit, whatever the ISA and whatever limit.
 #include <gtest/gtest.h>
 

@@ -1,7 +1,8 @@
 #pragma once
 
-// The per-ISA table of batched kernels, as a template over the lane count W. Each file in
-// src/kernels/isa/ instantiates it once, for its own W, compiled with its own flags.
+// The per-ISA table of batched kernels, as a template over the lane count W.
+// src/kernels/isa/batch_table.cpp instantiates it once per ISA, for that ISA's W, compiled with
+// its flags.
 
 #include <cstddef>
 

@@ -8,11 +8,12 @@
 // extensions: H = 1 is plain scalar code, H = 2 SSE2, 4 AVX2, 8 AVX-512. U > 1 interleaves U
 // independent pairs of registers: one Newton iteration is a long chain of dependent operations
 // (ending in a division), and interleaving U chains keeps the pipelines busy instead of waiting
-// on each result. The shapes (Shape<W> below) are: W = 1 (scalar reference), 4 (SSE2, 2 × 2),
-// 8 (AVX2, 4 × 2), 16 (AVX-512, 8 × 2).
+// on each result. The shapes (Shape<W> below) are: W = 1 (scalar reference), 4 (SSE2 or NEON,
+// 2 × 2), 8 (AVX2 or SVE, 4 × 2), 16 (AVX-512, 8 × 2).
 //
-// Each W is instantiated in exactly one translation unit (src/kernels/isa/), compiled with that
-// instruction set's flags, so no instantiation compiled for a wider ISA can leak into another.
+// Each W is instantiated in exactly one object (src/kernels/isa/batch_table.cpp, built once per
+// ISA), compiled with that instruction set's flags, so no instantiation compiled for a wider ISA
+// can leak into another (ISA.NoSharedCodeBetweenInstructionSets checks it).
 // Nothing here calls a non-template inline function for the same reason.
 
 #include <cstddef>
