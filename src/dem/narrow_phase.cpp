@@ -1,5 +1,6 @@
 #include "delta/dem/narrow_phase.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -64,9 +65,9 @@ bool dominated(const ContactPoint& contact, std::span<const ContactPoint> found,
     if (other.second == contact.second) continue;
     const Triangle triangle = triangles.triangle(other.second);
     const double scale =
-        maxAbs(q) + std::sqrt(std::fmax(lengthSquared(triangle.b - triangle.a),
-                                        std::fmax(lengthSquared(triangle.c - triangle.b),
-                                                  lengthSquared(triangle.a - triangle.c))));
+        maxAbs(q) + std::sqrt(std::max({lengthSquared(triangle.b - triangle.a),
+                                        lengthSquared(triangle.c - triangle.b),
+                                        lengthSquared(triangle.a - triangle.c)}));  // finite
     const double tolerance = kOnTriangleUlps * scale;
     if (!(signedGap(other) < gap - tolerance)) continue;
     if (kernels::closestPointOnTriangle(q, triangle).distanceSquared <= tolerance * tolerance)

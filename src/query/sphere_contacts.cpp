@@ -202,7 +202,7 @@ std::vector<ContactPoint> sphereContacts(std::span<const Sphere> spheres, const 
   checkSpheres(spheres);
   if (spheres.empty()) return {};
   const detail::QueryMeshData& data = mesh.data();
-  const double scale = std::fmax(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));
+  const double scale = std::max(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));  // finite
   return everySphere(spheres, [&](std::size_t i, std::vector<ContactPoint>& out) {
     contactsOf(spheres[i], i, data, scale, epsilon, out);
   });
@@ -214,7 +214,7 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
   checkSphere(sphere, 0);
   out.clear();
   const detail::QueryMeshData& data = mesh.data();
-  const double scale = std::fmax(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));
+  const double scale = std::max(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));  // finite
   const double reach = 2.0 * epsilon;
   const bool same = cache.valid_ && cache.meshData_.get() == &data && cache.epsilon_ == epsilon &&
                     cache.radius_ == sphere.radius;
