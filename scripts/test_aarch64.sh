@@ -2,8 +2,8 @@
 # The kernels' and queries' tests on AArch64, on this x86-64 machine: Debian's cross toolchain
 # builds Δ for arm64 (with its NEON and SVE tables) against Debian's arm64 libraries (multiarch),
 # and qemu-user runs the tests (its default CPU has SVE, so the tests that run every supported ISA
-# take NEON's and SVE's paths, and the default is SVE; then the dispatch tests on a CPU without). Idempotent; needs the meshes scripts/setup.sh
-# unpacks. Called by scripts/test.sh.
+# take NEON's and SVE's paths, and the default is SVE; then the dispatch tests on a CPU without).
+# Idempotent; needs the meshes scripts/setup.sh unpacks. Called by scripts/test.sh.
 #   scripts/test_aarch64.sh [BUILD_DIR]   (default BUILD_DIR: build-aarch64)
 set -euo pipefail
 cd "$(dirname "$0")/.."
