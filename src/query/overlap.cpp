@@ -1313,7 +1313,7 @@ void crossMeetingTriangles(Query& query, const QueryMesh& first, const QueryMesh
 /// its curves' length, its face count.
 struct Sums {
   Integrals integrals;
-  Vec3 areaB, areaMomentB;
+  Vec3 areaB;
   double curveLength = 0.0;
   std::size_t faces = 0;
 

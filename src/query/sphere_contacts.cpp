@@ -103,12 +103,13 @@ void contactsOf(const Sphere& sphere, std::size_t index, const TriangleSoA& mesh
   }
 }
 
-/// A triangle of a prepared mesh near a sphere: its prepared (tree) index, its id, and the
-/// kernel's answer.
+/// A triangle of a prepared mesh near a sphere: its prepared (tree) index, its id, the kernel's
+/// answer, and the triangle made ready for the kernel (which a SphereContactCache keeps).
 struct NearTriangle {
   std::uint32_t index;
   std::uint32_t id;
   kernels::SphereContactResult result;
+  kernels::PreparedTriangle prepared;
 };
 
 /// The triangles of a prepared mesh (its prepared frame) whose kernel gap to one (validated)
@@ -140,8 +141,9 @@ void nearTriangles(const Sphere& sphere, const detail::QueryMeshData& data, doub
     for (std::size_t k = from; k < to; ++k) {
       const Triangle triangle = data.triangle(k);
       if (apart(box, triangle.bounds(), gap)) continue;
-      const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, triangle);
-      if (r.gap < reach) out.push_back({static_cast<std::uint32_t>(k), data.order[k], r});
+      const kernels::PreparedTriangle prepared(triangle);
+      const kernels::SphereContactResult r = kernels::sphereTriangle(sphere, prepared);
+      if (r.gap < reach) out.push_back({static_cast<std::uint32_t>(k), data.order[k], r, prepared});
     }
   }
   std::sort(out.begin(), out.end(),
@@ -242,8 +244,7 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
   nearTriangles(sphere, data, scale, reach + skin, near);
   cache.triangles_.clear();
   for (const NearTriangle& triangle : near) {
-    cache.triangles_.push_back({triangle.index, triangle.result.gap,
-                                kernels::PreparedTriangle(data.triangle(triangle.index))});
+    cache.triangles_.push_back({triangle.index, triangle.result.gap, triangle.prepared});
     if (triangle.result.gap < reach)
       out.push_back(sphereContactPoint(triangle.result, 0, triangle.id));
   }
