@@ -10,6 +10,7 @@
 #include "delta/core/parallel.h"
 
 #include "apps/cli_run.h"
+#include "sanitized.h"
 
 namespace delta::test {
 namespace {
@@ -37,8 +38,8 @@ TEST(DeltaCliLimits, BuiltinParametersBeyondTheirLimitsAreRefused) {
 }
 
 TEST(DeltaCliLimits, RunningOutOfMemoryAnywayIsOneLine) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer's shadow memory cannot be mapped under ulimit -v";
+#if defined(DELTA_TESTS_SANITIZED)
+  GTEST_SKIP() << "the sanitizers' shadow memory cannot be mapped under ulimit -v";
 #endif
   // Within the estimates, but more than the process may have (here: 500 MB of address space).
   const CliRun run = runDeltaUnder("ulimit -v 500000;", "info builtin:cylinder:10000000");

@@ -16,17 +16,12 @@
 #include "delta/io/mesh_io.h"
 
 #include "io/test_files.h"
+#include "sanitized.h"
 
-// The sanitizers' runtimes: their shadow memory rules out an address-space limit, and their
-// allocators (GCC 12's AddressSanitizer, LLVM 14's ThreadSanitizer) do not take their locks
-// around fork(), so a child forked while another thread allocates can wait forever.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define DELTA_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define DELTA_TEST_SANITIZED 1
-#endif
-#endif
+// The sanitizers' runtimes (DELTA_TESTS_SANITIZED): their shadow memory rules out an
+// address-space limit, and their allocators (AddressSanitizer's, LLVM 14's ThreadSanitizer's) do
+// not take their locks around fork(), so a child forked while another thread allocates can wait
+// forever.
 
 namespace delta::io {
 namespace {
@@ -65,7 +60,7 @@ TEST(IsolatedImport, FilesThatCrashAssimpAreErrors) {
 }
 
 TEST(IsolatedImport, CrashingFilesFromManyThreads) {
-#ifdef DELTA_TEST_SANITIZED
+#ifdef DELTA_TESTS_SANITIZED
   // A child forked while another thread allocates can wait on a sanitizer allocator's lock that
   // no thread will release (glibc's malloc, in the other builds, resets its locks in the child).
   GTEST_SKIP() << "fork() from several threads can deadlock in the sanitizers' allocators";
@@ -140,7 +135,7 @@ TEST(IsolatedImport, StopsAChildThatHangs) {
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
 }
 
-#ifndef DELTA_TEST_SANITIZED  // the sanitizers' shadow memory rules out an address-space limit
+#ifndef DELTA_TESTS_SANITIZED  // the sanitizers' shadow memory rules out an address-space limit
 TEST(IsolatedImport, LimitsTheChildsMemory) {
   const std::string message = isolatedError(
       []() -> detail::TriangleSoup {

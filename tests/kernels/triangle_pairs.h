@@ -24,6 +24,8 @@
 #include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 
+#include "../sanitized.h"  // relative: bench/kernels_bench.cpp includes this file too
+
 namespace delta::test {
 
 enum class PairFamily {
@@ -93,14 +95,7 @@ inline const char* name(PairFamily family) {
 /// True in builds much slower than an optimised one (sanitizers, an emulator such as qemu, or no
 /// optimisation): the randomised tests then run fewer pairs, `scaledCount(n)`, to stay within a
 /// few minutes.
-// GCC defines __SANITIZE_*__; clang (the TSan build) answers __has_feature instead.
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define DELTA_TESTS_SANITIZED 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || \
-    defined(DELTA_TESTS_SANITIZED) || defined(DELTA_TESTS_EMULATED) || !defined(__OPTIMIZE__)
+#if defined(DELTA_TESTS_SANITIZED) || defined(DELTA_TESTS_EMULATED) || !defined(__OPTIMIZE__)
 inline constexpr bool kSlowBuild = true;
 #else
 inline constexpr bool kSlowBuild = false;

@@ -57,7 +57,7 @@ struct Aabb {
 /// predictor).
 ///
 /// Threading: a pure function.
-constexpr double distanceSquared(const Vec3& p, const Aabb& box) noexcept {
+[[gnu::always_inline]] constexpr double distanceSquared(const Vec3& p, const Aabb& box) noexcept {
   const double x = std::max(0.0, std::max(box.lower.x - p.x, p.x - box.upper.x));
   const double y = std::max(0.0, std::max(box.lower.y - p.y, p.y - box.upper.y));
   const double z = std::max(0.0, std::max(box.lower.z - p.z, p.z - box.upper.z));

@@ -23,19 +23,23 @@ struct Vec3 {
     return axis == 0 ? x : (axis == 1 ? y : z);
   }
 
-  constexpr Vec3& operator+=(const Vec3& v) noexcept {
+  // Always inlined, as aabb.h's distanceSquared(Vec3, Aabb) and QueryMeshData::triangle are:
+  // the per-ISA point tables call them (src/CMakeLists.txt), and an out-of-line copy built with
+  // one ISA's flags could stand in for every caller's (clang 14 with the sanitizers left them
+  // out of line; ISA.NoSharedCodeBetweenInstructionSets).
+  [[gnu::always_inline]] constexpr Vec3& operator+=(const Vec3& v) noexcept {
     x += v.x;
     y += v.y;
     z += v.z;
     return *this;
   }
-  constexpr Vec3& operator-=(const Vec3& v) noexcept {
+  [[gnu::always_inline]] constexpr Vec3& operator-=(const Vec3& v) noexcept {
     x -= v.x;
     y -= v.y;
     z -= v.z;
     return *this;
   }
-  constexpr Vec3& operator*=(double s) noexcept {
+  [[gnu::always_inline]] constexpr Vec3& operator*=(double s) noexcept {
     x *= s;
     y *= s;
     z *= s;

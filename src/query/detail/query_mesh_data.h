@@ -231,7 +231,7 @@ struct QueryMeshData {
   /// The number of triangles.
   std::size_t size() const noexcept { return corners.size(); }
   /// Sorted triangle `k` (< size(), unchecked).
-  Triangle triangle(std::size_t k) const noexcept {
+  [[gnu::always_inline]] Triangle triangle(std::size_t k) const noexcept {
     const TriangleIndices& c = corners[k];
     return {vertices[c[0]], vertices[c[1]], vertices[c[2]]};
   }

@@ -131,7 +131,8 @@ void exactlyEight(const QueryMeshData& mesh, const Vec3& point, std::size_t firs
 /// distances tie but for rounding), eight at a time, as long as the first of the eight is not
 /// farther than the best. The answer is the same: the best by (distance, id) of more triangles,
 /// whose lower bounds are not above it. (For one or two the scalar kernel is as fast.)
-void settle(const QueryMeshData& mesh, const Vec3& point, Search& search) noexcept {
+[[gnu::noinline, gnu::flatten]] void settle(const QueryMeshData& mesh, const Vec3& point,
+                                            Search& search) noexcept {
   std::size_t kept = 0;  // those still not beyond the pruning bound, in ascending order
   for (std::size_t c = 0; c < search.count; ++c) {
     const double lower = search.lower[c];
@@ -251,18 +252,19 @@ template <typename Bounds>
 }
 
 // The table's entries. No function this ISA's flags compiled may be left out of line for
-// another object to share (ISA.NoSharedCodeBetweenInstructionSets checks every build): the
-// bounds' entries inline all they call ([[gnu::flatten]]); the descent's helpers are local or
-// always inlined, and the library's small inline functions it calls are inlined by the optimiser
-// (these objects are optimised in every build type). Flattening the descent too cost 2% of W1
-// (settle's body inlined into every call site of the loop).
+// another object to share (ISA.NoSharedCodeBetweenInstructionSets checks every build): every
+// entry inlines all it calls ([[gnu::flatten]]), but for settle, kept out of line (inlined into
+// every call site of the loop it cost 2% of W1), which inlines all it calls itself. (The
+// optimiser's own choice is not enough: clang with the sanitizers left the library's small inline
+// functions, such as Vec3's operators, out of line.)
 
 /// The descent, its limit capped at the largest finite double: an empty slot of a node (the
 /// tree is not full) lies at +∞, and only a finite limit keeps it out. (An unlimited search
 /// from a point whose every distance overflowed once walked into them, past the end of the
 /// tree: the queries now refuse such points, coordinate_range.h, and this keeps the descent
 /// inside the tree whatever it is given. A NaN limit finds nothing.)
-Nearest nearest(const QueryMeshData& mesh, const Vec3& point, double limitSquared) noexcept {
+[[gnu::flatten]] Nearest nearest(const QueryMeshData& mesh, const Vec3& point,
+                                 double limitSquared) noexcept {
   const Vec3 local = point - mesh.lanes.origin;
   return descend<Bounds>(mesh, {mesh.lanes.view(), {local.x, local.y, local.z}}, point,
                          std::min(limitSquared, std::numeric_limits<double>::max()));
