@@ -1,7 +1,9 @@
 // Δ side by side with its peers (issue 5): Embree 3 and CGAL's AABB tree for points–mesh
 // distances, FCL for mesh–mesh distance and collision, on the same meshes, points and threads.
 //   build/bench/delta_bench_peers [--mesh PATH]... [--points N] [--threads 1,2]
-//                                 [--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [--json]
+//       [--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [Google Benchmark's flags]
+//   build/bench/delta_bench_peers --mesh data/meshes/armadillo.off --benchmark_repetitions=3
+//   build/bench/delta_bench_peers --benchmark_filter='^W1/' --benchmark_format=json
 //
 // Workloads (ε and the bands are fractions of the mesh's bounding-box diagonal D):
 //   W1 distance      N points uniform in the box grown by 10% per side (the same points as
@@ -16,57 +18,82 @@
 //                    ε = 10⁻⁶ D, against FCL's intersecting triangle pairs.
 //   W5 grid vertices the vertices of an immersed-boundary grid (ib::AdaptiveGrid, levels L,
 //                    default 7) refined around the mesh: the exact unsigned distance, and Δ's
-//                    signed distance too (a second Δ row) when the mesh is closed. Not in the
-//                    default list: run it with --workloads W5. Its own table, per thread count:
-//                    the grid's build (signed when the mesh is closed; seconds, vertices, queries,
-//                    queries per second inside Δ's distance queries and their share of the build)
-//                    and T moves (default 10) of the boundary, each turned about its box centre
-//                    and moved so that its furthest vertex moves 0.2 h, h the finest cell's
-//                    diagonal (bench/boundary_step.h): the same figures per move, averaged. The
-//                    grid's distances must equal a direct signed query at its vertices, and its
-//                    vertices and distances must not depend on the thread count.
+//                    signed distance too (Delta-signed) when the mesh is closed. Not in the
+//                    default list: run it with --workloads W5. Δ alone also times the grid
+//                    itself, per thread count: W5-build, an iteration the grid's build (signed
+//                    when the mesh is closed), and W5-moves, T moves (default 10) of the boundary,
+//                    an iteration each, every move turning it about its box centre and moving it
+//                    so that its furthest vertex moves 0.2 h, h the finest cell's diagonal
+//                    (bench/boundary_step.h; the motion is computed outside the timing), from the
+//                    built grid. Their counters: vertices, leaves, queries (per build or move),
+//                    queries_per_s_in_delta and share_in_delta (the time inside Δ's distance
+//                    queries, GridStatistics::querySeconds, and its share). The grid's distances
+//                    must equal a direct signed query at its vertices, and its vertices and
+//                    distances, built and moved, must not depend on the thread count.
 //
-// Per workload, library and thread count: build seconds (the library's structure), query
-// seconds (when a run takes under 2 s, the median of 5 samples after a warm-up, a sample
-// repeating a short query for 50 ms, per run; else one run), the ratios peer/Δ of query and of
-// build + query time, bytes per triangle, and the agreement check: every peer answer against Δ's
-// within 10⁻⁹ D (W1, W3, W5; W2: the same points within ε, except points whose distance is within
-// 10⁻⁹ D of ε; W4b: the same intersecting triangle pairs). A disagreement is settled by brute force
-// over all triangles with an exact oracle (CGAL, the first 3 of each row) and printed under the
-// mesh's table ("disagreements" in the JSON). Any disagreement, and Δ answering differently on
-// another thread count, makes the exit code 1 (2: bad options).
+// Timing: Google Benchmark. Every mesh, workload, library and thread count is a benchmark named
+// W1/armadillo/Embree/threads:2 (libraries Delta, Delta-signed, Embree, CGAL, and FCL on one
+// thread: it has no parallel traversal), timed in real time: an iteration is one query, the same
+// call into an output buffer made beforehand, and Google Benchmark repeats it until
+// --benchmark_min_time (0.5 s) has passed; --benchmark_repetitions=N reports the mean, median and
+// spread of N such runs, and --benchmark_min_warmup_time=T runs it untimed first. What a query
+// needs (the points, Δ's QueryMesh and each peer's structure per thread count — CGAL's once, its
+// build is serial —, W4's scene and models, W5's grid) is made when a benchmark first needs it,
+// outside the timing, and kept until the benchmarks move on to the next mesh. Counters:
+// build_s and bytes_per_triangle of the structure queried (the label says how the bytes were
+// counted), points and queries_per_s, within_eps (W2), inside (Delta-signed), max_diff_over_D (a
+// peer's largest |peer − Δ| / D), and W4's counts. After Google Benchmark's output comes a table
+// of peer/Δ query times per workload and thread count (the medians with repetitions): on stdout
+// with the console table, on stderr with --benchmark_format=json or csv, so that stdout holds
+// Google Benchmark's report alone (--benchmark_format=json replaces the former --json).
+//
+// Agreement, checked after each benchmark's timed loop on its last answers: every peer answer
+// against Δ's on the first thread count of --threads within 10⁻⁹ D (W1, W3, W5; W2: the same
+// points within ε, except points whose distance is within 10⁻⁹ D of ε; W4a: the minimum distance;
+// W4b: the same intersecting triangle pairs), and Δ's answers on every thread count against the
+// first's, bit for bit (signed: |d| equal to the unsigned distance too). A disagreement stops the
+// benchmark with an error in its row; it is settled by brute force over all triangles with an
+// exact oracle (CGAL; the first 3 of each benchmark) on stderr, and makes the exit code 1 (2: bad
+// options, an unreadable mesh, or a benchmark that stopped on an exception).
+#include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <iterator>
 #include <limits>
-#include <numeric>
+#include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <set>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "delta/core/version.h"
 #include "delta/ib/adaptive_grid.h"
 #include "delta/io/mesh_io.h"
 #include "delta/kernels/point_triangle.h"
+#include "delta/mesh/topology.h"
 #include "delta/query/contacts.h"
 #include "delta/query/minimum_distance.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 
+#include "bench_main.h"
 #include "boundary_step.h"
+#include "omp_threads.h"
 #include "peers.h"
 #include "report.h"
 
@@ -78,11 +105,9 @@ using delta::RigidTransform;
 using delta::Triangle;
 using delta::Vec3;
 namespace cd = delta::contactdetection;
+namespace ib = delta::ib;
 namespace bench = delta::bench;
-using bench::makeRow;
-using bench::MeshReport;
-using bench::Row;
-using bench::setRatios;
+using bench::OmpThreads;
 using bench::withCommas;
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
@@ -95,8 +120,6 @@ constexpr double kOverlapFraction = 0.05;      // W4b's overlap
 constexpr double kMeshEpsilonFraction = 1e-6;  // W4b's ε
 constexpr double kStepInCells = 0.2;           // W5's motion a move, in finest-cell diagonals
 constexpr int kMaxLevels = 20;                 // ib::GridOptions::levels
-constexpr double kRepeatBelowSeconds = 2.0;
-constexpr double kSampleSeconds = 0.05;  // a sample of a short query repeats it this long
 constexpr std::size_t kFclMaxContacts = 100'000'000;
 constexpr std::size_t kDisputesShown = 3;  // disagreements settled by brute force, each
 constexpr std::uint64_t kUniformSeed = 1;  // as `delta distance --points builtin:uniform:N`
@@ -115,12 +138,11 @@ struct Options {
   std::array<bool, 5> workloads{true, true, true, true, false};
   int levels = 7;  // W5
   int moves = 10;  // W5
-  bool json = false;
 };
 
 constexpr const char* kUsage =
     "usage: delta_bench_peers [--mesh PATH]... [--points N] [--threads LIST] "
-    "[--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [--json]\n"
+    "[--workloads W1,W2,W3,W4,W5] [--levels L] [--moves T] [Google Benchmark's flags]\n"
     "  --mesh PATH      a mesh file (repeatable; default CGAL's armadillo, bunny00 and\n"
     "                   refined_elephant from " DELTA_DATA_DIR
     "/meshes)\n"
@@ -129,7 +151,10 @@ constexpr const char* kUsage =
     "  --workloads LIST any of W1,W2,W3,W4,W5 (default W1,W2,W3,W4)\n"
     "  --levels L       W5: the grid's finest level, 1 to 20 (default 7)\n"
     "  --moves T        W5: moves of the boundary (default 10)\n"
-    "  --json           print one JSON object on stdout instead of the tables\n";
+    "Every other argument goes to Google Benchmark (listed below), which refuses what it does\n"
+    "not know: --benchmark_filter=REGEX (benchmarks are named W1/armadillo/Embree/threads:2),\n"
+    "--benchmark_repetitions=N, --benchmark_out=FILE, and --benchmark_format=json, which\n"
+    "replaces the former --json (the table of peer/Δ ratios then goes to stderr).\n";
 
 [[noreturn]] void usageError(const std::string& message) {
   std::fprintf(stderr, "delta_bench_peers: %s\n%s", message.c_str(), kUsage);
@@ -157,8 +182,11 @@ long long positiveInteger(const std::string& text, const char* option) {
   return value;
 }
 
-Options parseOptions(int argc, char** argv) {
+/// The program's own options, from argv; the other arguments (Google Benchmark's flags, and
+/// anything else, for benchmark::Initialize to refuse) go to `rest`, after argv[0].
+Options parseOptions(int argc, char** argv, std::vector<char*>& rest) {
   Options options;
+  rest.assign(argv, argv + 1);
   for (int i = 1; i < argc; ++i) {
     const std::string argument = argv[i];
     const auto value = [&]() -> std::string {
@@ -167,6 +195,7 @@ Options parseOptions(int argc, char** argv) {
     };
     if (argument == "--help" || argument == "-h") {
       std::fputs(kUsage, stdout);
+      benchmark::PrintDefaultHelp();
       std::exit(0);
     } else if (argument == "--mesh") {
       options.meshes.push_back(value());
@@ -192,9 +221,9 @@ Options parseOptions(int argc, char** argv) {
     } else if (argument == "--moves") {
       options.moves = static_cast<int>(positiveInteger(value(), "--moves"));
     } else if (argument == "--json") {
-      options.json = true;
+      usageError("--json is gone: Google Benchmark's --benchmark_format=json replaces it");
     } else {
-      usageError("unknown option '" + argument + "'");
+      rest.push_back(argv[i]);
     }
   }
   if (options.meshes.empty())
@@ -203,38 +232,11 @@ Options parseOptions(int argc, char** argv) {
   return options;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Timing
-
+/// The seconds `run` took (a structure's build; queries are timed by Google Benchmark).
 double secondsOf(const std::function<void()>& run) {
   const auto start = std::chrono::steady_clock::now();
   run();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-struct QueryTime {
-  double seconds = 0.0;
-  int runs = 1;
-};
-
-/// One run; when it took under kRepeatBelowSeconds it was the warm-up, and the time is the median
-/// of five samples, each of as many runs as fill kSampleSeconds (a sub-millisecond mesh–mesh
-/// query is otherwise timed at the resolution of this shared machine's noise), per run. Every
-/// run computes the full answer (the last one's is kept).
-QueryTime timeQuery(const std::function<void()>& run) {
-  const double first = secondsOf(run);
-  if (first >= kRepeatBelowSeconds) return {first, 1};
-  const int perSample =
-      static_cast<int>(std::clamp(std::ceil(kSampleSeconds / std::max(first, 1e-9)), 1.0, 1e6));
-  std::array<double, 5> times{};
-  for (double& t : times)
-    t = secondsOf([&] {
-          for (int r = 0; r < perSample; ++r)
-            run();
-        }) /
-        perSample;
-  std::sort(times.begin(), times.end());
-  return {times[2], static_cast<int>(times.size()) * perSample};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -289,12 +291,6 @@ struct Comparison {
   double maxDifference = 0.0;  // over the points both answered
   std::vector<std::size_t> examples;
 };
-
-void setAgreement(Row& row, const Comparison& comparison, double diagonal) {
-  row.agreed = comparison.disagreements == 0;
-  row.maxDifference = comparison.maxDifference / diagonal;
-  row.agreement = row.agreed ? "yes" : "NO (" + withCommas(comparison.disagreements) + ")";
-}
 
 /// Every distance within `tolerance` of Δ's.
 Comparison compareDistances(const std::vector<double>& reference, const std::vector<double>& peer,
@@ -386,16 +382,6 @@ std::string settlePoint(const Mesh& mesh, const Vec3& p, double radius, double d
   return text;
 }
 
-// ---------------------------------------------------------------------------------------------
-// W1–W3
-
-struct PointWorkload {
-  std::string name;
-  const std::vector<Vec3>* points;
-  double radius;            // +∞ or ε
-  bool alsoSigned = false;  // a second Δ row: signed distances (a closed mesh)
-};
-
 std::vector<double> distancesOf(const std::vector<cd::PointDistance>& answers) {
   std::vector<double> out(answers.size());
   for (std::size_t i = 0; i < answers.size(); ++i)
@@ -408,140 +394,13 @@ std::size_t countFinite(const std::vector<double>& distances) {
       std::count_if(distances.begin(), distances.end(), [](double d) { return std::isfinite(d); }));
 }
 
-/// Δ's signed distances for `workload`: timed as the unsigned ones, and checked against them (the
-/// same |distance|, bit for bit) and against the first thread count's (`firstSigned`, set when
-/// empty).
-Row signedRow(const QueryMesh& queryMesh, const PointWorkload& workload, int threads,
-              double buildSeconds, double unsignedSeconds,
-              const std::vector<double>& unsignedAnswers, std::vector<double>& firstSigned) {
-  std::vector<cd::PointDistance> answers(workload.points->size());
-  const QueryTime time = timeQuery([&] {
-    cd::distances(queryMesh, *workload.points, {.epsilon = workload.radius, .signedDistance = true},
-                  answers);
-  });
-  std::vector<double> signedDistances(answers.size());
-  std::size_t inside = 0, differing = 0;
-  for (std::size_t i = 0; i < answers.size(); ++i) {
-    signedDistances[i] = answers[i].signedDistance();
-    inside += answers[i].inside ? 1 : 0;
-    differing += answers[i].distance != unsignedAnswers[i] ? 1 : 0;
-  }
-  Row row = makeRow(workload.name, "Δ signed", threads);
-  row.buildSeconds = buildSeconds;
-  row.querySeconds = time.seconds;
-  row.queryRuns = time.runs;
-  row.bytesPerTriangle =
-      static_cast<double>(queryMesh.memoryBytes()) / static_cast<double>(queryMesh.size());
-  row.memoryMethod = "QueryMesh::memoryBytes()";
-  row.agreed = differing == 0;
-  row.agreement =
-      row.agreed ? "|d| = unsigned" : "NO: " + withCommas(differing) + " |d| != unsigned";
-  if (firstSigned.empty()) {
-    firstSigned = signedDistances;
-  } else if (firstSigned != signedDistances) {
-    row.agreed = false;
-    row.agreement += ", NO: differs from the first thread count";
-  } else {
-    row.agreement += ", = 1st thread count";
-  }
-  char note[96];
-  std::snprintf(note, sizeof note, "inside: %s; %.2f× the unsigned query",
-                withCommas(inside).c_str(), time.seconds / unsignedSeconds);
-  row.note = note;
-  return row;
-}
-
-void runPointWorkloads(const Mesh& mesh, const std::vector<PointWorkload>& workloads,
-                       const Options& options, MeshReport& report) {
-  const double diagonal = report.diagonal, tolerance = kAgreementFraction * diagonal;
-  const double triangles = static_cast<double>(mesh.triangleCount());
-  // Δ's answers on the first thread count: the others must match them bit for bit.
-  std::vector<std::vector<double>> firstAnswers(workloads.size()), firstSigned(workloads.size());
-
-  for (const int threads : options.threads) {
-    omp_set_num_threads(threads);
-    std::vector<std::vector<double>> deltaAnswers(workloads.size());
-
-    // Δ
-    std::optional<QueryMesh> queryMesh;
-    const double deltaBuild = secondsOf([&] { queryMesh.emplace(mesh); });
-    for (std::size_t w = 0; w < workloads.size(); ++w) {
-      const PointWorkload& workload = workloads[w];
-      // Into a buffer made before the clock starts, as every peer's answers are.
-      std::vector<cd::PointDistance> answers(workload.points->size());
-      const QueryTime time = timeQuery([&] {
-        cd::distances(*queryMesh, *workload.points, {.epsilon = workload.radius}, answers);
-      });
-      deltaAnswers[w] = distancesOf(answers);
-      Row row = makeRow(workload.name, "Δ", threads);
-      row.buildSeconds = deltaBuild;
-      row.querySeconds = time.seconds;
-      row.queryRuns = time.runs;
-      row.bytesPerTriangle = static_cast<double>(queryMesh->memoryBytes()) / triangles;
-      row.memoryMethod = "QueryMesh::memoryBytes()";
-      if (firstAnswers[w].empty()) {
-        firstAnswers[w] = deltaAnswers[w];
-        row.agreement = "reference";
-      } else {
-        row.agreed = firstAnswers[w] == deltaAnswers[w];
-        row.agreement = row.agreed ? "reference (= first thread count)"
-                                   : "NO: differs from the first thread count";
-      }
-      if (std::isfinite(workload.radius))
-        row.note = "within ε: " + withCommas(countFinite(deltaAnswers[w]));
-      else if (workload.points->size() != options.points)
-        row.note = withCommas(workload.points->size()) + " points";
-      report.rows.push_back(row);
-      if (workload.alsoSigned)
-        report.rows.push_back(signedRow(*queryMesh, workload, threads, deltaBuild, row.querySeconds,
-                                        deltaAnswers[w], firstSigned[w]));
-    }
-
-    // The peers
-    struct PeerMaker {
-      std::string name;
-      std::function<std::unique_ptr<bench::PointDistancePeer>()> make;
-    };
-    std::vector<PeerMaker> peers;
-#if defined(DELTA_HAVE_EMBREE)
-    peers.push_back({"Embree", [&] { return bench::makeEmbreePeer(mesh, threads); }});
-#endif
-#if defined(DELTA_HAVE_CGAL)
-    peers.push_back({"CGAL", [&] { return bench::makeCgalPeer(mesh); }});
-#endif
-    for (const PeerMaker& maker : peers) {
-      const std::unique_ptr<bench::PointDistancePeer> peer = maker.make();
-      for (std::size_t w = 0; w < workloads.size(); ++w) {
-        const PointWorkload& workload = workloads[w];
-        std::vector<double> answers(workload.points->size());
-        const QueryTime time =
-            timeQuery([&] { peer->distances(*workload.points, workload.radius, answers); });
-        Row row = makeRow(workload.name, maker.name, threads);
-        row.buildSeconds = peer->buildSeconds();
-        row.querySeconds = time.seconds;
-        row.queryRuns = time.runs;
-        row.bytesPerTriangle = static_cast<double>(peer->memoryBytes()) / triangles;
-        row.memoryMethod = peer->memoryMethod();
-        const std::vector<double>& reference = deltaAnswers[w];
-        const Comparison comparison = std::isfinite(workload.radius)
-                                          ? compareWithin(*queryMesh, *workload.points, reference,
-                                                          answers, workload.radius, tolerance)
-                                          : compareDistances(reference, answers, tolerance);
-        setAgreement(row, comparison, diagonal);
-        if (std::isfinite(workload.radius))
-          row.note = "within ε: " + withCommas(countFinite(answers));
-        for (const std::size_t i : comparison.examples) {
-          const Vec3& p = (*workload.points)[i];
-          report.disputes.push_back(workload.name + ", " + maker.name + ", point " +
-                                    std::to_string(i) + ": " +
-                                    settlePoint(mesh, p, workload.radius, reference[i], answers[i],
-                                                maker.name, tolerance, diagonal));
-        }
-        setRatios(row, report.rows);
-        report.rows.push_back(row);
-      }
-    }
-  }
+/// How many distances differ from the reference's, bit for bit.
+std::size_t countDiffering(const std::vector<double>& distances,
+                           const std::vector<double>& reference) {
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < distances.size(); ++i)
+    differing += distances[i] != reference[i] ? 1 : 0;
+  return differing;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -596,15 +455,6 @@ struct MeshMeshScene {
   std::string gapName = "W4a min distance", contactName = "W4b contacts";
 };
 
-/// Δ's W4 answers at the first thread count, which the other thread counts and the peers are
-/// compared with.
-struct MeshMeshReference {
-  cd::MinimumDistance minimum;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> contacts;      ///< (first, second) ids
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> intersecting;  ///< at distance 0
-  bool made = false;
-};
-
 MeshMeshScene meshMeshScene(const Mesh& mesh, double diagonal) {
   const double gapShift = shiftForGap(mesh, kGapFraction * diagonal, diagonal);
   const double overlapShift = gapShift - kOverlapFraction * diagonal;
@@ -621,99 +471,557 @@ MeshMeshScene meshMeshScene(const Mesh& mesh, double diagonal) {
           moved(mesh, overlapMotion)};
 }
 
-/// A row of Δ's W4: both meshes prepared (timed) and the copy moved rigidly by `motion`, as
-/// FCL's models are (the DEM case), then `query(first, copy)` timed.
-template <class Query>
-Row deltaMeshMeshRow(const MeshMeshScene& scene, const std::string& name,
-                     const RigidTransform& motion, int threads, const Query& query) {
-  std::optional<QueryMesh> a, b;
-  const double build = secondsOf([&] {
-    a.emplace(scene.mesh);
-    b.emplace(scene.mesh);
-  });
-  b->transform(motion);
-  const QueryTime time = timeQuery([&] { query(*a, *b); });
-  Row row = makeRow(name, "Δ", threads);
-  row.buildSeconds = build;
-  row.querySeconds = time.seconds;
-  row.queryRuns = time.runs;
-  row.bytesPerTriangle = static_cast<double>(a->memoryBytes() + b->memoryBytes()) / scene.triangles;
-  row.memoryMethod = "QueryMesh::memoryBytes(), both meshes";
-  row.agreement = "reference";
-  return row;
-}
-
-/// A later thread count's row: whether it answered as the first did.
-void compareWithFirst(Row& row, bool same) {
-  row.agreed = same;
-  row.agreement =
-      same ? "reference (= first thread count)" : "NO: differs from the first thread count";
-}
-
-/// W4a by Δ on `threads` threads.
-Row deltaMinimumDistance(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
-  cd::MinimumDistance minimum;
-  Row row = deltaMeshMeshRow(
-      scene, scene.gapName, scene.gapMotion, threads,
-      [&](const QueryMesh& a, const QueryMesh& b) { minimum = cd::minimumDistance(a, b); });
-  row.note = pairNote(minimum.distance, minimum.first, minimum.second);
-  if (reference.made)
-    compareWithFirst(row, minimum.distance == reference.minimum.distance);
-  else
-    reference.minimum = minimum;
-  return row;
-}
-
-/// W4b by Δ on `threads` threads.
-Row deltaContacts(const MeshMeshScene& scene, int threads, MeshMeshReference& reference) {
-  std::vector<delta::ContactPoint> contacts;
-  Row row = deltaMeshMeshRow(scene, scene.contactName, scene.overlapMotion, threads,
-                             [&](const QueryMesh& a, const QueryMesh& b) {
-                               contacts = cd::contacts(a, b, scene.epsilon);
-                             });
+/// Δ's W4b answer as triangle pairs: the (first, second) ids of every contact, in Δ's order,
+/// and of those at distance 0 (intersecting).
+struct ContactPairs {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> all, intersecting;
   std::size_t overlapping = 0;
+};
+
+ContactPairs contactPairs(const std::vector<delta::ContactPoint>& contacts) {
+  ContactPairs pairs;
   for (const delta::ContactPoint& contact : contacts) {
-    all.emplace_back(contact.first, contact.second);
-    overlapping += contact.overlap ? 1 : 0;
-    if (contact.distance == 0.0) intersecting.emplace_back(contact.first, contact.second);
+    pairs.all.emplace_back(contact.first, contact.second);
+    pairs.overlapping += contact.overlap ? 1 : 0;
+    if (contact.distance == 0.0) pairs.intersecting.emplace_back(contact.first, contact.second);
   }
-  row.note = "contacts " + withCommas(contacts.size()) + ", overlapping " +
-             withCommas(overlapping) + ", intersecting pairs " + withCommas(intersecting.size());
-  if (reference.made)
-    compareWithFirst(row, all == reference.contacts);
-  else
-    reference.contacts = std::move(all);
-  reference.intersecting = std::move(intersecting);
-  return row;
+  return pairs;
+}
+
+// ---------------------------------------------------------------------------------------------
+// W5
+
+/// Where `grid`'s vertices are and the distances it holds, to compare grids.
+struct GridField {
+  std::vector<Vec3> positions;
+  std::vector<double> distances;
+
+  explicit GridField(const delta::ib::AdaptiveGrid& grid)
+      : positions(grid.positions()), distances(grid.distances().begin(), grid.distances().end()) {}
+  bool operator==(const GridField&) const = default;
+};
+
+// ---------------------------------------------------------------------------------------------
+// What the benchmarks share
+
+enum class Workload { W1, W2, W3, W4a, W4b, W5, W5Build, W5Moves };
+enum class Library { Delta, DeltaSigned, Embree, Cgal, Fcl };
+
+const char* nameOf(Workload workload) {
+  constexpr std::array<const char*, 8> names{"W1",  "W2", "W3",       "W4a",
+                                             "W4b", "W5", "W5-build", "W5-moves"};
+  return names[static_cast<std::size_t>(workload)];
+}
+
+const char* nameOf(Library library) {
+  constexpr std::array<const char*, 5> names{"Delta", "Delta-signed", "Embree", "CGAL", "FCL"};
+  return names[static_cast<std::size_t>(library)];
+}
+
+/// A mesh of --mesh, loaded before any benchmark is registered, and the name its benchmarks
+/// carry (the file's stem, with -2, -3, … where two files share one).
+struct LoadedMesh {
+  std::string path, name;
+  Mesh mesh;
+  double diagonal = 0.0;
+  bool closed = false;  // closed and consistently oriented: QueryMesh::closed()
+};
+
+/// Δ's prepared mesh on one thread count, and the seconds its build took.
+struct DeltaMesh {
+  std::optional<QueryMesh> mesh;
+  double buildSeconds = 0.0;
+};
+
+/// W4's two prepared meshes, the copy moved rigidly to its place as FCL's models are (the DEM
+/// case), and the seconds both builds took.
+struct DeltaPair {
+  std::optional<QueryMesh> first, second;
+  double buildSeconds = 0.0;
+};
+
+#if defined(DELTA_HAVE_FCL)
+/// FCL's two models, and the seconds their build took.
+struct FclPair {
+  std::unique_ptr<bench::FclMeshPair> models;
+  double buildSeconds = 0.0;
+};
+#endif
+
+/// W5's grid built on the first thread count, which every thread count's grid must equal.
+struct GridReference {
+  std::optional<QueryMesh> boundary;  // its own, so that the grid's data is not counted in the
+                                      // memoryBytes() of the QueryMesh the W5 queries use
+  ib::GridOptions options;
+  double cellDiagonal = 0.0;  // of a finest cell, h
+  double step = 0.0;          // how far the furthest vertex moves in one move
+  std::optional<ib::AdaptiveGrid> built;
+  std::optional<GridField> builtField;
+  std::size_t differingFromDirect = 0;  // vertices whose distance is not a direct query's
+};
+
+/// What the benchmarks of one mesh share, each part made the first time a benchmark needs it
+/// (before its timed loop), then kept. Δ's reference answers are its answers on the first
+/// thread count of --threads, made there whichever benchmarks a filter leaves.
+///
+/// Threading: one benchmark at a time; every part is made on the thread count it belongs to.
+class MeshState {
+ public:
+  MeshState(const LoadedMesh& loaded, const Options& options)
+      : loaded_(loaded), options_(options) {}
+
+  const LoadedMesh& loaded() const noexcept { return loaded_; }
+  const Mesh& mesh() const noexcept { return loaded_.mesh; }
+  double diagonal() const noexcept { return loaded_.diagonal; }
+  double tolerance() const noexcept { return kAgreementFraction * loaded_.diagonal; }
+  int firstThreads() const noexcept { return options_.threads.front(); }
+  double triangles() const noexcept { return static_cast<double>(mesh().triangleCount()); }
+
+  /// The query points: W1 and W2 the uniform points, W3 those near the surface, W5 the grid's
+  /// vertices.
+  const std::vector<Vec3>& points(Workload workload) {
+    switch (workload) {
+      case Workload::W3:
+        if (!nearSurface_)
+          nearSurface_ = nearSurfacePoints(mesh(), kContactFraction * diagonal(), options_.points,
+                                           kNearSurfaceSeed);
+        return *nearSurface_;
+      case Workload::W5:
+        return grid().builtField->positions;
+      default:
+        if (!uniform_) uniform_ = uniformPoints(mesh().bounds(), options_.points, kUniformSeed);
+        return *uniform_;
+    }
+  }
+
+  /// The query's radius: W2's ε, +∞ (unbounded) for the others.
+  double radius(Workload workload) const {
+    return workload == Workload::W2 ? kContactFraction * diagonal() : kInfinity;
+  }
+
+  const DeltaMesh& deltaMesh(int threads) {
+    DeltaMesh& built = deltaMeshes_[threads];
+    if (!built.mesh) {
+      const OmpThreads omp(threads);
+      built.buildSeconds = secondsOf([&] { built.mesh.emplace(mesh()); });
+    }
+    return built;
+  }
+
+  /// Embree's scene for `threads` (its device has that many), or CGAL's tree (one for every
+  /// thread count: its build is serial).
+  const bench::PointDistancePeer& peer(Library library, int threads) {
+    std::unique_ptr<bench::PointDistancePeer>& peer =
+        peers_[{library, library == Library::Cgal ? 0 : threads}];
+    if (!peer) {
+      const OmpThreads omp(threads);
+#if defined(DELTA_HAVE_EMBREE)
+      if (library == Library::Embree) peer = bench::makeEmbreePeer(mesh(), threads);
+#endif
+#if defined(DELTA_HAVE_CGAL)
+      if (library == Library::Cgal) peer = bench::makeCgalPeer(mesh());
+#endif
+      if (!peer) throw std::logic_error(std::string("no points–mesh peer ") + nameOf(library));
+    }
+    return *peer;
+  }
+
+  /// Δ's unsigned distances (+∞ beyond the radius) on the first thread count.
+  const std::vector<double>& reference(Workload workload) {
+    const auto found = references_.find(workload);
+    if (found != references_.end()) return found->second;
+    const std::vector<cd::PointDistance> answers = firstAnswers(workload, false);
+    return references_.emplace(workload, distancesOf(answers)).first->second;
+  }
+
+  /// Δ's signed distances on the first thread count.
+  const std::vector<double>& signedReference(Workload workload) {
+    const auto found = signedReferences_.find(workload);
+    if (found != signedReferences_.end()) return found->second;
+    const std::vector<cd::PointDistance> answers = firstAnswers(workload, true);
+    std::vector<double> distances(answers.size());
+    for (std::size_t i = 0; i < answers.size(); ++i)
+      distances[i] = answers[i].signedDistance();
+    return signedReferences_.emplace(workload, std::move(distances)).first->second;
+  }
+
+  /// W4's scene, found on the largest thread count.
+  const MeshMeshScene& scene() {
+    if (!scene_) {
+      const OmpThreads omp(*std::max_element(options_.threads.begin(), options_.threads.end()));
+      scene_.emplace(meshMeshScene(mesh(), diagonal()));
+    }
+    return *scene_;
+  }
+
+  /// Δ's two meshes of W4a (the copy at the gap) or W4b (the copy overlapping).
+  const DeltaPair& deltaPair(Workload workload, int threads) {
+    DeltaPair& pair = deltaPairs_[{workload, threads}];
+    if (!pair.first) {
+      const RigidTransform& motion =
+          workload == Workload::W4a ? scene().gapMotion : scene().overlapMotion;
+      const OmpThreads omp(threads);
+      pair.buildSeconds = secondsOf([&] {
+        pair.first.emplace(mesh());
+        pair.second.emplace(mesh());
+      });
+      pair.second->transform(motion);
+    }
+    return pair;
+  }
+
+  /// Δ's W4a answer on the first thread count.
+  const cd::MinimumDistance& minimumReference() {
+    if (!minimum_) {
+      const DeltaPair& pair = deltaPair(Workload::W4a, firstThreads());
+      const OmpThreads omp(firstThreads());
+      minimum_ = cd::minimumDistance(*pair.first, *pair.second);
+    }
+    return *minimum_;
+  }
+
+  /// Δ's W4b answer on the first thread count.
+  const ContactPairs& contactsReference() {
+    if (!contacts_) {
+      const DeltaPair& pair = deltaPair(Workload::W4b, firstThreads());
+      const double epsilon = scene().epsilon;
+      const OmpThreads omp(firstThreads());
+      contacts_ = contactPairs(cd::contacts(*pair.first, *pair.second, epsilon));
+    }
+    return *contacts_;
+  }
+
+#if defined(DELTA_HAVE_FCL)
+  const FclPair& fcl() {
+    if (!fcl_) {
+      FclPair built;
+      built.buildSeconds = secondsOf([&] { built.models = bench::makeFclPair(mesh(), mesh()); });
+      fcl_ = std::move(built);
+    }
+    return *fcl_;
+  }
+#endif
+
+  /// W5's grid, built on the first thread count (signed where the mesh is closed), and checked
+  /// against direct queries at its vertices.
+  const GridReference& grid() {
+    if (grid_) return *grid_;
+    const OmpThreads omp(firstThreads());
+    GridReference grid;
+    const QueryMesh& boundary = grid.boundary.emplace(mesh());
+    grid.options = {.levels = options_.levels, .signedDistance = boundary.closed()};
+    grid.built.emplace(boundary, grid.options);
+    grid.builtField.emplace(*grid.built);
+    const std::vector<Vec3>& positions = grid.builtField->positions;
+    const std::vector<cd::PointDistance> direct =
+        cd::distances(boundary, positions, {.signedDistance = grid.options.signedDistance});
+    for (std::size_t v = 0; v < direct.size(); ++v) {
+      const double expected =
+          grid.options.signedDistance ? direct[v].signedDistance() : direct[v].distance;
+      grid.differingFromDirect += expected != grid.builtField->distances[v] ? 1 : 0;
+    }
+    grid.cellDiagonal = grid.built->cellDiagonal(options_.levels);
+    grid.step = kStepInCells * grid.cellDiagonal;
+    return grid_.emplace(std::move(grid));
+  }
+
+  /// W5's grid after --moves moves from where it was built, on the first thread count.
+  const GridField& movedGrid() {
+    if (!moved_) {
+      const GridReference& reference = grid();
+      const OmpThreads omp(firstThreads());
+      ib::AdaptiveGrid moving = *reference.built;
+      for (int move = 0; move < options_.moves; ++move)
+        moving.moveBoundary(bench::boundaryStep(moving.boundary(), reference.step));
+      moved_.emplace(moving);
+    }
+    return *moved_;
+  }
+
+ private:
+  std::vector<cd::PointDistance> firstAnswers(Workload workload, bool signedDistance) {
+    const std::vector<Vec3>& query = points(workload);
+    const QueryMesh& queryMesh = *deltaMesh(firstThreads()).mesh;
+    const OmpThreads omp(firstThreads());
+    std::vector<cd::PointDistance> answers(query.size());
+    cd::distances(queryMesh, query, {.epsilon = radius(workload), .signedDistance = signedDistance},
+                  answers);
+    return answers;
+  }
+
+  const LoadedMesh& loaded_;
+  const Options& options_;
+  std::optional<std::vector<Vec3>> uniform_, nearSurface_;
+  std::map<int, DeltaMesh> deltaMeshes_;
+  std::map<std::pair<Library, int>, std::unique_ptr<bench::PointDistancePeer>> peers_;
+  std::map<Workload, std::vector<double>> references_, signedReferences_;
+  std::optional<MeshMeshScene> scene_;
+  std::map<std::pair<Workload, int>, DeltaPair> deltaPairs_;
+  std::optional<cd::MinimumDistance> minimum_;
+  std::optional<ContactPairs> contacts_;
+#if defined(DELTA_HAVE_FCL)
+  std::optional<FclPair> fcl_;
+#endif
+  std::optional<GridReference> grid_;
+  std::optional<GridField> moved_;
+};
+
+/// What every benchmark reaches: the structures of the mesh whose benchmarks run now, and what
+/// the checks found. Asked for another mesh, it frees the previous one's structures first: the
+/// benchmarks are registered mesh by mesh, so each is made once (unless
+/// --benchmark_enable_random_interleaving mixes the meshes).
+///
+/// Threading: one benchmark at a time.
+class Shared {
+ public:
+  explicit Shared(const Options& options) : options_(options) {}
+
+  MeshState& of(const LoadedMesh& mesh) {
+    if (!current_ || &current_->loaded() != &mesh) {
+      current_.reset();
+      current_ = std::make_unique<MeshState>(mesh, options_);
+    }
+    return *current_;
+  }
+
+  /// Frees the last mesh's structures (before the program's end, while the peers' libraries
+  /// are still there to free them).
+  void release() { current_.reset(); }
+
+  /// A check of `benchmark` failed: its run stops with `message` as its error and the program
+  /// will exit 1. The first time it fails (Google Benchmark may run it several times), the
+  /// message and the brute-force verdicts settle() returns, one a line, go to stderr.
+  template <class Settle>
+  void disagree(benchmark::State& state, const std::string& benchmark, const std::string& message,
+                const Settle& settle) {
+    if (disagreeing_.insert(benchmark).second) {
+      std::fprintf(stderr, "disagreement: %s: %s\n", benchmark.c_str(), message.c_str());
+      for (const std::string& verdict : settle())
+        std::fprintf(stderr, "  %s\n", verdict.c_str());
+    }
+    state.SkipWithError(message.c_str());
+  }
+  void disagree(benchmark::State& state, const std::string& benchmark, const std::string& message) {
+    disagree(state, benchmark, message, [] { return std::vector<std::string>{}; });
+  }
+
+  /// `benchmark` stopped on an exception: its error, and exit status 2.
+  void fail(benchmark::State& state, const std::string& benchmark, const std::exception& error) {
+    failing_.insert(benchmark);
+    state.SkipWithError(error.what());
+  }
+
+  /// "every check passed", or what failed.
+  std::string verdict() const {
+    if (disagreeing_.empty() && failing_.empty()) return "every check passed";
+    std::string verdict = "FAILED:";
+    if (!disagreeing_.empty())
+      verdict += " " + std::to_string(disagreeing_.size()) + " benchmarks disagree (see stderr)";
+    if (!failing_.empty())
+      verdict += " " + std::to_string(failing_.size()) + " benchmarks stopped with an error";
+    return verdict;
+  }
+
+  /// 0, 1 for a disagreement, 2 for a benchmark that stopped on an exception.
+  int exitStatus() const { return !disagreeing_.empty() ? 1 : !failing_.empty() ? 2 : 0; }
+
+ private:
+  const Options& options_;
+  std::unique_ptr<MeshState> current_;
+  std::set<std::string> disagreeing_, failing_;
+};
+
+/// One benchmark: the mesh, workload, library and thread count it times, and its name.
+struct Case {
+  const LoadedMesh* mesh = nullptr;
+  Workload workload = Workload::W1;
+  Library library = Library::Delta;
+  int threads = 1;
+  std::string name;
+};
+
+// ---------------------------------------------------------------------------------------------
+// W1–W3, W5's vertices
+
+/// The counters of a points–mesh benchmark: its points, queries per second, and the build
+/// seconds and bytes per triangle of the structure it queried; the label says how the bytes
+/// were counted.
+void setPointCounters(benchmark::State& state, std::size_t points, double buildSeconds,
+                      double bytesPerTriangle, const std::string& memoryMethod) {
+  const auto count = static_cast<double>(points);
+  state.counters["points"] = count;
+  state.counters["queries_per_s"] =
+      benchmark::Counter(count, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["build_s"] = buildSeconds;
+  state.counters["bytes_per_triangle"] = bytesPerTriangle;
+  state.SetLabel(memoryMethod);
+}
+
+/// Δ's unsigned distances: the first thread count's, bit for bit.
+void deltaPoints(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const DeltaMesh& built = mesh.deltaMesh(c.threads);
+  const std::vector<Vec3>& points = mesh.points(c.workload);
+  const double radius = mesh.radius(c.workload);
+  const std::vector<double>& reference = mesh.reference(c.workload);
+  const OmpThreads omp(c.threads);
+  // Into a buffer made before the clock starts, as every peer's answers are.
+  std::vector<cd::PointDistance> answers(points.size());
+  for (auto _ : state)
+    cd::distances(*built.mesh, points, {.epsilon = radius}, answers);
+  setPointCounters(state, points.size(), built.buildSeconds,
+                   static_cast<double>(built.mesh->memoryBytes()) / mesh.triangles(),
+                   "QueryMesh::memoryBytes()");
+  const std::vector<double> distances = distancesOf(answers);
+  if (std::isfinite(radius))
+    state.counters["within_eps"] = static_cast<double>(countFinite(distances));
+  if (const std::size_t differing = countDiffering(distances, reference); differing > 0)
+    shared.disagree(state, c.name,
+                    withCommas(differing) + " distances differ from the first thread count's");
+}
+
+/// Δ's signed distances (W5, a closed mesh): |d| the unsigned distance and the signed distances
+/// the first thread count's, bit for bit.
+void deltaSignedPoints(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const DeltaMesh& built = mesh.deltaMesh(c.threads);
+  const std::vector<Vec3>& points = mesh.points(c.workload);
+  const double radius = mesh.radius(c.workload);
+  const std::vector<double>& unsignedReference = mesh.reference(c.workload);
+  const std::vector<double>& signedReference = mesh.signedReference(c.workload);
+  const OmpThreads omp(c.threads);
+  std::vector<cd::PointDistance> answers(points.size());
+  for (auto _ : state)
+    cd::distances(*built.mesh, points, {.epsilon = radius, .signedDistance = true}, answers);
+  setPointCounters(state, points.size(), built.buildSeconds,
+                   static_cast<double>(built.mesh->memoryBytes()) / mesh.triangles(),
+                   "QueryMesh::memoryBytes()");
+  std::size_t inside = 0, notUnsigned = 0, notFirst = 0;
+  for (std::size_t i = 0; i < answers.size(); ++i) {
+    inside += answers[i].inside ? 1 : 0;
+    notUnsigned += answers[i].distance != unsignedReference[i] ? 1 : 0;
+    notFirst += answers[i].signedDistance() != signedReference[i] ? 1 : 0;
+  }
+  state.counters["inside"] = static_cast<double>(inside);
+  if (notUnsigned > 0 || notFirst > 0)
+    shared.disagree(state, c.name,
+                    withCommas(notUnsigned) + " |d| differ from the unsigned distance, " +
+                        withCommas(notFirst) + " signed distances from the first thread count's");
+}
+
+/// A peer's distances: every answer against Δ's; the first disagreements settled by brute force.
+void peerPoints(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const bench::PointDistancePeer& peer = mesh.peer(c.library, c.threads);
+  const std::vector<Vec3>& points = mesh.points(c.workload);
+  const double radius = mesh.radius(c.workload), tolerance = mesh.tolerance();
+  const std::vector<double>& reference = mesh.reference(c.workload);
+  const QueryMesh& deltaMesh = *mesh.deltaMesh(mesh.firstThreads()).mesh;
+  const OmpThreads omp(c.threads);
+  std::vector<double> answers(points.size());
+  for (auto _ : state)
+    peer.distances(points, radius, answers);
+  setPointCounters(state, points.size(), peer.buildSeconds(),
+                   static_cast<double>(peer.memoryBytes()) / mesh.triangles(), peer.memoryMethod());
+  const Comparison comparison =
+      std::isfinite(radius)
+          ? compareWithin(deltaMesh, points, reference, answers, radius, tolerance)
+          : compareDistances(reference, answers, tolerance);
+  if (std::isfinite(radius))
+    state.counters["within_eps"] = static_cast<double>(countFinite(answers));
+  state.counters["max_diff_over_D"] = comparison.maxDifference / mesh.diagonal();
+  if (comparison.disagreements == 0) return;
+  shared.disagree(
+      state, c.name, withCommas(comparison.disagreements) + " answers differ from Δ's", [&] {
+        std::vector<std::string> verdicts;
+        for (const std::size_t i : comparison.examples)
+          verdicts.push_back("point " + std::to_string(i) + ": " +
+                             settlePoint(mesh.mesh(), points[i], radius, reference[i], answers[i],
+                                         nameOf(c.library), tolerance, mesh.diagonal()));
+        return verdicts;
+      });
+}
+
+// ---------------------------------------------------------------------------------------------
+// W4
+
+/// The counters of a mesh–mesh benchmark: the build seconds and bytes per triangle (of both
+/// meshes) of the structures it queried; the label says how the bytes were counted, then
+/// `note` where there is one.
+void setMeshMeshCounters(benchmark::State& state, double buildSeconds, double bytesPerTriangle,
+                         const std::string& memoryMethod, const std::string& note = {}) {
+  state.counters["build_s"] = buildSeconds;
+  state.counters["bytes_per_triangle"] = bytesPerTriangle;
+  state.SetLabel(note.empty() ? memoryMethod : memoryMethod + "; " + note);
+}
+
+/// W4a by Δ: the first thread count's minimum distance, bit for bit.
+void deltaMinimumDistance(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const DeltaPair& pair = mesh.deltaPair(Workload::W4a, c.threads);
+  const cd::MinimumDistance& reference = mesh.minimumReference();
+  const double triangles = mesh.scene().triangles;
+  const OmpThreads omp(c.threads);
+  cd::MinimumDistance minimum;
+  for (auto _ : state)
+    minimum = cd::minimumDistance(*pair.first, *pair.second);
+  setMeshMeshCounters(
+      state, pair.buildSeconds,
+      static_cast<double>(pair.first->memoryBytes() + pair.second->memoryBytes()) / triangles,
+      "QueryMesh::memoryBytes(), both meshes",
+      pairNote(minimum.distance, minimum.first, minimum.second));
+  if (minimum.distance != reference.distance) {
+    char text[160];
+    std::snprintf(text, sizeof text, "d = %.17g, the first thread count's %.17g", minimum.distance,
+                  reference.distance);
+    shared.disagree(state, c.name, text);
+  }
+}
+
+/// W4b by Δ: the first thread count's contacts (their triangle pairs, in order).
+void deltaContacts(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const DeltaPair& pair = mesh.deltaPair(Workload::W4b, c.threads);
+  const ContactPairs& reference = mesh.contactsReference();
+  const double epsilon = mesh.scene().epsilon, triangles = mesh.scene().triangles;
+  const OmpThreads omp(c.threads);
+  std::vector<delta::ContactPoint> contacts;
+  for (auto _ : state)
+    contacts = cd::contacts(*pair.first, *pair.second, epsilon);
+  const ContactPairs pairs = contactPairs(contacts);
+  setMeshMeshCounters(
+      state, pair.buildSeconds,
+      static_cast<double>(pair.first->memoryBytes() + pair.second->memoryBytes()) / triangles,
+      "QueryMesh::memoryBytes(), both meshes");
+  state.counters["contacts"] = static_cast<double>(contacts.size());
+  state.counters["overlapping"] = static_cast<double>(pairs.overlapping);
+  state.counters["intersecting_pairs"] = static_cast<double>(pairs.intersecting.size());
+  if (pairs.all != reference.all)
+    shared.disagree(state, c.name,
+                    "contacts (" + withCommas(pairs.all.size()) +
+                        ") differ from the first thread count's (" +
+                        withCommas(reference.all.size()) + ")");
 }
 
 #if defined(DELTA_HAVE_FCL)
-/// A row of FCL's (one thread: it has no parallel traversal): its build, query and memory.
-Row fclRow(const MeshMeshScene& scene, const std::string& name, const bench::FclMeshPair& fcl,
-           double build, const QueryTime& time) {
-  Row row = makeRow(name, "FCL", 1);
-  row.buildSeconds = build;
-  row.querySeconds = time.seconds;
-  row.queryRuns = time.runs;
-  row.bytesPerTriangle = static_cast<double>(fcl.memoryBytes()) / scene.triangles;
-  row.memoryMethod = "heap growth over the build, both models";
-  return row;
-}
-
 /// W4a by FCL, against Δ's answer; a disagreement is settled on both pairs exactly.
-Row fclMinimumDistance(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
-                       const MeshMeshReference& reference, MeshReport& report) {
-  const cd::MinimumDistance& delta = reference.minimum;
+void fclMinimumDistance(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const MeshMeshScene& scene = mesh.scene();
+  const FclPair& fcl = mesh.fcl();
+  const cd::MinimumDistance& delta = mesh.minimumReference();
+  const OmpThreads omp(c.threads);
   bench::FclMeshPair::Distance answer;
-  Row row = fclRow(scene, scene.gapName, fcl, build,
-                   timeQuery([&] { answer = fcl.minimumDistance(scene.gapMotion); }));
-  row.note = pairNote(answer.distance, answer.first, answer.second);
+  for (auto _ : state)
+    answer = fcl.models->minimumDistance(scene.gapMotion);
+  setMeshMeshCounters(state, fcl.buildSeconds,
+                      static_cast<double>(fcl.models->memoryBytes()) / scene.triangles,
+                      "heap growth over the build, both models",
+                      pairNote(answer.distance, answer.first, answer.second));
   const double difference = std::abs(answer.distance - delta.distance);
-  row.agreed = difference <= scene.tolerance;
-  row.maxDifference = difference / scene.diagonal;
-  row.agreement = row.agreed ? "yes" : "NO";
-  if (!row.agreed) {
+  state.counters["max_diff_over_D"] = difference / scene.diagonal;
+  if (difference <= scene.tolerance) return;
+  shared.disagree(state, c.name, "FCL's minimum distance differs from Δ's", [&] {
     // Which pair is closer? Both pairs, exactly, on Δ's coordinates of the copy.
     char text[512];
     const Triangle fclFirst = scene.mesh.triangle(answer.first),
@@ -732,20 +1040,22 @@ Row fclMinimumDistance(const MeshMeshScene& scene, bench::FclMeshPair& fcl, doub
                   "exactly %.17g)",
                   scene.gapName.c_str(), delta.distance, delta.first, delta.second, deltaExact,
                   answer.distance, answer.first, answer.second, fclExact);
-    report.disputes.push_back(text);
-  }
-  return row;
+    return std::vector<std::string>{text};
+  });
 }
 
 /// W4b by FCL: its intersecting pairs against Δ's (contacts at distance 0); each disagreement
 /// (a few shown) settled exactly.
-Row fclContacts(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double build,
-                const MeshMeshReference& reference, MeshReport& report) {
+void fclContacts(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const MeshMeshScene& scene = mesh.scene();
+  const FclPair& fcl = mesh.fcl();
+  const ContactPairs& reference = mesh.contactsReference();
   const auto& intersecting = reference.intersecting;
+  const OmpThreads omp(c.threads);
   bench::FclMeshPair::Collision collision;
-  Row row =
-      fclRow(scene, scene.contactName, fcl, build,
-             timeQuery([&] { collision = fcl.collide(scene.overlapMotion, kFclMaxContacts); }));
+  for (auto _ : state)
+    collision = fcl.models->collide(scene.overlapMotion, kFclMaxContacts);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> onlyFcl, onlyDelta;
   std::set_difference(collision.pairs.begin(), collision.pairs.end(), intersecting.begin(),
                       intersecting.end(), std::back_inserter(onlyFcl));
@@ -753,14 +1063,16 @@ Row fclContacts(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double buil
                       collision.pairs.end(), std::back_inserter(onlyDelta));
   std::size_t fclOutsideContacts = 0;  // FCL pairs Δ does not even report closer than 2ε
   for (const auto& pair : onlyFcl)
-    if (!std::binary_search(reference.contacts.begin(), reference.contacts.end(), pair))
-      ++fclOutsideContacts;
-  row.note = "contacts " + withCommas(collision.contacts) + ", intersecting pairs " +
-             withCommas(collision.pairs.size()) + " (only FCL " + withCommas(onlyFcl.size()) +
-             ", only Δ " + withCommas(onlyDelta.size()) + ")";
-  row.agreed = onlyFcl.empty() && onlyDelta.empty();
-  row.agreement =
-      row.agreed ? "yes" : "NO (" + withCommas(onlyFcl.size() + onlyDelta.size()) + " pairs)";
+    if (!std::binary_search(reference.all.begin(), reference.all.end(), pair)) ++fclOutsideContacts;
+  setMeshMeshCounters(state, fcl.buildSeconds,
+                      static_cast<double>(fcl.models->memoryBytes()) / scene.triangles,
+                      "heap growth over the build, both models");
+  state.counters["contacts"] = static_cast<double>(collision.contacts);
+  state.counters["intersecting_pairs"] = static_cast<double>(collision.pairs.size());
+  state.counters["only_fcl"] = static_cast<double>(onlyFcl.size());
+  state.counters["only_delta"] = static_cast<double>(onlyDelta.size());
+  state.counters["fcl_pairs_not_in_contacts"] = static_cast<double>(fclOutsideContacts);
+  if (onlyFcl.empty() && onlyDelta.empty()) return;
   const auto settle = [&](const std::pair<std::uint32_t, std::uint32_t>& pair, bool fclSaysMeet) {
     const Triangle first = scene.mesh.triangle(pair.first),
                    second = scene.overlapCopy.triangle(pair.second);
@@ -781,194 +1093,217 @@ Row fclContacts(const MeshMeshScene& scene, bench::FclMeshPair& fcl, double buil
                   fclSaysMeet ? "intersecting" : "not intersecting",
                   fclSaysMeet ? "not intersecting" : "intersecting",
                   meet ? "they meet" : "they do not meet", gap, verdict);
-    report.disputes.push_back(text);
+    return std::string(text);
   };
-  for (std::size_t k = 0; k < onlyFcl.size() && k < kDisputesShown; ++k)
-    settle(onlyFcl[k], true);
-  for (std::size_t k = 0; k < onlyDelta.size() && k < kDisputesShown; ++k)
-    settle(onlyDelta[k], false);
-  if (fclOutsideContacts > 0)
-    row.note += ", " + withCommas(fclOutsideContacts) + " FCL pairs not among Δ's contacts";
-  return row;
+  shared.disagree(state, c.name,
+                  withCommas(onlyFcl.size() + onlyDelta.size()) +
+                      " intersecting pairs differ from Δ's (only FCL " +
+                      withCommas(onlyFcl.size()) + ", only Δ " + withCommas(onlyDelta.size()) + ")",
+                  [&] {
+                    std::vector<std::string> verdicts;
+                    for (std::size_t k = 0; k < onlyFcl.size() && k < kDisputesShown; ++k)
+                      verdicts.push_back(settle(onlyFcl[k], true));
+                    for (std::size_t k = 0; k < onlyDelta.size() && k < kDisputesShown; ++k)
+                      verdicts.push_back(settle(onlyDelta[k], false));
+                    return verdicts;
+                  });
 }
 #endif
 
-void runMeshMeshWorkloads(const Mesh& mesh, const Options& options, MeshReport& report) {
-  omp_set_num_threads(*std::max_element(options.threads.begin(), options.threads.end()));
-  const MeshMeshScene scene = meshMeshScene(mesh, report.diagonal);
-  MeshMeshReference reference;
-  for (const int threads : options.threads) {
-    omp_set_num_threads(threads);
-    report.rows.push_back(deltaMinimumDistance(scene, threads, reference));
-    report.rows.push_back(deltaContacts(scene, threads, reference));
-    reference.made = true;
+// ---------------------------------------------------------------------------------------------
+// W5's grid
+
+/// The counters of W5-build and W5-moves (as bench/ib_bench.cpp's): the grid's vertices and
+/// leaves, queries per build or move, queries per second inside Δ's distance queries and their
+/// share of the time (GridStatistics, summed over the iterations); the label: the grid.
+void setGridCounters(benchmark::State& state, const ib::GridStatistics& totals,
+                     const ib::AdaptiveGrid& grid, const GridReference& reference) {
+  const auto queries = static_cast<double>(totals.queries);
+  state.counters["vertices"] = static_cast<double>(grid.vertexCount());
+  state.counters["leaves"] = static_cast<double>(grid.leafCount());
+  state.counters["queries"] = queries / static_cast<double>(state.iterations());
+  state.counters["queries_per_s_in_delta"] = queries / totals.querySeconds;
+  state.counters["share_in_delta"] = totals.querySeconds / totals.seconds;
+  char label[160];
+  std::snprintf(label, sizeof label,
+                "levels %d, %s distances, finest cell diagonal h = %.6g, a move %.3g h",
+                reference.options.levels, reference.options.signedDistance ? "signed" : "unsigned",
+                reference.cellDiagonal, reference.step / reference.cellDiagonal);
+  state.SetLabel(label);
+}
+
+/// W5-build: the grid built on every thread count must be the first thread count's, which must
+/// hold the distances of direct queries at its vertices.
+void gridBuild(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const GridReference& reference = mesh.grid();
+  const OmpThreads omp(c.threads);
+  std::optional<ib::AdaptiveGrid> grid;
+  ib::GridStatistics totals;
+  for (auto _ : state) {
+    grid.emplace(*reference.boundary, reference.options);
+    totals += grid->statistics();
   }
-#if defined(DELTA_HAVE_FCL)
-  // FCL is single-threaded: its ratios are against Δ on one thread.
-  omp_set_num_threads(1);
-  std::unique_ptr<bench::FclMeshPair> fcl;
-  const double build = secondsOf([&] { fcl = bench::makeFclPair(mesh, mesh); });
-  for (Row row : {fclMinimumDistance(scene, *fcl, build, reference, report),
-                  fclContacts(scene, *fcl, build, reference, report)}) {
-    setRatios(row, report.rows);
-    report.rows.push_back(row);
+  setGridCounters(state, totals, *grid, reference);
+  if (reference.differingFromDirect > 0)
+    shared.disagree(state, c.name,
+                    "the first thread count's grid: " + withCommas(reference.differingFromDirect) +
+                        " vertices differ from direct queries");
+  else if (GridField(*grid) != *reference.builtField)
+    shared.disagree(state, c.name, "the grid differs from the first thread count's");
+}
+
+/// W5-moves: --moves moves (one an iteration) from the built grid, after which the grid must be
+/// the first thread count's.
+void gridMoves(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const GridReference& reference = mesh.grid();
+  const GridField& movedReference = mesh.movedGrid();
+  const OmpThreads omp(c.threads);
+  ib::AdaptiveGrid grid = *reference.built;
+  ib::GridStatistics totals;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const RigidTransform motion = bench::boundaryStep(grid.boundary(), reference.step);
+    state.ResumeTiming();
+    totals += grid.moveBoundary(motion);
   }
-#endif
+  setGridCounters(state, totals, grid, reference);
+  if (GridField(grid) != movedReference)
+    shared.disagree(state, c.name,
+                    "the grid after " + std::to_string(state.iterations()) +
+                        " moves differs from the first thread count's");
 }
 
 // ---------------------------------------------------------------------------------------------
-// W5
+// The program
 
-/// Where `grid`'s vertices are and the distances it holds, to compare grids.
-struct GridField {
-  std::vector<Vec3> positions;
-  std::vector<double> distances;
-
-  explicit GridField(const delta::ib::AdaptiveGrid& grid)
-      : positions(grid.positions()), distances(grid.distances().begin(), grid.distances().end()) {}
-  bool operator==(const GridField&) const = default;
-};
-
-/// W5's grid at every thread count (report.grid): its build (the median of three after a warm-up
-/// when it takes under kRepeatBelowSeconds), then options.moves moves of the boundary. The first
-/// thread count's grid is checked against a direct query at its vertices, the others against
-/// it, before and after the moves. Returns the vertices of the built grid.
-std::vector<Vec3> runGridPhases(const Mesh& mesh, const Options& options, MeshReport& report) {
-  const QueryMesh boundary(mesh);
-  bench::GridReport& grid = report.grid;
-  grid.levels = options.levels;
-  grid.signedDistance = boundary.closed();
-  grid.moves = options.moves;
-  const delta::ib::GridOptions gridOptions{.levels = options.levels,
-                                           .signedDistance = grid.signedDistance};
-  std::optional<GridField> firstBuilt, firstMoved;
-  for (const int threads : options.threads) {
-    omp_set_num_threads(threads);
-    std::optional<delta::ib::AdaptiveGrid> built;
-    std::vector<delta::ib::GridStatistics> runs;
-    const auto build = [&] {
-      built.emplace(boundary, gridOptions);
-      runs.push_back(built->statistics());
-    };
-    build();
-    if (runs.front().seconds < kRepeatBelowSeconds) {
-      runs.clear();
-      for (int run = 0; run < 3; ++run)
-        build();
-      std::sort(runs.begin(), runs.end(),
-                [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
-    }
-    const delta::ib::GridStatistics& median = runs[runs.size() / 2];
-    delta::ib::AdaptiveGrid& adaptive = *built;
-    bench::GridPhases phases;
-    phases.threads = threads;
-    phases.vertices = adaptive.vertexCount();
-    phases.leaves = adaptive.leafCount();
-    phases.buildSeconds = median.seconds;
-    phases.buildRuns = static_cast<int>(runs.size());
-    phases.buildQueries = median.queries;
-    phases.buildQuerySeconds = median.querySeconds;
-
-    const GridField field(adaptive);
-    if (!firstBuilt) {
-      const std::vector<cd::PointDistance> direct =
-          cd::distances(boundary, field.positions, {.signedDistance = grid.signedDistance});
-      std::size_t differing = 0;
-      for (std::size_t v = 0; v < direct.size(); ++v) {
-        const double expected =
-            grid.signedDistance ? direct[v].signedDistance() : direct[v].distance;
-        differing += expected != field.distances[v] ? 1 : 0;
-      }
-      phases.agreed = differing == 0;
-      phases.agreement = phases.agreed
-                             ? "built = direct queries"
-                             : "NO: " + withCommas(differing) + " differ from direct queries";
-      firstBuilt = field;
-    } else {
-      phases.agreed = field == *firstBuilt;
-      phases.agreement = phases.agreed ? "built = first thread count"
-                                       : "NO: built differs from the first thread count";
-    }
-
-    grid.cellDiagonal = adaptive.cellDiagonal(options.levels);
-    grid.step = kStepInCells * grid.cellDiagonal;
-    delta::ib::GridStatistics moves;
-    for (int move = 0; move < options.moves; ++move)
-      moves += adaptive.moveBoundary(bench::boundaryStep(adaptive.boundary(), grid.step));
-    phases.moveSeconds = moves.seconds / options.moves;
-    phases.moveQueries = static_cast<double>(moves.queries) / options.moves;
-    phases.moveQuerySeconds = moves.querySeconds / options.moves;
-    const GridField moved(adaptive);
-    if (!firstMoved) {
-      firstMoved = moved;
-    } else if (moved == *firstMoved) {
-      phases.agreement += ", moved = first thread count";
-    } else {
-      phases.agreed = false;
-      phases.agreement += ", NO: moved differs from the first thread count";
-    }
-    grid.rows.push_back(phases);
+/// The meshes of --mesh, named by their stems.
+std::vector<LoadedMesh> loadMeshes(const Options& options) {
+  std::vector<LoadedMesh> meshes;
+  std::set<std::string> names;
+  for (const std::string& path : options.meshes) {
+    const std::string stem = std::filesystem::path(path).stem().string();
+    std::string name = stem;
+    for (int k = 2; !names.insert(name).second; ++k)
+      name = stem + "-" + std::to_string(k);
+    Mesh mesh = delta::io::load(path);
+    const double diagonal = mesh.bounds().diagonal();
+    const delta::Topology topology = delta::analyzeTopology(mesh);
+    meshes.push_back(
+        {path, name, std::move(mesh), diagonal, topology.closed && topology.consistentlyOriented});
   }
-  return firstBuilt->positions;
+  return meshes;
 }
 
-int run(const Options& options) {
-  if (!options.json)
-    std::printf("Δ %s (%s) against its peers%s; %d hardware threads\n", delta::version(),
-                delta::gitCommit(), bench::peerVersions().c_str(), omp_get_num_procs());
-  std::vector<MeshReport> reports;
-  bool agreed = true;
-  for (const std::string& path : options.meshes) {
-    const Mesh mesh = delta::io::load(path);
-    MeshReport report;
-    report.path = path;
-    report.triangles = mesh.triangleCount();
-    report.vertices = mesh.vertexCount();
-    report.diagonal = mesh.bounds().diagonal();
-    report.points = options.points;
-    const std::vector<Vec3> uniform = uniformPoints(mesh.bounds(), options.points, kUniformSeed);
-    std::vector<Vec3> nearSurface, gridVertices;
-    std::vector<PointWorkload> workloads;
-    if (options.workloads[0]) workloads.push_back({"W1 distance", &uniform, kInfinity});
-    if (options.workloads[1])
-      workloads.push_back({"W2 contacts", &uniform, kContactFraction * report.diagonal});
-    if (options.workloads[2]) {
-      nearSurface = nearSurfacePoints(mesh, kContactFraction * report.diagonal, options.points,
-                                      kNearSurfaceSeed);
-      workloads.push_back({"W3 near surface", &nearSurface, kInfinity});
+using Function = void (*)(benchmark::State&, Shared&, const Case&);
+
+/// Registers `function` on `c`, named workload/mesh/library/threads:N, an exception becoming the
+/// benchmark's error.
+benchmark::internal::Benchmark* add(Shared& shared, Case c, Function function) {
+  c.name = std::string(nameOf(c.workload)) + "/" + c.mesh->name + "/" + nameOf(c.library) +
+           "/threads:" + std::to_string(c.threads);
+  return benchmark::RegisterBenchmark(c.name.c_str(),
+                                      [&shared, c, function](benchmark::State& state) {
+                                        try {
+                                          function(state, shared, c);
+                                        } catch (const std::exception& error) {
+                                          shared.fail(state, c.name, error);
+                                        }
+                                      })
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
+
+/// Mesh by mesh, workload by workload, library by library, thread count by thread count.
+void registerBenchmarks(const std::vector<LoadedMesh>& meshes, const Options& options,
+                        Shared& shared) {
+  std::vector<Library> peers;
+#if defined(DELTA_HAVE_EMBREE)
+  peers.push_back(Library::Embree);
+#endif
+#if defined(DELTA_HAVE_CGAL)
+  peers.push_back(Library::Cgal);
+#endif
+  std::vector<std::pair<Library, Function>> pointLibraries{{Library::Delta, deltaPoints}};
+  for (const Library peer : peers)
+    pointLibraries.emplace_back(peer, peerPoints);
+  for (const LoadedMesh& mesh : meshes) {
+    const auto everyThreadCount = [&](Workload workload, Library library, Function function) {
+      for (const int threads : options.threads)
+        add(shared, {&mesh, workload, library, threads, {}}, function);
+    };
+    for (const Workload workload : {Workload::W1, Workload::W2, Workload::W3})
+      if (options.workloads[static_cast<std::size_t>(workload)])
+        for (const auto& [library, function] : pointLibraries)
+          everyThreadCount(workload, library, function);
+    if (options.workloads[3]) {
+      everyThreadCount(Workload::W4a, Library::Delta, deltaMinimumDistance);
+#if defined(DELTA_HAVE_FCL)
+      add(shared, {&mesh, Workload::W4a, Library::Fcl, 1, {}}, fclMinimumDistance);
+#endif
+      everyThreadCount(Workload::W4b, Library::Delta, deltaContacts);
+#if defined(DELTA_HAVE_FCL)
+      add(shared, {&mesh, Workload::W4b, Library::Fcl, 1, {}}, fclContacts);
+#endif
     }
     if (options.workloads[4]) {
-      gridVertices = runGridPhases(mesh, options, report);
-      workloads.push_back(
-          {"W5 grid vertices", &gridVertices, kInfinity, report.grid.signedDistance});
+      everyThreadCount(Workload::W5Build, Library::Delta, gridBuild);
+      for (const int threads : options.threads)
+        add(shared, {&mesh, Workload::W5Moves, Library::Delta, threads, {}}, gridMoves)
+            ->Iterations(options.moves);
+      for (const auto& [library, function] : pointLibraries) {
+        everyThreadCount(Workload::W5, library, function);
+        if (library == Library::Delta && mesh.closed)
+          everyThreadCount(Workload::W5, Library::DeltaSigned, deltaSignedPoints);
+      }
     }
-    if (!workloads.empty()) runPointWorkloads(mesh, workloads, options, report);
-    if (options.workloads[3]) runMeshMeshWorkloads(mesh, options, report);
-    for (const Row& row : report.rows)
-      agreed = agreed && row.agreed;
-    for (const bench::GridPhases& phases : report.grid.rows)
-      agreed = agreed && phases.agreed;
-    if (!options.json) {
-      bench::printTable(report);
-      std::fflush(stdout);
-    }
-    reports.push_back(std::move(report));
   }
-  if (options.json)
-    printJson(options.points, reports, agreed);
-  else
-    std::printf("\nagreement: %s\n", agreed ? "every check passed" : "FAILED (see above)");
-  return agreed ? 0 : 1;
+}
+
+/// The machine, the peers, the meshes and the options, in Google Benchmark's context.
+void addContext(const std::vector<LoadedMesh>& meshes, const Options& options) {
+  benchmark::AddCustomContext("omp_num_procs", std::to_string(omp_get_num_procs()));
+  bench::addPeersToContext();
+  benchmark::AddCustomContext("points", withCommas(options.points) + " (W1-W3)");
+  if (options.workloads[4])
+    benchmark::AddCustomContext("w5_grid", "levels " + std::to_string(options.levels) + ", " +
+                                               std::to_string(options.moves) + " moves");
+  for (const LoadedMesh& mesh : meshes) {
+    char text[512];
+    std::snprintf(text, sizeof text, "%s: %s triangles, %s vertices, diagonal D = %.6g%s",
+                  mesh.path.c_str(), withCommas(mesh.mesh.triangleCount()).c_str(),
+                  withCommas(mesh.mesh.vertexCount()).c_str(), mesh.diagonal,
+                  mesh.closed ? ", closed" : "");
+    benchmark::AddCustomContext("mesh " + mesh.name, text);
+  }
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options options = parseOptions(argc, argv);
+  std::vector<char*> benchmarkArguments;
+  const Options options = parseOptions(argc, argv, benchmarkArguments);
+  std::vector<LoadedMesh> meshes;
   try {
-    return run(options);
+    meshes = loadMeshes(options);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "delta_bench_peers: %s\n", error.what());
     return 2;
   }
+  Shared shared(options);
+  registerBenchmarks(meshes, options, shared);
+  addContext(meshes, options);
+  bench::RatioReporter reporter;
+  const int benchmarkArgc = static_cast<int>(benchmarkArguments.size());
+  benchmarkArguments.push_back(nullptr);
+  if (const int status = bench::runBenchmarks(benchmarkArgc, benchmarkArguments.data(), &reporter))
+    return status;
+  shared.release();
+  if (!reporter.ran()) return shared.exitStatus();
+  std::FILE* out = reporter.displaysConsole() ? stdout : stderr;
+  std::fflush(stdout);
+  reporter.printRatios(out);
+  std::fprintf(out, "\nagreement: %s\n", shared.verdict().c_str());
+  return shared.exitStatus();
 }

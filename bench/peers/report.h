@@ -1,88 +1,65 @@
 #pragma once
 
-// The report of bench/peers/peers_bench.cpp: one row per workload, library and thread count,
-// printed as a table per mesh or as one JSON object.
+// What bench/peers/peers_bench.cpp reports beside Google Benchmark's own output: the peers'
+// versions in the context, and the peer/Δ ratios of query time, which Google Benchmark does not
+// compute, from the runs its display reporter shows.
+
+#include <benchmark/benchmark.h>
 
 #include <cstddef>
-#include <limits>
+#include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace delta::bench {
 
-inline constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
-
-struct Row {
-  std::string workload;
-  std::string library;
-  int threads = 1;
-  double buildSeconds = kNotMeasured;
-  double querySeconds = kNotMeasured;
-  int queryRuns = 0;
-  double ratioQuery = kNotMeasured;  // peer / Δ at the same thread count
-  double ratioTotal = kNotMeasured;  // (build + query) peer / Δ
-  double bytesPerTriangle = kNotMeasured;
-  std::string memoryMethod;
-  std::string agreement;  // "reference", "yes" or "NO (disagreements)"
-  bool agreed = true;
-  double maxDifference = kNotMeasured;  // max |peer − Δ| / D
-  std::string note;
-};
-
-/// W5's adaptive grid (ib::AdaptiveGrid) at one thread count: its build, and a run of moves of
-/// the boundary. "In Δ" is the time inside Δ's distance queries (GridStatistics::querySeconds).
-struct GridPhases {
-  int threads = 1;
-  std::size_t vertices = 0;
-  std::size_t leaves = 0;
-  double buildSeconds = kNotMeasured;  // the median build (GridStatistics::seconds)
-  int buildRuns = 0;
-  std::size_t buildQueries = 0;
-  double buildQuerySeconds = kNotMeasured;
-  double moveSeconds = kNotMeasured;  // means over the moves
-  double moveQueries = kNotMeasured;
-  double moveQuerySeconds = kNotMeasured;
-  std::string agreement;  // against a direct query and the first thread count
-  bool agreed = true;
-};
-
-/// W5's grid at every thread count, and how it was made and moved.
-struct GridReport {
-  int levels = 0;
-  bool signedDistance = false;
-  double cellDiagonal = kNotMeasured;  // of a finest cell, h
-  int moves = 0;
-  double step = kNotMeasured;  // how far the furthest vertex moves in one move
-  std::vector<GridPhases> rows;
-};
-
-struct MeshReport {
-  std::string path;
-  std::size_t triangles = 0;
-  std::size_t vertices = 0;
-  double diagonal = 0.0;
-  std::size_t points = 0;
-  std::vector<Row> rows;
-  GridReport grid;                    // W5 (no rows when W5 was not run)
-  std::vector<std::string> disputes;  // brute-force verdicts on disagreements
-};
-
-Row makeRow(const std::string& workload, const std::string& library, int threads);
-
 /// 1234567 → "1,234,567".
 std::string withCommas(std::size_t value);
 
-/// Fills the peer/Δ ratios of `row` from Δ's row of the same workload and thread count in `rows`.
-void setRatios(Row& row, const std::vector<Row>& rows);
+/// Adds the versions of the peers this program was built with to Google Benchmark's context
+/// (embree_version, cgal_version, fcl_version) and names those it was built without
+/// (skipped_peers: "FCL (not built with FCL)").
+void addPeersToContext();
 
-/// ", Embree 3.13.5, CGAL 5.5.1, FCL 0.7.0": the peers this program was built with.
-std::string peerVersions();
+/// Google Benchmark's display reporter (the one --benchmark_format chooses, made once the flags
+/// are read), recording the real time of every run it shows. The benchmarks are named
+/// workload/mesh/library/threads:N; library "Delta" is the reference the others are divided by.
+///
+/// Threading: Google Benchmark calls it from the thread that runs the benchmarks.
+class RatioReporter final : public benchmark::BenchmarkReporter {
+ public:
+  bool ReportContext(const Context& context) override;
+  void ReportRuns(const std::vector<Run>& runs) override;
+  void Finalize() override;
 
-/// The mesh's table, W5's grid table, the peers it was built without, and the disagreements'
-/// verdicts.
-void printTable(const MeshReport& report);
+  /// Whether benchmarks ran (not with --benchmark_list_tests, or a filter matching nothing).
+  bool ran() const noexcept { return display_ != nullptr; }
+  /// Whether the display is Google Benchmark's console table (not JSON or CSV): then the ratio
+  /// table goes to stdout beside it, else to stderr, so that stdout stays one JSON document.
+  bool displaysConsole() const noexcept;
+  /// peer/Δ query time per mesh, workload and thread count (Δ's own time in milliseconds): the
+  /// median aggregate where there were repetitions, else the run's time; runs that stopped with
+  /// an error are left out. Workloads without a peer (W5's grid) have no row.
+  void printRatios(std::FILE* out) const;
 
-/// One JSON object for the whole run on stdout.
-void printJson(std::size_t points, const std::vector<MeshReport>& reports, bool agreed);
+ private:
+  struct Time {
+    double seconds = 0.0;  // real time of one query
+    bool median = false;   // the median aggregate of the repetitions
+  };
+  /// The times of one mesh, workload and thread count, per library.
+  struct Measured {
+    std::string mesh, workload;
+    int threads = 1;
+    std::map<std::string, Time> byLibrary;
+  };
+
+  void record(const Run& run);
+
+  benchmark::BenchmarkReporter* display_ = nullptr;  // made and kept by Google Benchmark
+  std::vector<Measured> measured_;                   // in the order first run
+  std::vector<std::string> peers_;                   // the libraries other than Δ, as met
+};
 
 }  // namespace delta::bench
