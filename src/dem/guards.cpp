@@ -47,12 +47,52 @@ Aabb movedBox(const Aabb& box, const RigidTransform& pose) noexcept {
   return moved;
 }
 
+/// The obstacles' boxes where they are, and how fast their farthest points move (0 at rest).
+struct ObstacleMotions {
+  std::vector<Aabb> box;
+  std::vector<double> speed;
+  double fastest = 0.0;
+};
+
+ObstacleMotions obstacleMotions(const std::vector<Obstacle>& obstacles) {
+  ObstacleMotions motions{std::vector<Aabb>(obstacles.size()),
+                          std::vector<double>(obstacles.size(), 0.0)};
+  for (std::size_t o = 0; o < obstacles.size(); ++o) {
+    const Obstacle& wall = obstacles[o];
+    const ObstacleMotion& motion = wall.motion;
+    motions.box[o] = movedBox(wall.queryMesh.bounds(), wall.pose);
+    if (motion.velocity == Vec3{} && motion.angularVelocity == Vec3{}) continue;
+    motions.speed[o] =
+        length(motion.velocity) +
+        length(motion.angularVelocity) * reachFrom(motions.box[o], wall.pose.apply(motion.pivot));
+    motions.fastest = std::max(motions.fastest, motions.speed[o]);
+  }
+  return motions;
+}
+
+/// The fastest two bodies could approach: the two fastest particles' speeds summed, or the
+/// fastest particle's and the fastest obstacle's. Speeds that are not finite are left out (the
+/// step goes on and requireFiniteParticles names the particle after it).
+double fastestPairSpeed(const std::vector<double>& speeds, double fastestObstacle) noexcept {
+  double first = 0.0, second = 0.0;
+  for (const double speed : speeds) {
+    if (!std::isfinite(speed)) continue;
+    if (speed > first) {
+      second = first;
+      first = speed;
+    } else if (speed > second) {
+      second = speed;
+    }
+  }
+  return first + std::max(second, fastestObstacle);
+}
+
 }  // namespace
 
 void World::requireCatchableMotion() const {
   const double dt = parameters_.timeStep, half = 0.5 * dt;
   const double shell = 2.0 * law_.epsilon;
-  // Each particle's drift in the coming step, with the velocities the half kick will give it
+  // Each particle's motion in the coming step, with the velocities the half kick will give it
   // (computed as halfKick() does: World::step in world.h), and how far its surface may move
   // about its centre by turning (|ω|·r·dt).
   struct Motion {
@@ -66,53 +106,30 @@ void World::requireCatchableMotion() const {
                   length(angularVelocityOf(particle, particle.orientation,
                                            particle.angularMomentum + particle.torque * half))};
   };
+  const auto radius = [&](std::size_t i) { return shapes_[particles_[i].shape].boundingRadius(); };
+  // 1. Each particle's speed bound, |v| + |ω|·r.
   std::vector<double> speeds(owned_);
   parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const Motion motion = motionOf(i);
-      speeds[i] =
-          length(motion.velocity) + motion.angular * shapes_[particles_[i].shape].boundingRadius();
+      speeds[i] = length(motion.velocity) + motion.angular * radius(i);
     }
   });
-  // The cheap bound first: the two fastest particles (not finite: the step goes on and
-  // requireFiniteParticles names the particle after it) and the fastest obstacle.
-  double first = 0.0, second = 0.0;
-  for (std::size_t i = 0; i < owned_; ++i) {
-    const double speed = speeds[i];
-    if (!std::isfinite(speed)) continue;
-    if (speed > first) {
-      second = first;
-      first = speed;
-    } else if (speed > second) {
-      second = speed;
-    }
-  }
-  std::vector<double> wallSpeed(obstacles_.size(), 0.0);
-  std::vector<Aabb> wallBox(obstacles_.size());
-  double obstacle = 0.0;
-  for (std::size_t o = 0; o < obstacles_.size(); ++o) {
-    const Obstacle& wall = obstacles_[o];
-    const ObstacleMotion& motion = wall.motion;
-    wallBox[o] = movedBox(wall.queryMesh.bounds(), wall.pose);
-    if (motion.velocity == Vec3{} && motion.angularVelocity == Vec3{}) continue;
-    wallSpeed[o] =
-        length(motion.velocity) +
-        length(motion.angularVelocity) * reachFrom(wallBox[o], wall.pose.apply(motion.pivot));
-    obstacle = std::max(obstacle, wallSpeed[o]);
-  }
-  if ((first + std::max(second, obstacle)) * dt < shell) return;
+  // 2. Each obstacle's box and speed.
+  const ObstacleMotions obstacles = obstacleMotions(obstacles_);
+  // 3. The cheap bound: no two bodies can approach by 2ε.
+  if (fastestPairSpeed(speeds, obstacles.fastest) * dt < shell) return;
+  // 4. Some two could: the pairs that could, where one moves by ε or more. A pair is unsafe when
+  // its bounding spheres (grown by their turning and the shell) can meet along the straight
+  // drift of their centres, or a particle's swept box can meet an obstacle's box (grown by the
+  // obstacle's motion), and their motions sum to 2ε or more.
   std::vector<Vec3> drift(owned_);
   std::vector<double> turn(owned_);
   for (std::size_t i = 0; i < owned_; ++i) {
     const Motion motion = motionOf(i);
     drift[i] = motion.velocity * dt;
-    turn[i] = motion.angular * shapes_[particles_[i].shape].boundingRadius() * dt;
+    turn[i] = motion.angular * radius(i) * dt;
   }
-
-  // Some two bodies could approach by 2ε: look at the pairs that could, where one moves by ε or
-  // more. A pair is unsafe when its bounding spheres (grown by their turning and the shell) can
-  // meet along the straight drift of their centres, or a particle's swept box can meet an
-  // obstacle's box (grown by the obstacle's motion), and their motions sum to 2ε or more.
   const auto fail = [&](std::size_t i, const std::string& other, double otherSpeed) {
     const Particle& particle = particles_[i];
     const double safe = shell / (speeds[i] + otherSpeed);
@@ -131,26 +148,24 @@ void World::requireCatchableMotion() const {
   for (std::size_t i = 0; i < owned_; ++i) {
     const double mi = speeds[i] * dt;
     if (!std::isfinite(mi)) continue;
-    const Particle& a = particles_[i];
-    const double ra = shapes_[a.shape].boundingRadius();
+    const Vec3& a = particles_[i].position;
     for (std::size_t j = 0; j < owned_; ++j) {
       const double mj = speeds[j] * dt;
       if (j == i || !std::isfinite(mj) || std::max(mi, mj) < epsilon || mi + mj < shell) continue;
       if (mj > mi || (mj == mi && j < i)) continue;  // each pair once, from its faster body
-      const Particle& b = particles_[j];
-      const double reach = ra + shapes_[b.shape].boundingRadius() + turn[i] + turn[j] + shell;
-      if (closestApproach(b.position - a.position, drift[j] - drift[i]) <= reach)
+      const double reach = radius(i) + radius(j) + turn[i] + turn[j] + shell;
+      if (closestApproach(particles_[j].position - a, drift[j] - drift[i]) <= reach)
         fail(i, "particle " + std::to_string(ids_[j]), speeds[j]);
     }
     for (std::size_t o = 0; o < obstacles_.size(); ++o) {
-      const double mo = wallSpeed[o] * dt;
+      const double mo = obstacles.speed[o] * dt;
       if (std::max(mi, mo) < epsilon || mi + mo < shell) continue;
       Aabb swept;
-      swept.extend(a.position);
-      swept.extend(a.position + drift[i]);
-      const double grow = ra + turn[i] + shell + mo;
-      if (distanceSquared(swept, wallBox[o]) <= grow * grow)
-        fail(i, "obstacle " + std::to_string(o), wallSpeed[o]);
+      swept.extend(a);
+      swept.extend(a + drift[i]);
+      const double grow = radius(i) + turn[i] + shell + mo;
+      if (distanceSquared(swept, obstacles.box[o]) <= grow * grow)
+        fail(i, "obstacle " + std::to_string(o), obstacles.speed[o]);
     }
   }
 }
