@@ -857,23 +857,29 @@ void setPointCounters(benchmark::State& state, std::size_t points, double buildS
   state.SetLabel(memoryMethod);
 }
 
-/// Δ's unsigned distances: the first thread count's, bit for bit.
-void deltaPoints(benchmark::State& state, Shared& shared, const Case& c) {
-  MeshState& mesh = shared.of(*c.mesh);
+/// Δ's distances of `c`'s points (signed or not) timed, into a buffer made before the clock
+/// starts, as every peer's answers are; the counters set.
+std::vector<cd::PointDistance> timedDeltaDistances(benchmark::State& state, MeshState& mesh,
+                                                   const Case& c, bool signedDistance) {
   const DeltaMesh& built = mesh.deltaMesh(c.threads);
   const std::vector<Vec3>& points = mesh.points(c.workload);
-  const double radius = mesh.radius(c.workload);
-  const std::vector<double>& reference = mesh.reference(c.workload);
+  const cd::PointQuery query{.epsilon = mesh.radius(c.workload), .signedDistance = signedDistance};
   const OmpThreads omp(c.threads);
-  // Into a buffer made before the clock starts, as every peer's answers are.
   std::vector<cd::PointDistance> answers(points.size());
   for (auto _ : state)
-    cd::distances(*built.mesh, points, {.epsilon = radius}, answers);
+    cd::distances(*built.mesh, points, query, answers);
   setPointCounters(state, points.size(), built.buildSeconds,
                    static_cast<double>(built.mesh->memoryBytes()) / mesh.triangles(),
                    "QueryMesh::memoryBytes()");
-  const std::vector<double> distances = distancesOf(answers);
-  if (std::isfinite(radius))
+  return answers;
+}
+
+/// Δ's unsigned distances: the first thread count's, bit for bit.
+void deltaPoints(benchmark::State& state, Shared& shared, const Case& c) {
+  MeshState& mesh = shared.of(*c.mesh);
+  const std::vector<double>& reference = mesh.reference(c.workload);
+  const std::vector<double> distances = distancesOf(timedDeltaDistances(state, mesh, c, false));
+  if (std::isfinite(mesh.radius(c.workload)))
     state.counters["within_eps"] = static_cast<double>(countFinite(distances));
   if (const std::size_t differing = countDiffering(distances, reference); differing > 0)
     shared.disagree(state, c.name,
@@ -884,18 +890,9 @@ void deltaPoints(benchmark::State& state, Shared& shared, const Case& c) {
 /// the first thread count's, bit for bit.
 void deltaSignedPoints(benchmark::State& state, Shared& shared, const Case& c) {
   MeshState& mesh = shared.of(*c.mesh);
-  const DeltaMesh& built = mesh.deltaMesh(c.threads);
-  const std::vector<Vec3>& points = mesh.points(c.workload);
-  const double radius = mesh.radius(c.workload);
   const std::vector<double>& unsignedReference = mesh.reference(c.workload);
   const std::vector<double>& signedReference = mesh.signedReference(c.workload);
-  const OmpThreads omp(c.threads);
-  std::vector<cd::PointDistance> answers(points.size());
-  for (auto _ : state)
-    cd::distances(*built.mesh, points, {.epsilon = radius, .signedDistance = true}, answers);
-  setPointCounters(state, points.size(), built.buildSeconds,
-                   static_cast<double>(built.mesh->memoryBytes()) / mesh.triangles(),
-                   "QueryMesh::memoryBytes()");
+  const std::vector<cd::PointDistance> answers = timedDeltaDistances(state, mesh, c, true);
   std::size_t inside = 0, notUnsigned = 0, notFirst = 0;
   for (std::size_t i = 0; i < answers.size(); ++i) {
     inside += answers[i].inside ? 1 : 0;
