@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <vector>
 
 #include "delta/io/mesh_io.h"
@@ -109,11 +110,16 @@ void expectSmallestIdNamed(const Mesh& mesh, const std::vector<SharedPoint>& poi
     EXPECT_EQ(found[i].distance, 0.0) << name << ", point " << i;
     EXPECT_EQ(found[i].closest, points[i].point) << name << ", point " << i;
     wrong += found[i].triangle != expected;
-    if (found[i].triangle != expected) {
+    if (found[i].triangle != expected) {  // what each incident triangle's kernel said
+      std::ostringstream said;
+      said.precision(17);
       for (std::uint32_t t : points[i].incident) {
-        auto r = kernels::closestPointOnTriangle(points[i].point, mesh.triangle(t));
-        std::printf("DEBUG tri %u d2 %g feature %d\n", t, r.distanceSquared, int(r.feature));
+        const auto r = kernels::closestPointOnTriangle(points[i].point, mesh.triangle(t));
+        said << " triangle " << t << ": d² " << r.distanceSquared << ", feature "
+             << static_cast<int>(r.feature) << ";";
       }
+      ADD_FAILURE() << name << ", point " << i << " named triangle " << found[i].triangle
+                    << ", not " << expected << ";" << said.str();
     }
     for (kernels::Isa isa : kernels::supportedIsas()) {
       const detail::Nearest nearest = detail::nearestTriangle(
