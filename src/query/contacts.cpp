@@ -580,31 +580,6 @@ void checkEpsilon(double epsilon) {
     throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
 }
 
-/// How far any point of a mesh (its box and its `radius` about the box's centre) moves from
-/// where (`rotation`, `translation`) put it to where `now` does: the smaller of two bounds of
-/// |(R − R₀)·p + t − t₀|, the farthest corner's move (it is convex in p) and the centre's move
-/// plus ‖R − R₀‖·radius. The second is the tighter for a turning body: its corners lie up to √3
-/// times farther out than its surface. ‖R − R₀‖ = ‖R₀ᵀR − I‖ = 2 sin(θ/2) = √(3 − tr R₀ᵀR) for
-/// rotations; the trace, ⟨R₀, R⟩ summed entry by entry, cancels for small turns, so its rounding
-/// (a few ulps of 3) is added under the root.
-double farthestMove(const Aabb& box, double radius, const detail::MatrixMotion& now,
-                    const Mat3& rotation, const Vec3& translation) noexcept {
-  const Mat3 turn = now.rotation + rotation * -1.0;
-  const Vec3 shift = now.translation - translation;
-  double farthest = 0.0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
-                 (corner & 4) ? box.upper.z : box.lower.z};
-    farthest = std::max(farthest, lengthSquared(turn * p + shift));
-  }
-  double trace = 0.0;
-  for (std::size_t k = 0; k < 9; ++k)
-    trace += rotation.entries[k] * now.rotation.entries[k];
-  const double turnNorm = std::sqrt(std::max(0.0, 3.0 - trace) + 0x1p-40);
-  const double ball = length(turn * box.center() + shift) + turnNorm * radius;
-  return std::min(std::sqrt(farthest), ball);
-}
-
 /// Where both QueryMesh contact queries start: ε and the pair checked, the second mesh placed
 /// in the first's prepared frame (the motion only where either has moved).
 struct PlacedPair {
@@ -630,17 +605,11 @@ PlacedPair placedPair(const QueryMesh& first, const QueryMesh& second, double ep
           2.0 * epsilon};
 }
 
-/// The largest coordinate of the pair where the kernels meet it: the first mesh's box and the
-/// corners of the second's, placed.
+/// The largest coordinate of the pair where the kernels meet it, or of the translation that
+/// places the second there (the move's measure rounds with both: detail::relativeMove).
 double magnitudeOf(const PlacedPair& pair) noexcept {
-  double magnitude = std::max(maxAbs(pair.a.bounds.lower), maxAbs(pair.a.bounds.upper));
-  const Aabb& box = pair.b.bounds;
-  for (int corner = 0; corner < 8; ++corner)
-    magnitude = std::max(
-        magnitude, maxAbs(pair.secondToFirst.apply({(corner & 1) ? box.upper.x : box.lower.x,
-                                                    (corner & 2) ? box.upper.y : box.lower.y,
-                                                    (corner & 4) ? box.upper.z : box.lower.z})));
-  return magnitude;
+  return std::max(detail::placedMagnitude(pair.a.bounds, pair.b.bounds, pair.secondToFirst),
+                  maxAbs(pair.motion.translation));
 }
 
 }  // namespace
@@ -662,9 +631,9 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   const bool same = cache.valid_ && cache.firstData_.get() == &pair.a &&
                     cache.secondData_.get() == &pair.b && cache.epsilon_ == epsilon &&
                     cache.solver_ == solver;
-  const double move = same ? farthestMove(pair.b.bounds, pair.b.radius, pair.motion,
-                                          cache.rotation_, cache.translation_)
-                           : 0.0;
+  const double move =
+      same ? detail::relativeMove(pair.a, pair.b, pair.motion, cache.rotation_, cache.translation_)
+           : 0.0;
   if (same && move <= cache.budget_) {
     const double nearer = pair.reach + move + cache.allowance_;
     if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts

@@ -260,7 +260,8 @@ class Side {
         pieces_(recycled<Piece, 0>(isA ? 0 : 1)),
         crossings_(recycled<EdgeCrossing, 0>(isA ? 0 : 1)),
         leafSlot_(SlotMap::of(isA ? 0 : 1, 3, data_.levels[0].size())),
-        leafBoxes_(recycled<LeafBoxes, 0>(isA ? 0 : 1)) {
+        leafBoxes_(recycled<LeafBoxes, 0>(isA ? 0 : 1)),
+        planes_(recycled<detail::SeparatingPlane, 0>(isA ? 0 : 1)) {
     // Conservative world box: the prepared box moved, grown by the motion's rounding.
     const Aabb moved = moved_ ? movedBox(data_.bounds, motion_) : data_.bounds;
     margin_ = 0x1p-40 * (maxAbs(moved.lower) + maxAbs(moved.upper) + maxAbs(pose_.translation));
@@ -337,6 +338,17 @@ class Side {
     return triangles_[static_cast<std::size_t>(slot)];
   }
 
+  /// The separating plane of sorted triangle k where it is (placed first), made on first use:
+  /// for making an OverlapCache only.
+  const detail::SeparatingPlane& plane(std::uint32_t k) {
+    const std::array<Vec3, 3>& p = triangle(k).p;
+    const auto slot = static_cast<std::size_t>(triangleSlot_[k]);
+    if (planes_.size() <= slot) planes_.resize(triangles_.size(), kNoPlane);
+    detail::SeparatingPlane& plane = planes_[slot];
+    if (plane.magnitude < 0.0) plane = detail::separatingPlane(Triangle{p[0], p[1], p[2]});
+    return plane;
+  }
+
   /// Sorted triangle k's placed copy, by slot (stable while triangles are placed).
   PlacedTriangle& placed(std::uint32_t k) {
     triangle(k);
@@ -405,6 +417,9 @@ class Side {
   SlotMap& leafSlot_;
   std::vector<LeafBoxes>& leafBoxes_;
   Aabb otherBox_;
+  /// plane()'s, by triangle slot (magnitude −1: not made yet).
+  std::vector<detail::SeparatingPlane>& planes_;
+  static constexpr detail::SeparatingPlane kNoPlane{{}, {}, -1.0, 0.0, false};
 };
 
 /// Closed boxes that share a point.
@@ -1269,19 +1284,37 @@ namespace delta::contactdetection {
 
 namespace {
 
-/// Phase 2: every pair of triangles whose boxes meet, both trees descended together in A's frame,
-/// then per leaf pair the triangles whose world boxes meet (single precision, conservative): only
-/// these are placed and crossed (crossPair).
-void crossMeetingTriangles(Query& query, const QueryMesh& first, const QueryMesh& second) {
+/// A pair of triangles, A's and B's sorted indices, as one key: increasing keys cross them in
+/// the order of A's, then B's.
+std::uint64_t pairKey(std::uint32_t first, std::uint32_t second) noexcept {
+  return std::uint64_t{first} << 32 | second;
+}
+
+/// Whether sorted triangle i of A and k of B (both placed) lie farther than `reach` apart by the
+/// plane of one of them: all three corners of the other beyond it on one side (dual_traversal.h:
+/// separated, with its margin for the rounding). A box test cannot see this for a particle's
+/// triangles near a large obstacle triangle, whose box holds the whole particle.
+bool planesApart(Side& a, std::uint32_t i, Side& b, std::uint32_t k, double reach) {
+  const detail::SeparatingPlane& planeA = a.plane(i);
+  const detail::SeparatingPlane& planeB = b.plane(k);
+  const std::array<Vec3, 3>&p = a.triangle(i).p, &q = b.triangle(k).p;
+  return detail::separated(planeA, Triangle{q[0], q[1], q[2]}, planeB.magnitude, reach) ||
+         detail::separated(planeB, Triangle{p[0], p[1], p[2]}, planeA.magnitude, reach);
+}
+
+/// Phase 2a: every pair of triangles whose world boxes lie within `skin` of each other (0: whose
+/// boxes meet), both trees descended together in A's frame, then per leaf pair the triangles
+/// whose world boxes come that close (single precision, conservative; the other mesh's box grown
+/// by the skin in setReference): only these are placed. Into `pairs`, by increasing keys.
+void pairsWithin(Query& query, const detail::MatrixMotion& motion, bool moved, double skin,
+                 std::vector<std::uint64_t>& pairs) {
   Side &a = query.a, &b = query.b;
   const detail::QueryMeshData &dataA = a.data(), &dataB = b.data();
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const bool moved = first.moved() || second.moved();
   const detail::MovedTree secondTree(dataB.levels, moved ? &motion : nullptr);
-  const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack;
+  const double reach = 4.0 * (a.margin() + b.margin()) + dataA.slack + dataB.slack + skin;
   std::vector<detail::LeafPair>& leafPairs = recycled<detail::LeafPair, 0>();
   detail::leafPairsWithin(dataA, dataB, secondTree, reach, leafPairs);
+  pairs.clear();
   for (const detail::LeafPair& pair : leafPairs) {
     const LeafBoxes& boxesB = b.leafBoxes(pair.second);
     if (boxesB.nearOther == 0) continue;
@@ -1290,22 +1323,42 @@ void crossMeetingTriangles(Query& query, const QueryMesh& first, const QueryMesh
     const std::size_t fromB = std::size_t{pair.second} * detail::kFanout;
     for (std::uint32_t firsts = boxesA.nearOther; firsts != 0; firsts &= firsts - 1) {
       const auto lane = static_cast<std::size_t>(std::countr_zero(firsts));
-      // B's lanes whose boxes meet this one's.
-      const float lower[3] = {boxesA.boxes.lower[0][lane], boxesA.boxes.lower[1][lane],
-                              boxesA.boxes.lower[2][lane]};
-      const float upper[3] = {boxesA.boxes.upper[0][lane], boxesA.boxes.upper[1][lane],
-                              boxesA.boxes.upper[2][lane]};
+      // B's lanes whose boxes come within the skin of this one's.
+      float lower[3], upper[3];
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        lower[axis] = boxesA.boxes.lower[axis][lane];
+        upper[axis] = boxesA.boxes.upper[axis][lane];
+        if (skin > 0.0) {
+          lower[axis] = floatBelow(double{lower[axis]} - skin);
+          upper[axis] = floatAbove(double{upper[axis]} + skin);
+        }
+      }
       std::uint32_t hits = detail::lanesMeeting(boxesB.boxes, lower, upper);
       hits &= boxesB.nearOther;
       if (hits == 0) continue;
       const auto i = static_cast<std::uint32_t>(fromA + lane);
-      const PlacedTriangle& ta = a.triangle(i);  // B's placing leaves it where it is
+      const Aabb boxA = a.triangle(i).box.grown(skin);
       for (; hits != 0; hits &= hits - 1) {
         const auto k = static_cast<std::uint32_t>(fromB + std::countr_zero(hits));
-        const PlacedTriangle& tb = b.triangle(k);
-        if (meet(ta.box, tb.box)) crossPair(query, i, k, ta, tb);
+        if (meet(boxA, b.triangle(k).box) && (skin == 0.0 || !planesApart(a, i, b, k, skin)))
+          pairs.push_back(pairKey(i, k));
       }
     }
+  }
+  std::sort(pairs.begin(), pairs.end());
+}
+
+/// Phase 2b: the pairs (increasing keys) whose boxes meet crossed, their intersection segments
+/// found (crossPair). A pair that does not cross adds nothing, so what this phase leaves depends
+/// only on the crossing pairs and their order: the same from a cache's pairs as from a fresh
+/// pairsWithin's, as long as both hold every pair that crosses.
+void crossPairs(Query& query, const std::vector<std::uint64_t>& pairs) {
+  Side &a = query.a, &b = query.b;
+  for (const std::uint64_t key : pairs) {
+    const auto i = static_cast<std::uint32_t>(key >> 32), k = static_cast<std::uint32_t>(key);
+    const PlacedTriangle& ta = a.triangle(i);  // B's placing leaves it where it is
+    const PlacedTriangle& tb = b.triangle(k);
+    if (meet(ta.box, tb.box)) crossPair(query, i, k, ta, tb);
   }
 }
 
@@ -1418,10 +1471,13 @@ std::vector<std::size_t>& reportRegions(const Query& query, const std::vector<Su
 }  // namespace
 
 /// In phases: the meshes checked and placed about a reference point (1); the triangles whose
-/// boxes meet crossed, their intersection segments found (2); every triangle's corners classified
-/// inside or outside the other mesh (3); the faces inside and the regions they join into (4);
-/// each region's integrals summed (5); the regions reported, with their curves if asked (6).
-Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
+/// boxes meet crossed, their intersection segments found (2: from the cache where it holds, else
+/// from a descent, which makes the cache anew where it has a skin); every triangle's corners
+/// classified inside or outside the other mesh (3); the faces inside and the regions they join
+/// into (4); each region's integrals summed (5); the regions reported, with their curves if
+/// asked (6).
+Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options,
+                OverlapCache& cache) {
   checkMesh(first, "first");
   checkMesh(second, "second");
   detail::checkPlacedPair(first, second, "overlap");
@@ -1433,10 +1489,50 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   // overlap so that they keep their accuracy far from the world's origin).
   Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
   query.reference = common.center();
-  a.setReference(query.reference, b.box());
-  b.setReference(query.reference, a.box());
 
-  crossMeetingTriangles(query, first, second);
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const bool moved = first.moved() || second.moved();
+  const double skin = cache.skin_;
+  const bool same = cache.valid_ && cache.firstData_ == first.sharedData() &&
+                    cache.secondData_ == second.sharedData();
+  if (same && detail::relativeMove(a.data(), b.data(), motion, cache.rotation_,
+                                   cache.translation_) <= cache.budget_) {
+    a.setReference(query.reference, b.box());
+    b.setReference(query.reference, a.box());
+    crossPairs(query, cache.pairs_);
+    ++cache.reused_;
+  } else if (std::isfinite(skin) && skin > 0.0) {
+    // Kept: the pairs whose boxes lie within the skin now. A pair that crosses later, after the
+    // second has moved by less than the skin less what rounding can add, lies within it now:
+    // the placement of the vertices (world frame) and the move's measure (the first's frame)
+    // round by a few ulps of their coordinates (and of the placing translation) each; allowed
+    // 2⁻³⁶ of the largest of them.
+    a.setReference(query.reference, b.box().grown(skin));
+    b.setReference(query.reference, a.box().grown(skin));
+    pairsWithin(query, motion, moved, skin, cache.pairs_);
+    crossPairs(query, cache.pairs_);
+    const double magnitude =
+        detail::placedMagnitude(a.data().bounds, b.data().bounds, secondToFirst) +
+        maxAbs(motion.translation) +
+        std::max({maxAbs(a.box().lower), maxAbs(a.box().upper), maxAbs(b.box().lower),
+                  maxAbs(b.box().upper)});
+    cache.valid_ = true;
+    cache.firstData_ = first.sharedData();
+    cache.secondData_ = second.sharedData();
+    cache.rotation_ = motion.rotation;
+    cache.translation_ = motion.translation;
+    cache.budget_ = skin - 0x1p-36 * magnitude;
+    ++cache.made_;
+  } else {
+    a.setReference(query.reference, b.box());
+    b.setReference(query.reference, a.box());
+    std::vector<std::uint64_t>& pairs = recycled<std::uint64_t, 0>();
+    pairsWithin(query, motion, moved, 0.0, pairs);
+    crossPairs(query, pairs);
+    ++cache.made_;
+  }
+
   classify(a, b);
   classify(b, a);
   std::vector<Face>& faces = recycled<Face, 0>();
@@ -1454,6 +1550,11 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     result.curves = chainCurves(query, regionOfSegment);
   }
   return result;
+}
+
+Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options) {
+  OverlapCache none;  // no skin: a fresh query
+  return overlap(first, second, options, none);
 }
 
 }  // namespace delta::contactdetection

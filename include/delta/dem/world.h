@@ -230,6 +230,9 @@ struct Energies {
 /// made, handed alone to the kernels until the two bodies have moved ε/2 against each other. The
 /// contacts are those of a fresh query, bit for bit, so neither the thread count nor the process
 /// count (a pair's cache is made anew where a pair moves to another process) changes a result.
+/// Under the volume law each pair keeps a contactdetection::OverlapCache (query/overlap.h) with
+/// the same skin: the triangle pairs whose boxes lay within ε/2 when it was made, the only ones
+/// crossed until the bodies have moved ε/2 against each other; the same overlap, bit for bit.
 ///
 /// The narrow phase, in parallel over
 /// those pairs (delta::parallelFor, each pair into its own slot), runs pairContacts
@@ -527,6 +530,10 @@ class World {
   using SphereCaches = std::vector<std::pair<std::uint64_t, contactdetection::SphereContactCache>>;
   SphereCaches sphereObstacleCaches_, spareSphereCaches_;
   std::vector<contactdetection::SphereContactCache*> sphereCacheOf_;
+  /// Under the volume law, each pair's overlap cache (query/overlap.h), keyed and sorted likewise.
+  using OverlapCaches = std::vector<std::pair<std::uint64_t, contactdetection::OverlapCache>>;
+  OverlapCaches particleOverlapCaches_, obstacleOverlapCaches_, spareOverlapCaches_;
+  std::vector<contactdetection::OverlapCache*> overlapCacheOf_;
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
   std::vector<QueryMesh> placed_;
   std::vector<QueryMesh> placedObstacles_;  ///< each obstacle where it is now

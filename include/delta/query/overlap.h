@@ -2,8 +2,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
 #include "delta/query/query_mesh.h"
 
@@ -94,8 +96,9 @@ struct OverlapOptions {
 /// computed in double in frames local to each triangle, so they keep their accuracy at any offset.
 ///
 /// How: the trees of both meshes are descended together to the pairs of triangles whose boxes
-/// meet; each pair gives at most one segment. Each triangle's part inside the other mesh is
-/// bounded by its edges' inside parts and its segments; integrals over it come from that
+/// meet; each pair gives at most one segment, and they are crossed by increasing triangle ids
+/// (so the result does not depend on the descent's order). Each triangle's part inside the other
+/// mesh is bounded by its edges' inside parts and its segments; integrals over it come from that
 /// boundary alone (Green's theorem), so no polygon is ever built. Which vertices lie inside is
 /// propagated along the edges from those outside the other mesh's box (each crossing flips it);
 /// a connected piece with none (a mesh wholly inside the other's box) takes one exact ray test.
@@ -110,5 +113,68 @@ struct OverlapOptions {
 /// per vertex or triangle, per side), so that a query costs in proportion to the triangles near
 /// the overlap, not to the meshes' sizes.
 Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options = {});
+
+/// What a pair of meshes that meets again and again (a DEM pair, step after step) keeps from one
+/// overlap() to the next: the pairs of triangles that could cross until the second mesh has
+/// moved against the first by `skin`. Made by a descent of both trees that keeps each pair of
+/// triangles whose boxes lie within the skin of each other and that neither one's plane
+/// separates by more; while the two meshes have moved less than the skin against each other
+/// since (measured in the frame where it is smaller: a particle turning next to a large obstacle
+/// moves little in the obstacle's frame; moving both together costs nothing), only those pairs
+/// are placed and crossed: no descent, no leaf boxes, no triangles placed that meet nothing. A
+/// larger skin keeps the cache longer and holds more pairs.
+///
+/// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
+class OverlapCache {
+ public:
+  /// An empty cache (made at the first call that finds the meshes' boxes meeting) that keeps
+  /// the triangle pairs within `skin`; a skin that is not finite and positive makes every call
+  /// a fresh query.
+  explicit OverlapCache(double skin = 0.0) noexcept : skin_(skin) {}
+
+  /// The skin it was given.
+  double skin() const noexcept { return skin_; }
+  /// The triangle pairs it holds.
+  std::size_t size() const noexcept { return pairs_.size(); }
+  /// How many calls made it anew, and how many it answered; for statistics.
+  std::size_t made() const noexcept { return made_; }
+  std::size_t reused() const noexcept { return reused_; }
+  /// Asks the processor to fetch what the next call reads first (a caller's loop over its
+  /// pairs calls it one pair ahead).
+  void prefetch() const noexcept { __builtin_prefetch(pairs_.data()); }
+  /// Forgets what it holds: the next call makes it anew.
+  void clear() noexcept {
+    valid_ = false;
+    firstData_.reset();
+    secondData_.reset();
+  }
+
+ private:
+  friend Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options,
+                         OverlapCache& cache);
+  double skin_ = 0.0;
+  bool valid_ = false;
+  /// The prepared meshes it was made for, held: no other mesh comes to their addresses.
+  std::shared_ptr<const void> firstData_, secondData_;
+  /// Where the second mesh was in the first's prepared frame when made.
+  Mat3 rotation_;
+  Vec3 translation_;
+  double budget_ = 0.0;  ///< how far the second may move: the skin less rounding
+  /// (first, second) sorted triangle indices, first << 32 | second, increasing.
+  std::vector<std::uint64_t> pairs_;
+  std::size_t made_ = 0, reused_ = 0;
+};
+
+/// overlap(a, b, options), the same overlap bit for bit, through `cache`: made anew when empty,
+/// made for other meshes, or when the second mesh has moved against the first by more than the
+/// skin allows since; otherwise only the triangle pairs it holds are crossed (every pair that
+/// crosses now lay within the skin when it was made, and the pairs are crossed in the same order
+/// either way: by increasing indices). Meshes whose boxes do not meet leave it as it is.
+///
+/// Throws as overlap(a, b, options).
+///
+/// Threading: as overlap(); `cache` is the caller's, one thread at a time.
+Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options,
+                OverlapCache& cache);
 
 }  // namespace delta::contactdetection

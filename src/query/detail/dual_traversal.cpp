@@ -34,6 +34,50 @@ MatrixMotion matrixMotion(const RigidTransform& motion) {
   return {Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix(), motion.translation};
 }
 
+/// ‖R − R₀‖ = ‖R₀ᵀR − I‖ = 2 sin(θ/2) = √(3 − tr R₀ᵀR) for rotations; the trace, ⟨R₀, R⟩ summed
+/// entry by entry, cancels for small turns, so its rounding (a few ulps of 3) is added under the
+/// root.
+double farthestMove(const Aabb& box, double radius, const MatrixMotion& now, const Mat3& rotation,
+                    const Vec3& translation) noexcept {
+  const Mat3 turn = now.rotation + rotation * -1.0;
+  const Vec3 shift = now.translation - translation;
+  double farthest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
+                 (corner & 4) ? box.upper.z : box.lower.z};
+    farthest = std::max(farthest, lengthSquared(turn * p + shift));
+  }
+  double trace = 0.0;
+  for (std::size_t k = 0; k < 9; ++k)
+    trace += rotation.entries[k] * now.rotation.entries[k];
+  const double turnNorm = std::sqrt(std::max(0.0, 3.0 - trace) + 0x1p-40);
+  const double ball = length(turn * box.center() + shift) + turnNorm * radius;
+  return std::min(std::sqrt(farthest), ball);
+}
+
+double relativeMove(const QueryMeshData& first, const QueryMeshData& second,
+                    const MatrixMotion& now, const Mat3& rotation,
+                    const Vec3& translation) noexcept {
+  const double secondMoved = farthestMove(second.bounds, second.radius, now, rotation, translation);
+  // The first's points in the second's frame: the inverse motions, (Rᵀ, −Rᵀ·t).
+  const Mat3 back = now.rotation.transposed(), backThen = rotation.transposed();
+  const MatrixMotion inverse{back, back * now.translation * -1.0};
+  const double firstMoved =
+      farthestMove(first.bounds, first.radius, inverse, backThen, backThen * translation * -1.0);
+  return std::min(secondMoved, firstMoved);
+}
+
+double placedMagnitude(const Aabb& first, const Aabb& second,
+                       const RigidTransform& secondToFirst) noexcept {
+  double magnitude = std::max(maxAbs(first.lower), maxAbs(first.upper));
+  for (int corner = 0; corner < 8; ++corner)
+    magnitude = std::max(
+        magnitude, maxAbs(secondToFirst.apply({(corner & 1) ? second.upper.x : second.lower.x,
+                                               (corner & 2) ? second.upper.y : second.lower.y,
+                                               (corner & 4) ? second.upper.z : second.lower.z})));
+  return magnitude;
+}
+
 MovedOctet boxesOf(const Triangle* triangles, std::size_t count, double slack) noexcept {
   MovedOctet octet;
   for (std::size_t i = 0; i < kFanout; ++i) {

@@ -31,6 +31,32 @@ struct MatrixMotion {
 };
 MatrixMotion matrixMotion(const RigidTransform& motion);
 
+/// How far any point of a mesh (its box and its `radius` about the box's centre) moves from
+/// where (`rotation`, `translation`) put it to where `now` does: the smaller of two bounds of
+/// |(R − R₀)·p + t − t₀|, the farthest corner's move (it is convex in p) and the centre's move
+/// plus ‖R − R₀‖·radius. The second is the tighter for a turning body: its corners lie up to √3
+/// times farther out than its surface. (The caches of query/contacts.h and query/overlap.h
+/// measure with it how far the second mesh has moved against the first.)
+double farthestMove(const Aabb& box, double radius, const MatrixMotion& now, const Mat3& rotation,
+                    const Vec3& translation) noexcept;
+
+/// How far the second of two prepared meshes has moved against the first since `rotation`,
+/// `translation` placed it in the first's frame, where `now` places it: the smaller of how far
+/// the second's points moved in the first's frame and how far the first's moved in the
+/// second's (either bounds how much any distance between a point of one and a point of the
+/// other has changed). The second bound is the one that counts for a small body against a
+/// large one (a particle against a funnel: its turn swings the funnel's far corners round in its
+/// frame). Rounding: a few ulps of the coordinates and of the translations.
+double relativeMove(const QueryMeshData& first, const QueryMeshData& second,
+                    const MatrixMotion& now, const Mat3& rotation,
+                    const Vec3& translation) noexcept;
+
+/// The largest coordinate of a pair of prepared meshes where the mesh–mesh kernels meet them:
+/// the first's box (`first`) and the corners of the second's (`second`) carried by
+/// `secondToFirst`.
+double placedMagnitude(const Aabb& first, const Aabb& second,
+                       const RigidTransform& secondToFirst) noexcept;
+
 /// Eight boxes in double, structure of arrays (axis, then lane): an octet of a tree
 /// (query_mesh_data.h) as another frame sees it. Empty slots have lower +∞, upper −∞.
 struct MovedOctet {
