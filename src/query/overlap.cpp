@@ -1481,6 +1481,20 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   checkMesh(first, "first");
   checkMesh(second, "second");
   detail::checkPlacedPair(first, second, "overlap");
+  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
+  const bool moved = first.moved() || second.moved();
+  const bool holds = cache.valid_ && cache.firstData_ == first.sharedData() &&
+                     cache.secondData_ == second.sharedData() &&
+                     detail::relativeMove(first.data(), second.data(), motion, cache.rotation_,
+                                          cache.translation_) <= cache.budget_;
+  // Made for meshes that shared nothing and had no triangles within the skin of each other: every
+  // point of each surface lay farther than the skin from the other surface, and no distance has
+  // changed by the skin since, so no point has passed into the other mesh: they share nothing.
+  if (holds && cache.apart_) {
+    ++cache.reused_;
+    return {};
+  }
   Overlap result;
   Query query(first, second);
   Side &a = query.a, &b = query.b;
@@ -1490,14 +1504,9 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
   query.reference = common.center();
 
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
-  const bool moved = first.moved() || second.moved();
   const double skin = cache.skin_;
-  const bool same = cache.valid_ && cache.firstData_ == first.sharedData() &&
-                    cache.secondData_ == second.sharedData();
-  if (same && detail::relativeMove(a.data(), b.data(), motion, cache.rotation_,
-                                   cache.translation_) <= cache.budget_) {
+  bool making = false;
+  if (holds) {
     a.setReference(query.reference, b.box());
     b.setReference(query.reference, a.box());
     crossPairs(query, cache.pairs_);
@@ -1508,6 +1517,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     // the placement of the vertices (world frame) and the move's measure (the first's frame)
     // round by a few ulps of their coordinates (and of the placing translation) each; allowed
     // 2⁻³⁶ of the largest of them.
+    cache.apart_ = false;  // until this call's result is known
     a.setReference(query.reference, b.box().grown(skin));
     b.setReference(query.reference, a.box().grown(skin));
     pairsWithin(query, motion, moved, skin, cache.pairs_);
@@ -1524,6 +1534,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     cache.translation_ = motion.translation;
     cache.budget_ = skin - 0x1p-36 * magnitude;
     ++cache.made_;
+    making = true;
   } else {
     a.setReference(query.reference, b.box());
     b.setReference(query.reference, a.box());
@@ -1549,6 +1560,9 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
       regionOfSegment[s] = regionOfRoot[regions.find(query.segments[s].faceA)];
     result.curves = chainCurves(query, regionOfSegment);
   }
+  if (making)
+    cache.apart_ = cache.pairs_.empty() && result.regions.empty() && result.touching == 0 &&
+                   result.segments == 0 && result.total.volume == 0.0;
   return result;
 }
 

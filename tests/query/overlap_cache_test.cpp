@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -151,6 +152,30 @@ TEST(OverlapCache, AMoveBeyondItsSkinMakesItAnew) {
     differing += sameBits(made.total.volume, moved.total.volume) ? 0 : 1;
   }
   EXPECT_EQ(differing, 40u);  // every move changed the overlap
+}
+
+// Pairs that share nothing for a while: two granulates near but apart (their boxes meet), which
+// the cache answers alone while they drift, and a small mesh wholly inside a large one (no
+// triangles cross, yet they share the small one's volume), which it must not: the same overlap as
+// a fresh query at every step, from both.
+TEST(OverlapCache, PairsApartOrWhollyInsideAlongAPath) {
+  Mesh near = primitives::granulate(4);
+  near.translate({1.5, 1.5, 0.1});
+  Mesh inner = primitives::icosphere(2, 0.2);
+  inner.translate({0.1, -0.05, 0.0});
+  const Scene scenes[] = {{"apart", primitives::granulate(3), near, 0.02, 0.002},
+                          {"wholly inside", primitives::icosphere(3), inner, 0.02, 0.002}};
+  for (const Scene& scene : scenes) {
+    SCOPED_TRACE(scene.name);
+    OverlapCache cache(scene.skin);
+    std::size_t overlapping = 0;
+    walk(scene, false, cache, overlapping);
+    EXPECT_GT(cache.reused(), 75u);
+    if (std::string(scene.name) == "apart")
+      EXPECT_EQ(overlapping, 0u);
+    else
+      EXPECT_EQ(overlapping, 150u);
+  }
 }
 
 TEST(OverlapCache, OtherMeshesMakeItAnew) {

@@ -121,7 +121,9 @@ Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& op
 /// separates by more; while the two meshes have moved less than the skin against each other
 /// since (measured in the frame where it is smaller: a particle turning next to a large obstacle
 /// moves little in the obstacle's frame; moving both together costs nothing), only those pairs
-/// are placed and crossed: no descent, no leaf boxes, no triangles placed that meet nothing. A
+/// are placed and crossed: no descent, no leaf boxes, no triangles placed that meet nothing; and
+/// meshes that shared nothing when it was made, with no triangles within the skin of each other
+/// (a DEM pair in the broad phase's list but not touching), cost no more than that test. A
 /// larger skin keeps the cache longer and holds more pairs.
 ///
 /// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
@@ -162,6 +164,8 @@ class OverlapCache {
   double budget_ = 0.0;  ///< how far the second may move: the skin less rounding
   /// (first, second) sorted triangle indices, first << 32 | second, increasing.
   std::vector<std::uint64_t> pairs_;
+  /// Made for meshes that shared nothing, with no pairs: they share nothing while it holds.
+  bool apart_ = false;
   std::size_t made_ = 0, reused_ = 0;
 };
 
