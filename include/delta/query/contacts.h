@@ -79,8 +79,9 @@ enum class InsideTest : std::uint8_t { now, later };
 /// What contacts(first, second, ε, cache) keeps of a pair of prepared meshes from one call to
 /// the next (temporal coherence, as a DEM pair in contact is met step after step): the triangle
 /// pairs closer than 2ε + `skin` where the second mesh was, relative to the first, when it was
-/// made. Until the second has moved against the first by about the skin (bounded at the corners
-/// of its box), no other triangle pair can have come within 2ε, so the two trees are not
+/// made. Until the two have moved against each other by about the skin (bounded in the frame of
+/// either, whichever bound is smaller: a ball about each one's box), no other triangle pair can
+/// have come within 2ε, so the two trees are not
 /// descended again: only the kept pairs go to the kernels, and of those only the ones whose
 /// distance when kept, less the move since, is still under 2ε. A larger skin keeps the cache
 /// longer and costs a larger descent each time it is made.

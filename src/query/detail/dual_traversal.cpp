@@ -34,36 +34,28 @@ MatrixMotion matrixMotion(const RigidTransform& motion) {
   return {Quaternion::fromComponents(q.w, q.x, q.y, q.z).matrix(), motion.translation};
 }
 
-/// ‖R − R₀‖ = ‖R₀ᵀR − I‖ = 2 sin(θ/2) = √(3 − tr R₀ᵀR) for rotations; the trace, ⟨R₀, R⟩ summed
-/// entry by entry, cancels for small turns, so its rounding (a few ulps of 3) is added under the
-/// root.
-double farthestMove(const Aabb& box, double radius, const MatrixMotion& now, const Mat3& rotation,
+/// Each body's move is bounded by its box centre's move plus ‖R − R₀‖ times its radius about that
+/// centre (|(R − R₀)·(p − c)| ≤ ‖R − R₀‖·|p − c|). ‖R − R₀‖ = ‖Rᵀ − R₀ᵀ‖ = ‖R₀ᵀR − I‖ = 2 sin(θ/2)
+/// = √(3 − tr R₀ᵀR) for rotations, the same in both frames; the trace, ⟨R₀, R⟩ summed entry by
+/// entry, cancels for small turns, so its rounding (a few ulps of 3) is added under the root. (The
+/// box's farthest corner bounds a pure translation no better than the ball, and a turn up to √3
+/// times worse: not computed.)
+double relativeMove(const QueryMeshData& first, const QueryMeshData& second,
+                    const MatrixMotion& now, const Mat3& rotation,
                     const Vec3& translation) noexcept {
-  const Mat3 turn = now.rotation + rotation * -1.0;
-  const Vec3 shift = now.translation - translation;
-  double farthest = 0.0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
-                 (corner & 4) ? box.upper.z : box.lower.z};
-    farthest = std::max(farthest, lengthSquared(turn * p + shift));
-  }
   double trace = 0.0;
   for (std::size_t k = 0; k < 9; ++k)
     trace += rotation.entries[k] * now.rotation.entries[k];
   const double turnNorm = std::sqrt(std::max(0.0, 3.0 - trace) + 0x1p-40);
-  const double ball = length(turn * box.center() + shift) + turnNorm * radius;
-  return std::min(std::sqrt(farthest), ball);
-}
-
-double relativeMove(const QueryMeshData& first, const QueryMeshData& second,
-                    const MatrixMotion& now, const Mat3& rotation,
-                    const Vec3& translation) noexcept {
-  const double secondMoved = farthestMove(second.bounds, second.radius, now, rotation, translation);
-  // The first's points in the second's frame: the inverse motions, (Rᵀ, −Rᵀ·t).
-  const Mat3 back = now.rotation.transposed(), backThen = rotation.transposed();
-  const MatrixMotion inverse{back, back * now.translation * -1.0};
-  const double firstMoved =
-      farthestMove(first.bounds, first.radius, inverse, backThen, backThen * translation * -1.0);
+  // The second's centre in the first's frame, now and then.
+  const Vec3 centreB = second.bounds.center();
+  const double secondMoved =
+      length(now.apply(centreB) - (rotation * centreB + translation)) + turnNorm * second.radius;
+  // The first's centre in the second's frame, now and then: Rᵀ·(c − t).
+  const Vec3 centreA = first.bounds.center();
+  const double firstMoved = length(now.rotation.transposed() * (centreA - now.translation) -
+                                   rotation.transposed() * (centreA - translation)) +
+                            turnNorm * first.radius;
   return std::min(secondMoved, firstMoved);
 }
 

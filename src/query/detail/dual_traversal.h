@@ -31,15 +31,6 @@ struct MatrixMotion {
 };
 MatrixMotion matrixMotion(const RigidTransform& motion);
 
-/// How far any point of a mesh (its box and its `radius` about the box's centre) moves from
-/// where (`rotation`, `translation`) put it to where `now` does: the smaller of two bounds of
-/// |(R − R₀)·p + t − t₀|, the farthest corner's move (it is convex in p) and the centre's move
-/// plus ‖R − R₀‖·radius. The second is the tighter for a turning body: its corners lie up to √3
-/// times farther out than its surface. (The caches of query/contacts.h and query/overlap.h
-/// measure with it how far the second mesh has moved against the first.)
-double farthestMove(const Aabb& box, double radius, const MatrixMotion& now, const Mat3& rotation,
-                    const Vec3& translation) noexcept;
-
 /// How far the second of two prepared meshes has moved against the first since `rotation`,
 /// `translation` placed it in the first's frame, where `now` places it: the smaller of how far
 /// the second's points moved in the first's frame and how far the first's moved in the
