@@ -134,17 +134,21 @@ struct PlacedTriangle {
   Vec3 permanent;  ///< per component, the sum of the absolute products of its minor
 };
 
+/// Every member given (none left to be zeroed first: a query places a few dozen of these).
 PlacedTriangle placedTriangle(const std::array<Vec3, 3>& p,
-                              const std::array<std::int32_t, 3>& slots) noexcept {
-  PlacedTriangle t{p, slots, false, {}, {}, {}, {}};
-  for (const Vec3& corner : p)
-    t.box.extend(corner);
+                              const std::array<std::int32_t, 3>& slots,
+                              const std::array<Vec3, 3>& local) noexcept {
+  const Aabb box{min(min(p[0], p[1]), p[2]), max(max(p[0], p[1]), p[2])};
   const Vec3 u = p[1] - p[0], v = p[2] - p[0];
   const double a = u.y * v.z, b = u.z * v.y, c = u.z * v.x, d = u.x * v.z, e = u.x * v.y,
                f = u.y * v.x;
-  t.minors = {a - b, c - d, e - f};
-  t.permanent = {std::abs(a) + std::abs(b), std::abs(c) + std::abs(d), std::abs(e) + std::abs(f)};
-  return t;
+  return {p,
+          slots,
+          false,
+          local,
+          box,
+          {a - b, c - d, e - f},
+          {std::abs(a) + std::abs(b), std::abs(c) + std::abs(d), std::abs(e) + std::abs(f)}};
 }
 
 /// The sign of orient(p0, p1, p2, s) where the filter decides it (Shewchuk's bound for the
@@ -324,16 +328,16 @@ class Side {
     std::int32_t& slot = triangleSlot_[k];
     if (slot == kAbsent) {
       triangleSlot_.used(k);
-      std::array<Vec3, 3> points;
+      std::array<Vec3, 3> points, local;
       std::array<std::int32_t, 3> slots;
       for (std::size_t i = 0; i < 3; ++i) {
         slots[i] = vertex(corner(k, i));
-        points[i] = vertices_[static_cast<std::size_t>(slots[i])].world;
+        const VertexState& state = vertices_[static_cast<std::size_t>(slots[i])];
+        points[i] = state.world;
+        local[i] = state.local;
       }
       slot = static_cast<std::int32_t>(triangles_.size());
-      triangles_.push_back(placedTriangle(points, slots));
-      for (std::size_t i = 0; i < 3; ++i)
-        triangles_.back().local[i] = vertices_[static_cast<std::size_t>(slots[i])].local;
+      triangles_.push_back(placedTriangle(points, slots, local));
     }
     return triangles_[static_cast<std::size_t>(slot)];
   }
@@ -1354,11 +1358,16 @@ void pairsWithin(Query& query, const detail::MatrixMotion& motion, bool moved, d
 /// pairsWithin's, as long as both hold every pair that crosses.
 void crossPairs(Query& query, const std::vector<std::uint64_t>& pairs) {
   Side &a = query.a, &b = query.b;
+  std::uint32_t last = 0;
+  const PlacedTriangle* ta = nullptr;  // A's triangle of a run of keys: B's placing leaves it
   for (const std::uint64_t key : pairs) {
     const auto i = static_cast<std::uint32_t>(key >> 32), k = static_cast<std::uint32_t>(key);
-    const PlacedTriangle& ta = a.triangle(i);  // B's placing leaves it where it is
+    if (ta == nullptr || i != last) {
+      ta = &a.triangle(i);
+      last = i;
+    }
     const PlacedTriangle& tb = b.triangle(k);
-    if (meet(ta.box, tb.box)) crossPair(query, i, k, ta, tb);
+    if (meet(ta->box, tb.box)) crossPair(query, i, k, *ta, tb);
   }
 }
 
