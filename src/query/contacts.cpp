@@ -626,29 +626,26 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
 std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
                                    ContactCache& cache, kernels::Solver solver, InsideTest inside) {
   const PlacedPair pair = placedPair(first, second, epsilon);
-  const double skin = cache.skin_;
   std::vector<ContactPoint> found;
-  const bool same = cache.valid_ && cache.firstData_.get() == &pair.a &&
-                    cache.secondData_.get() == &pair.b && cache.epsilon_ == epsilon &&
-                    cache.solver_ == solver;
   const double move =
-      same ? detail::relativeMove(pair.a, pair.b, pair.motion, cache.rotation_, cache.translation_)
-           : 0.0;
-  if (same && move <= cache.budget_) {
-    const double nearer = pair.reach + move + cache.allowance_;
+      cache.epsilon_ == epsilon && cache.solver_ == solver
+          ? cache.moveSince(first, second, pair.motion.rotation, pair.motion.translation)
+          : std::numeric_limits<double>::infinity();
+  if (cache.holds(move)) {
+    const double nearer = pair.reach + move + cache.allowance();
     if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts
       found =
           keptContacts(pair.a, pair.b, pair.placement(), pair.reach, solver, cache.pairs_, nearer);
-    ++cache.reused_;
-  } else if (std::isfinite(skin) && skin > 0.0) {
+    cache.answered();
+  } else if (cache.keeps()) {
     // The kept pairs are those the kernels could find within 2ε until the second has moved by
     // the skin less what rounding can add: the kernels' error at both poses (10⁻¹² of a pair's
     // size: kernels/hybrid.h), the triangles' placement and the move's bound (a few ulps of the
     // coordinates each); allowed 2⁻³⁶ of the largest coordinate, as the flat query's prune is
     // (2ε itself has the prune's slack in the boxes and planes already).
     std::vector<CandidatePair> candidates;
-    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach + skin,
-                              solver, &candidates);
+    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach,
+                              pair.reach + cache.skin(), solver, &candidates);
     // By distance (then ids, for a fixed order): a call hands the kernels a prefix. The penalty
     // solver's distances are not bounds: its pairs all go, as if at distance 0.
     if (solver == kernels::Solver::Penalty)
@@ -662,20 +659,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     cache.pairs_ = std::move(candidates);
     cache.nearest_ = cache.pairs_.empty() ? std::numeric_limits<double>::infinity()
                                           : cache.pairs_.front().distance;
-    cache.valid_ = true;
-    cache.firstData_ = first.sharedData();
-    cache.secondData_ = second.sharedData();
     cache.epsilon_ = epsilon;
     cache.solver_ = solver;
-    cache.rotation_ = pair.motion.rotation;
-    cache.translation_ = pair.motion.translation;
-    cache.allowance_ = 0x1p-36 * magnitudeOf(pair);
-    cache.budget_ = skin - cache.allowance_;
-    ++cache.made_;
+    cache.keep(first, second, pair.motion.rotation, pair.motion.translation,
+               0x1p-36 * magnitudeOf(pair));
   } else {
     found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach, solver,
                               nullptr);
-    ++cache.made_;
+    cache.madeWithoutKeeping();
   }
   finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
   return found;

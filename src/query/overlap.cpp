@@ -1493,15 +1493,13 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const bool moved = first.moved() || second.moved();
-  const bool holds = cache.valid_ && cache.firstData_ == first.sharedData() &&
-                     cache.secondData_ == second.sharedData() &&
-                     detail::relativeMove(first.data(), second.data(), motion, cache.rotation_,
-                                          cache.translation_) <= cache.budget_;
+  const bool holds =
+      cache.holds(cache.moveSince(first, second, motion.rotation, motion.translation));
   // Made for meshes that shared nothing and had no triangles within the skin of each other: every
   // point of each surface lay farther than the skin from the other surface, and no distance has
   // changed by the skin since, so no point has passed into the other mesh: they share nothing.
   if (holds && cache.apart_) {
-    ++cache.reused_;
+    cache.answered();
     return {};
   }
   Overlap result;
@@ -1513,14 +1511,14 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   Aabb common{max(a.box().lower, b.box().lower), min(a.box().upper, b.box().upper)};
   query.reference = common.center();
 
-  const double skin = cache.skin_;
+  const double skin = cache.skin();
   bool making = false;
   if (holds) {
     a.setReference(query.reference, b.box());
     b.setReference(query.reference, a.box());
     crossPairs(query, cache.pairs_);
-    ++cache.reused_;
-  } else if (std::isfinite(skin) && skin > 0.0) {
+    cache.answered();
+  } else if (cache.keeps()) {
     // Kept: the pairs whose boxes lie within the skin now. A pair that crosses later, after the
     // second has moved by less than the skin less what rounding can add, lies within it now:
     // the placement of the vertices (world frame) and the move's measure (the first's frame)
@@ -1536,13 +1534,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
         maxAbs(motion.translation) +
         std::max({maxAbs(a.box().lower), maxAbs(a.box().upper), maxAbs(b.box().lower),
                   maxAbs(b.box().upper)});
-    cache.valid_ = true;
-    cache.firstData_ = first.sharedData();
-    cache.secondData_ = second.sharedData();
-    cache.rotation_ = motion.rotation;
-    cache.translation_ = motion.translation;
-    cache.budget_ = skin - 0x1p-36 * magnitude;
-    ++cache.made_;
+    cache.keep(first, second, motion.rotation, motion.translation, 0x1p-36 * magnitude);
     making = true;
   } else {
     a.setReference(query.reference, b.box());
@@ -1550,7 +1542,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     std::vector<std::uint64_t>& pairs = recycled<std::uint64_t, 0>();
     pairsWithin(query, motion, moved, 0.0, pairs);
     crossPairs(query, pairs);
-    ++cache.made_;
+    cache.madeWithoutKeeping();
   }
 
   classify(a, b);

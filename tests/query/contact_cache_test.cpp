@@ -2,14 +2,13 @@
 // for bit, at every pose of a pair moved along a path, whether the cache answered or was made
 // anew, and with the inside test left for later (markInside). The paths move the second mesh
 // against the first by small steps (the cache answers most calls) and by jumps (it must be made
-// anew), both meshes moved or only one, on random and adversarial pairs: granulates, overlapping
-// icospheres, a box face on a box face (coplanar, touching), a cylinder resting on a box a million
-// units from the origin, a tiny pair.
+// anew), both meshes moved or only one, on the scenes of pair_paths.h: granulates, icospheres, a
+// box face on a box face (coplanar, touching), a cylinder resting on a box a million units from
+// the origin, a tiny pair.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
-#include <random>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -17,6 +16,8 @@
 #include "delta/mesh/primitives.h"
 #include "delta/query/contacts.h"
 #include "delta/query/query_mesh.h"
+
+#include "pair_paths.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -36,65 +37,14 @@ bool sameContacts(const std::vector<ContactPoint>& a, const std::vector<ContactP
   return true;
 }
 
-struct Scene {
-  const char* name;
-  Mesh first, second;
-  double epsilon;
-  double step;  ///< the path's step, against the scene's size
-};
-
-std::vector<Scene> scenes() {
-  std::vector<Scene> all;
-  Mesh a = primitives::granulate(3);
-  Mesh b = primitives::granulate(4);
-  b.translate({1.75, 0.1, 0.0});
-  all.push_back({"granulates", a, b, 0.05, 0.004});
-  Mesh c = primitives::icosphere(3);
-  Mesh d = primitives::icosphere(3);
-  d.rotate({1, 0, 0}, 0.3).translate({1.8, 0.3, 0});
-  all.push_back({"overlapping icospheres", c, d, 0.01, 0.002});
-  all.push_back({"box face on box face", primitives::box({1, 1, 1}),
-                 primitives::box({1, 1, 1}, {0.2, 0.1, 1.0}), 0.01, 0.001});
-  all.push_back({"cylinder on a box far from the origin", primitives::box({2, 2, 0.5}, {1e6, 0, 0}),
-                 primitives::cylinder(0.5, 1, 24, {1e6 + 0.3, 0.2, 0.75 + 1e-3}), 0.002, 2e-4});
-  Mesh e = primitives::granulate(5, {1e-6, 1e-6, 1e-6});
-  Mesh f = primitives::granulate(6, {1e-6, 1e-6, 1e-6});
-  f.translate({1.8e-6, 0.0, 0.0});
-  all.push_back({"tiny granulates", e, f, 5e-8, 4e-9});
-  return all;
-}
-
-/// The move at step `s` of a path: a drift and a turn of about the scene's step, with a jump
-/// every 37 steps (40 steps at once) that no skin covers.
-RigidTransform poseAt(int s, double step, std::mt19937_64& random) {
-  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
-  const double jump = s % 37 == 36 ? 40.0 : 1.0;
-  const Vec3 axis{0.3 + uniform(), 0.5, 1.0};
-  return RigidTransform{Quaternion::fromAxisAngle(axis, 0.5 * step),
-                        Vec3{uniform(), uniform(), uniform()} * (jump * step)};
-}
-
 TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
   std::size_t insideMarks = 0;  // contacts marked by the inside test alone
-  for (const Scene& scene : scenes()) {
+  for (const test::PairScene& scene : test::pairScenes(false)) {
     SCOPED_TRACE(scene.name);
     for (const bool moveFirst : {false, true}) {
-      const QueryMesh first(scene.first), second(scene.second);
       ContactCache cache(0.5 * scene.epsilon), laterCache(0.5 * scene.epsilon);
-      std::mt19937_64 random(7);
-      RigidTransform secondPose, firstPose;
       std::size_t withContacts = 0;
-      for (int s = 0; s < 150; ++s) {
-        const RigidTransform step = poseAt(s, scene.step, random);
-        // Turned about the second mesh's centre, so that it rolls on the first.
-        const Vec3 centre = secondPose.apply(scene.second.bounds().center());
-        secondPose = RigidTransform::translationBy(step.translation) *
-                     RigidTransform::rotationAbout(step.rotation, centre) * secondPose;
-        if (moveFirst)
-          firstPose = RigidTransform::translationBy(step.translation * 0.5) * firstPose;
-        QueryMesh a = first, b = second;
-        a.setPose(firstPose);
-        b.setPose(secondPose);
+      test::walkPath(scene, moveFirst, 150, [&](int s, const QueryMesh& a, const QueryMesh& b) {
         const std::vector<ContactPoint> fresh = contacts(a, b, scene.epsilon);
         const std::vector<ContactPoint> cached = contacts(a, b, scene.epsilon, cache);
         ASSERT_TRUE(sameContacts(cached, fresh))
@@ -107,7 +57,7 @@ TEST(ContactCache, SameContactsAsAFreshQueryAlongAPath) {
         markInside(a, b, scene.epsilon, later);
         ASSERT_TRUE(sameContacts(later, fresh)) << "step " << s << ", the inside test later";
         withContacts += fresh.empty() ? 0 : 1;
-      }
+      });
       // Both ways of answering were taken, on a path that touched most of the time.
       EXPECT_GT(cache.reused(), 75u);
       EXPECT_GT(cache.made(), 4u);

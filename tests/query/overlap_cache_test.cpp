@@ -20,6 +20,8 @@
 #include "delta/query/overlap.h"
 #include "delta/query/query_mesh.h"
 
+#include "pair_paths.h"
+
 namespace delta::contactdetection {
 namespace {
 
@@ -52,59 +54,10 @@ bool sameOverlap(const Overlap& x, const Overlap& y) {
   return true;
 }
 
-struct Scene {
-  const char* name;
-  Mesh first, second;
-  double skin;
-  double step;  ///< the path's step
-};
-
-std::vector<Scene> scenes() {
-  std::vector<Scene> all;
-  Mesh a = primitives::granulate(3);
-  Mesh b = primitives::granulate(4);
-  b.translate({1.6, 0.1, 0.0});
-  all.push_back({"granulates", a, b, 0.025, 0.004});
-  Mesh c = primitives::icosphere(3);
-  Mesh d = primitives::icosphere(3);
-  d.rotate({1, 0, 0}, 0.3).translate({1.8, 0.3, 0});
-  all.push_back({"icospheres", c, d, 0.005, 0.002});
-  all.push_back({"box face on box face", primitives::box({1, 1, 1}),
-                 primitives::box({1, 1, 1}, {0.2, 0.1, 1.0}), 0.005, 0.001});
-  all.push_back({"cylinder in a box far from the origin", primitives::box({2, 2, 0.5}, {1e6, 0, 0}),
-                 primitives::cylinder(0.5, 1, 24, {1e6 + 0.3, 0.2, 0.74}), 0.001, 2e-4});
-  Mesh e = primitives::granulate(5, {1e-6, 1e-6, 1e-6});
-  Mesh f = primitives::granulate(6, {1e-6, 1e-6, 1e-6});
-  f.translate({1.6e-6, 0.0, 0.0});
-  all.push_back({"tiny granulates", e, f, 2.5e-8, 4e-9});
-  return all;
-}
-
-/// The move at step `s` of a path: a drift and a turn of about the scene's step, with a jump
-/// every 37 steps (40 steps at once) that no skin covers.
-RigidTransform poseAt(int s, double step, std::mt19937_64& random) {
-  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
-  const double jump = s % 37 == 36 ? 40.0 : 1.0;
-  const Vec3 axis{0.3 + uniform(), 0.5, 1.0};
-  return RigidTransform{Quaternion::fromAxisAngle(axis, 0.5 * step),
-                        Vec3{uniform(), uniform(), uniform()} * (jump * step)};
-}
-
 /// `scene`'s path of 150 steps, each pose's overlap through `cache` against a fresh one.
-void walk(const Scene& scene, bool moveFirst, OverlapCache& cache, std::size_t& overlapping) {
-  const QueryMesh first(scene.first), second(scene.second);
-  std::mt19937_64 random(7);
-  RigidTransform secondPose, firstPose;
-  for (int s = 0; s < 150; ++s) {
-    const RigidTransform step = poseAt(s, scene.step, random);
-    // Turned about the second mesh's centre, so that it rolls in the first.
-    const Vec3 centre = secondPose.apply(scene.second.bounds().center());
-    secondPose = RigidTransform::translationBy(step.translation) *
-                 RigidTransform::rotationAbout(step.rotation, centre) * secondPose;
-    if (moveFirst) firstPose = RigidTransform::translationBy(step.translation * 0.5) * firstPose;
-    QueryMesh a = first, b = second;
-    a.setPose(firstPose);
-    b.setPose(secondPose);
+void walk(const test::PairScene& scene, bool moveFirst, OverlapCache& cache,
+          std::size_t& overlapping) {
+  test::walkPath(scene, moveFirst, 150, [&](int s, const QueryMesh& a, const QueryMesh& b) {
     const OverlapOptions options{s % 2 == 0};  // curves on every other step
     const Overlap fresh = overlap(a, b, options);
     const Overlap cached = overlap(a, b, options, cache);
@@ -112,14 +65,14 @@ void walk(const Scene& scene, bool moveFirst, OverlapCache& cache, std::size_t& 
         << "step " << s << ": volume " << cached.total.volume << " against " << fresh.total.volume
         << ", " << cached.segments << " segments against " << fresh.segments;
     overlapping += fresh.any() ? 1 : 0;
-  }
+  });
 }
 
 TEST(OverlapCache, SameOverlapAsAFreshQueryAlongAPath) {
-  for (const Scene& scene : scenes()) {
+  for (const test::PairScene& scene : test::pairScenes(true)) {
     SCOPED_TRACE(scene.name);
     for (const bool moveFirst : {false, true}) {
-      OverlapCache cache(scene.skin);
+      OverlapCache cache(0.5 * scene.epsilon);
       std::size_t overlapping = 0;
       walk(scene, moveFirst, cache, overlapping);
       // Both ways of answering were taken, on a path that overlapped most of the time.
@@ -134,17 +87,17 @@ TEST(OverlapCache, SameOverlapAsAFreshQueryAlongAPath) {
 // it, by a random shift each trial; the moves change the overlap, and the cache's answer is a
 // fresh query's.
 TEST(OverlapCache, AMoveBeyondItsSkinMakesItAnew) {
-  const Scene scene = scenes().front();
+  const test::PairScene scene = test::pairScenes(true).front();
   const QueryMesh first(scene.first), second(scene.second);
   std::size_t differing = 0;
   std::mt19937_64 random(11);
   for (int trial = 0; trial < 40; ++trial) {
-    OverlapCache cache(0.1 * scene.skin);
+    OverlapCache cache(0.05 * scene.epsilon);
     QueryMesh b = second;
     const Overlap made = overlap(first, b, {}, cache);
     ASSERT_EQ(cache.made(), 1u);
     const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
-    const Vec3 shift = normalized(Vec3{uniform(), uniform(), uniform()}) * (0.5 * scene.skin);
+    const Vec3 shift = normalized(Vec3{uniform(), uniform(), uniform()}) * (0.25 * scene.epsilon);
     b.setPose(RigidTransform::translationBy(shift));
     const Overlap moved = overlap(first, b, {}, cache);
     EXPECT_EQ(cache.made(), 2u);
@@ -163,11 +116,12 @@ TEST(OverlapCache, PairsApartOrWhollyInsideAlongAPath) {
   near.translate({1.5, 1.5, 0.1});
   Mesh inner = primitives::icosphere(2, 0.2);
   inner.translate({0.1, -0.05, 0.0});
-  const Scene scenes[] = {{"apart", primitives::granulate(3), near, 0.02, 0.002},
-                          {"wholly inside", primitives::icosphere(3), inner, 0.02, 0.002}};
-  for (const Scene& scene : scenes) {
+  const test::PairScene scenes[] = {
+      {"apart", primitives::granulate(3), near, 0.04, 0.002},
+      {"wholly inside", primitives::icosphere(3), inner, 0.04, 0.002}};
+  for (const test::PairScene& scene : scenes) {
     SCOPED_TRACE(scene.name);
-    OverlapCache cache(scene.skin);
+    OverlapCache cache(0.5 * scene.epsilon);
     std::size_t overlapping = 0;
     walk(scene, false, cache, overlapping);
     EXPECT_GT(cache.reused(), 75u);

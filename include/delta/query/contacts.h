@@ -1,14 +1,13 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <vector>
 
 #include "delta/core/contact_point.h"
-#include "delta/core/mat3.h"
 #include "delta/kernels/triangle_batch.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/pair_cache.h"
 #include "delta/query/query_mesh.h"
 
 /// The seed's contact-detection API: mesh–mesh contacts and minimum distance, points–mesh
@@ -79,15 +78,14 @@ enum class InsideTest : std::uint8_t { now, later };
 /// What contacts(first, second, ε, cache) keeps of a pair of prepared meshes from one call to
 /// the next (temporal coherence, as a DEM pair in contact is met step after step): the triangle
 /// pairs closer than 2ε + `skin` where the second mesh was, relative to the first, when it was
-/// made. Until the two have moved against each other by about the skin (bounded in the frame of
-/// either, whichever bound is smaller: a ball about each one's box), no other triangle pair can
-/// have come within 2ε, so the two trees are not
+/// made. Until the two have moved against each other by about the skin (PairCache,
+/// query/pair_cache.h), no other triangle pair can have come within 2ε, so the two trees are not
 /// descended again: only the kept pairs go to the kernels, and of those only the ones whose
 /// distance when kept, less the move since, is still under 2ε. A larger skin keeps the cache
 /// longer and costs a larger descent each time it is made.
 ///
 /// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
-class ContactCache {
+class ContactCache : public PairCache {
  public:
   /// A kept triangle pair: prepared (sorted) triangle indices, and the kernels' distance when
   /// made (0 with the penalty solver, whose distances may be too long): less the move since, a
@@ -99,46 +97,24 @@ class ContactCache {
 
   /// An empty cache (made at the first call) that keeps pairs within 2ε + `skin`; a skin that is
   /// not finite and positive makes every call a fresh query.
-  explicit ContactCache(double skin = 0.0) noexcept : skin_(skin) {}
+  explicit ContactCache(double skin = 0.0) noexcept : PairCache(skin) {}
 
-  /// The skin it was given.
-  double skin() const noexcept { return skin_; }
   /// The triangle pairs it holds (0: empty, or a pair further than 2ε + skin apart).
   std::size_t size() const noexcept { return pairs_.size(); }
-  /// How many calls made it anew, and how many it answered; for statistics.
-  std::size_t made() const noexcept { return made_; }
-  std::size_t reused() const noexcept { return reused_; }
   /// Asks the processor to fetch what the next call reads first (a caller's loop over its
   /// pairs calls it one pair ahead: the kept pairs are touched once a step, cold).
   void prefetch() const noexcept { __builtin_prefetch(pairs_.data()); }
-  /// Forgets what it holds: the next call makes it anew.
-  void clear() noexcept {
-    valid_ = false;
-    firstData_.reset();
-    secondData_.reset();
-  }
 
  private:
   friend std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second,
                                             double epsilon, ContactCache& cache,
                                             kernels::Solver solver, InsideTest inside);
-  double skin_ = 0.0;
-  bool valid_ = false;
-  /// The prepared meshes it was made for, held: no other mesh comes to their addresses.
-  std::shared_ptr<const void> firstData_, secondData_;
   double epsilon_ = 0.0;
   kernels::Solver solver_ = kernels::Solver::Hybrid;
-  /// Where the second mesh was in the first's prepared frame when made, as the matrix the
-  /// kernels' triangles were placed with.
-  Mat3 rotation_;
-  Vec3 translation_;
-  double budget_ = 0.0;          ///< how far the second may move: the skin less rounding
-  double allowance_ = 0.0;       ///< the rounding allowed for: 2⁻³⁶ of the coordinates
   std::vector<KeptPair> pairs_;  ///< by increasing distance, in one block (one cache miss)
   /// The first's distance (+∞: none), beside the rest: a pair still apart by it costs no read
   /// of the kept pairs.
   double nearest_ = 0.0;
-  std::size_t made_ = 0, reused_ = 0;
 };
 
 /// contacts(first, second, ε, solver), the same contacts bit for bit, through `cache`: made

@@ -2,11 +2,10 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
-#include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
+#include "delta/query/pair_cache.h"
 #include "delta/query/query_mesh.h"
 
 /// @file
@@ -119,54 +118,33 @@ Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& op
 /// moved against the first by `skin`. Made by a descent of both trees that keeps each pair of
 /// triangles whose boxes lie within the skin of each other and that neither one's plane
 /// separates by more; while the two meshes have moved less than the skin against each other
-/// since (measured in the frame where it is smaller: a particle turning next to a large obstacle
-/// moves little in the obstacle's frame; moving both together costs nothing), only those pairs
+/// since (PairCache, query/pair_cache.h; moving both together costs nothing), only those pairs
 /// are placed and crossed: no descent, no leaf boxes, no triangles placed that meet nothing; and
 /// meshes that shared nothing when it was made, with no triangles within the skin of each other
 /// (a DEM pair in the broad phase's list but not touching), cost no more than that test. A
 /// larger skin keeps the cache longer and holds more pairs.
 ///
 /// Threading: a value type; one cache belongs to one pair, used by one thread at a time.
-class OverlapCache {
+class OverlapCache : public PairCache {
  public:
   /// An empty cache (made at the first call that finds the meshes' boxes meeting) that keeps
   /// the triangle pairs within `skin`; a skin that is not finite and positive makes every call
   /// a fresh query.
-  explicit OverlapCache(double skin = 0.0) noexcept : skin_(skin) {}
+  explicit OverlapCache(double skin = 0.0) noexcept : PairCache(skin) {}
 
-  /// The skin it was given.
-  double skin() const noexcept { return skin_; }
   /// The triangle pairs it holds.
   std::size_t size() const noexcept { return pairs_.size(); }
-  /// How many calls made it anew, and how many it answered; for statistics.
-  std::size_t made() const noexcept { return made_; }
-  std::size_t reused() const noexcept { return reused_; }
   /// Asks the processor to fetch what the next call reads first (a caller's loop over its
   /// pairs calls it one pair ahead).
   void prefetch() const noexcept { __builtin_prefetch(pairs_.data()); }
-  /// Forgets what it holds: the next call makes it anew.
-  void clear() noexcept {
-    valid_ = false;
-    firstData_.reset();
-    secondData_.reset();
-  }
 
  private:
   friend Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options,
                          OverlapCache& cache);
-  double skin_ = 0.0;
-  bool valid_ = false;
-  /// The prepared meshes it was made for, held: no other mesh comes to their addresses.
-  std::shared_ptr<const void> firstData_, secondData_;
-  /// Where the second mesh was in the first's prepared frame when made.
-  Mat3 rotation_;
-  Vec3 translation_;
-  double budget_ = 0.0;  ///< how far the second may move: the skin less rounding
   /// (first, second) sorted triangle indices, first << 32 | second, increasing.
   std::vector<std::uint64_t> pairs_;
   /// Made for meshes that shared nothing, with no pairs: they share nothing while it holds.
   bool apart_ = false;
-  std::size_t made_ = 0, reused_ = 0;
 };
 
 /// overlap(a, b, options), the same overlap bit for bit, through `cache`: made anew when empty,
