@@ -595,8 +595,7 @@ struct PlacedPair {
 
 PlacedPair placedPair(const QueryMesh& first, const QueryMesh& second, double epsilon) {
   checkEpsilon(epsilon);
-  detail::checkPlacedPair(first, second, "contacts");
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "contacts");
   return {first.data(),
           second.data(),
           secondToFirst,

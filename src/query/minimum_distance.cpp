@@ -517,10 +517,10 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   // Moved meshes meet in the first one's prepared frame; the second's boxes and, leaf by leaf,
   // its triangles are carried there. Serial: the search is short and its answer must not depend
   // on threads.
-  detail::checkPlacedPair(first, second, "minimumDistance");
+  const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "minimumDistance");
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
-  const detail::MatrixMotion motion = detail::matrixMotion(first.inversePose() * second.pose());
+  const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const detail::MovedTree secondTree(b.levels, moved ? &motion : nullptr);
   MinimumDistance best =
       PreparedPairSearch(a, b, secondTree, moved ? &motion : nullptr, solver).run();

@@ -1489,8 +1489,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
                 OverlapCache& cache) {
   checkMesh(first, "first");
   checkMesh(second, "second");
-  detail::checkPlacedPair(first, second, "overlap");
-  const RigidTransform secondToFirst = first.inversePose() * second.pose();
+  const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "overlap");
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);
   const bool moved = first.moved() || second.moved();
   const bool holds =

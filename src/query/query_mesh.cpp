@@ -14,6 +14,7 @@
 #include "delta/mesh/mass_properties.h"
 
 #include "detail/morton.h"
+#include "detail/placement.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta {
@@ -517,6 +518,7 @@ QueryMesh& QueryMesh::transform(const RigidTransform& motion) {
   pose_ = checkedMotion(motion, "transform") * pose_;
   inversePose_ = pose_.inverse();
   moved_ = true;
+  placedSurelyInRange_ = detail::surelyInRange(data_->bounds, pose_);
   return *this;
 }
 
@@ -524,6 +526,7 @@ QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
   pose_ = checkedMotion(pose, "setPose");
   inversePose_ = pose_.inverse();
   moved_ = true;
+  placedSurelyInRange_ = detail::surelyInRange(data_->bounds, pose_);
   return *this;
 }
 

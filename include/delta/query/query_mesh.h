@@ -78,6 +78,10 @@ class QueryMesh {
   const RigidTransform& inversePose() const noexcept { return inversePose_; }
   /// Whether a transform has been applied (the pose is not the identity).
   bool moved() const noexcept { return moved_; }
+  /// Whether a quick test made when the pose was set finds the mesh's box, moved by its pose,
+  /// within the coordinate range (mesh/coordinate_range.h); false means only that the pair
+  /// queries check it exactly.
+  bool placedSurelyInRange() const noexcept { return placedSurelyInRange_; }
 
   /// The number of triangles.
   std::size_t size() const noexcept;
@@ -113,6 +117,7 @@ class QueryMesh {
   RigidTransform pose_;
   RigidTransform inversePose_;
   bool moved_ = false;
+  bool placedSurelyInRange_ = true;  ///< at the identity: checked when prepared
 };
 
 }  // namespace delta

@@ -14,8 +14,6 @@ Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
   return moved;
 }
 
-namespace {
-
 /// A sufficient test, one rotation instead of movedBox's eight: every point of `box` moved by
 /// `motion` lies within the ball about the moved centre of the box's half diagonal, so within
 /// the range when that ball's reach from the origin is (with a factor of two to spare for the
@@ -27,17 +25,14 @@ bool surelyInRange(const Aabb& box, const RigidTransform& motion) noexcept {
   return reach <= 0.5 * kLargestCoordinate;
 }
 
-}  // namespace
-
-void checkPlacedPair(const QueryMesh& first, const QueryMesh& second, const char* query) {
-  if (!first.moved() && !second.moved()) return;  // where they were prepared: checked then
-  // Called for every pair of a DEM step: the exact boxes and the messages only where the quick
-  // test cannot tell.
+RigidTransform checkPlacedPair(const QueryMesh& first, const QueryMesh& second, const char* query) {
   const RigidTransform secondToFirst = first.inversePose() * second.pose();
-  if (surelyInRange(first.bounds(), first.pose()) &&
-      surelyInRange(second.bounds(), second.pose()) &&
+  if (!first.moved() && !second.moved()) return secondToFirst;  // checked when prepared
+  // Called for every pair of a DEM step: each mesh's own quick test made once a pose, the exact
+  // boxes and the messages only where the quick tests cannot tell.
+  if (first.placedSurelyInRange() && second.placedSurelyInRange() &&
       surelyInRange(second.bounds(), secondToFirst))
-    return;
+    return secondToFirst;
   const Aabb placed[3] = {movedBox(first.bounds(), first.pose()),
                           movedBox(second.bounds(), second.pose()),
                           movedBox(second.bounds(), secondToFirst)};
@@ -46,6 +41,7 @@ void checkPlacedPair(const QueryMesh& first, const QueryMesh& second, const char
   for (std::size_t i = 0; i < 3; ++i)
     if (!boxInCoordinateRange(placed[i]))
       checkCoordinateRange(placed[i], std::string(query) + kWhich[i]);
+  return secondToFirst;
 }
 
 }  // namespace delta::detail
