@@ -38,7 +38,8 @@ MatrixMotion matrixMotion(const RigidTransform& motion) {
 /// centre (|(R − R₀)·(p − c)| ≤ ‖R − R₀‖·|p − c|). ‖R − R₀‖ = ‖Rᵀ − R₀ᵀ‖ = ‖R₀ᵀR − I‖ = 2 sin(θ/2)
 /// = √(3 − tr R₀ᵀR) for rotations, the same in both frames; the trace, ⟨R₀, R⟩ summed entry by
 /// entry, cancels for small turns, so its rounding (a few ulps of 3) is added under the root. (The
-/// box's farthest corner bounds a pure translation no better than the ball, and a turn up to √3
+/// box's farthest corner is no less than the centre's move, so it can beat the ball by less
+/// than ‖R − R₀‖ times the radius, 2⁻²⁰ of it for a pure translation, and bounds a turn up to √3
 /// times worse: not computed.)
 double relativeMove(const QueryMeshData& first, const QueryMeshData& second,
                     const MatrixMotion& now, const Mat3& rotation,
