@@ -1523,6 +1523,9 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
     // the placement of the vertices (world frame) and the move's measure (the first's frame)
     // round by a few ulps of their coordinates (and of the placing translation) each; allowed
     // 2⁻³⁶ of the largest of them.
+    // Forgotten first: pairsWithin refills the pairs, and a throw before keep() must not leave
+    // them under the pose they were not made for.
+    cache.clear();
     cache.apart_ = false;  // until this call's result is known
     a.setReference(query.reference, b.box().grown(skin));
     b.setReference(query.reference, a.box().grown(skin));
