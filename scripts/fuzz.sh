@@ -12,6 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 
 CC=clang CXX=clang++ scripts/setup.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
   -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_TESTS=OFF \
   -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
 

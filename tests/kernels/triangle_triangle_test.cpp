@@ -296,12 +296,10 @@ TEST(TriangleDistance, ExactOracleAgreesWithRationalArithmeticAndCgal) {
           << name(family) << "\n"
           << pasteable(a, b);
       // and its point–triangle and segment–segment parts
-      const double pointRational = CGAL::to_double(
-          test::detail::pointTriangle<test::detail::Rational>(b.a, a, test::detail::degenerate(a)));
+      const double pointRational = test::exactSquaredDistanceRational(b.a, a);
       EXPECT_LE(std::fabs(std::sqrt(exactSquaredDistance(b.a, a)) - std::sqrt(pointRational)),
                 1.01 * test::kCertifiedFraction * (pairSize(a, b) + std::sqrt(pointRational)));
-      const double edgeRational =
-          CGAL::to_double(test::detail::segmentSegment<test::detail::Rational>(a.a, a.b, b.b, b.c));
+      const double edgeRational = test::exactSquaredDistanceRational(a.a, a.b, b.b, b.c);
       EXPECT_LE(
           std::fabs(std::sqrt(exactSquaredDistance(a.a, a.b, b.b, b.c)) - std::sqrt(edgeRational)),
           1.01 * test::kCertifiedFraction * (pairSize(a, b) + std::sqrt(edgeRational)));
