@@ -1,20 +1,32 @@
 #!/usr/bin/env bash
 # Fuzzes every reader Δ owns (fuzz/: OFF, PLY, OBJ, STL meshes, query points, the DEM config)
 # with libFuzzer under AddressSanitizer + UndefinedBehaviorSanitizer: builds the targets with
-# clang (build-fuzz/), replays every regression input in tests/fuzz/TARGET/, then fuzzes each
-# target for SECONDS (default 20) from seeds: those regression inputs, assimp's test models and
-# CGAL's meshes of the target's format, and the corpus earlier runs grew in build-fuzz/corpus/.
-# Fails on the first crash, leak, hang (10 s an input) or sanitizer report, leaving the input in
-# build-fuzz/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a regression.
-#   scripts/fuzz.sh [SECONDS]
+# clang (in BUILD, default build-fuzz/), replays every regression input in tests/fuzz/TARGET/,
+# then fuzzes each target for SECONDS (default 20) from seeds: those regression inputs, assimp's
+# test models and CGAL's meshes of the target's format, and the corpus earlier runs grew in
+# BUILD/corpus/. Fails on the first crash, leak, hang (10 s an input) or sanitizer report,
+# leaving the input in BUILD/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a
+# regression.
+#   scripts/fuzz.sh [SECONDS [BUILD]]
+# BUILD, when given, is a sanitized clang build already configured with -DDELTA_BUILD_FUZZERS=ON
+# (scripts/test.sh passes its ASan build, so that the library is compiled once); otherwise
+# build-fuzz/ is set up here.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-20}
+build=${2:-build-fuzz}
 
-CC=clang CXX=clang++ scripts/setup.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
-  -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_TESTS=OFF \
-  -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
+if [ "$build" = build-fuzz ]; then
+  CC=clang CXX=clang++ scripts/setup.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
+    -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_TESTS=OFF \
+    -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
+else
+  grep -q '^DELTA_BUILD_FUZZERS:BOOL=ON' "$build/CMakeCache.txt" ||
+    { echo "fuzz.sh: $build is not configured with -DDELTA_BUILD_FUZZERS=ON" >&2; exit 1; }
+  cmake --build "$build" --target fuzz_load_off fuzz_load_ply fuzz_load_obj fuzz_load_stl \
+    fuzz_points fuzz_dem_config
+fi
 
 # Seeds a target starts from, beside its regression inputs: files of its format under 64 KiB.
 seeds() {
@@ -28,15 +40,15 @@ seeds() {
 
 total=0
 for target in load_off load_ply load_obj load_stl points dem_config; do
-  fuzzer=build-fuzz/fuzz/fuzz_$target
+  fuzzer=$build/fuzz/fuzz_$target
   regressions=tests/fuzz/$target
-  corpus=build-fuzz/corpus/$target
-  seed_dir=build-fuzz/seeds/$target
-  crashes=build-fuzz/crashes/$target/
+  corpus=$build/corpus/$target
+  seed_dir=$build/seeds/$target
+  crashes=$build/crashes/$target/
   mkdir -p "$corpus" "$seed_dir" "$crashes"
   seeds "$target" | while read -r seed; do cp -f "$seed" "$seed_dir/"; done
   if compgen -G "$regressions/*" >/dev/null; then
-    replay=build-fuzz/replay_$target.log
+    replay=$build/replay_$target.log
     if ! "$fuzzer" "$regressions"/* >"$replay" 2>&1; then
       tail -n 60 "$replay"
       echo "fuzz_$target: a regression input crashes again" >&2
@@ -45,7 +57,7 @@ for target in load_off load_ply load_obj load_stl points dem_config; do
     echo "fuzz_$target: $(grep -c '^Executed' "$replay") regression inputs replayed, no crash"
   fi
   echo "== fuzz_$target: fuzzing for ${seconds}s"
-  log=build-fuzz/fuzz_$target.log
+  log=$build/fuzz_$target.log
   if ! "$fuzzer" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$crashes" "$corpus" "$seed_dir" \
     $([ -d "$regressions" ] && echo "$regressions") >"$log" 2>&1; then

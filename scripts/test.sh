@@ -20,11 +20,11 @@ echo "== sanitizer build (ASan + UBSan)"
 # compile time of full debug information; the library itself at -O1 (src/CMakeLists.txt).
 CC=clang CXX=clang++ scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG=-gline-tables-only -DDELTA_SANITIZE=address,undefined \
-  -DDELTA_BUILD_BENCH=OFF
+  -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_BENCH=OFF
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j"$jobs" --output-on-failure)
 
 echo "== fuzzing (libFuzzer under ASan + UBSan): every reader Δ owns, its regressions replayed"
-scripts/fuzz.sh 15
+scripts/fuzz.sh 15 build-asan  # the fuzz targets of the ASan build
 
 echo "== ThreadSanitizer build (clang + LLVM OpenMP): the threaded tests (names contain Thread)"
 # Built with clang and LLVM's OpenMP runtime, which TSan understands (GCC's libgomp is not
