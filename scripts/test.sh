@@ -16,8 +16,9 @@ echo "== sanitizer build (ASan + UBSan)"
 # Built with clang, as the fuzzers and the TSan build are: GCC takes minutes for each ISA's
 # batch table (optimised in every build, src/CMakeLists.txt) once the sanitizers instrument it,
 # clang seconds.
-# Line tables only (-gline-tables-only): what the sanitizers' reports need, in two thirds of the
-# compile time of full debug information; the library itself at -O1 (src/CMakeLists.txt).
+# Line tables only (-gline-tables-only): what the sanitizers' reports need, for less compile time
+# than full debug information; the library itself at -O1 (src/CMakeLists.txt). The fuzz targets
+# are built here too (-DDELTA_BUILD_FUZZERS=ON: coverage in the readers' code only).
 CC=clang CXX=clang++ scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=Debug \
   -DCMAKE_CXX_FLAGS_DEBUG=-gline-tables-only -DDELTA_SANITIZE=address,undefined \
   -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_BENCH=OFF
@@ -32,7 +33,8 @@ echo "== ThreadSanitizer build (clang + LLVM OpenMP): the threaded tests (names 
 # calls), so the library's loops run on its thread pool while user threads call it concurrently.
 # Only the test sources that hold such tests are built (DELTA_TEST_SOURCES_MATCHING).
 CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" -DDELTA_SANITIZE=thread -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" -DDELTA_SANITIZE=thread \
+  -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF \
   "-DDELTA_TEST_SOURCES_MATCHING=Thread|ParallelFor"
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \
   ctest -j"$jobs" -R "Thread|ParallelFor" --no-tests=error --output-on-failure)
