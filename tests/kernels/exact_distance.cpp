@@ -24,7 +24,7 @@
 
 namespace delta::test {
 
-namespace detail {
+namespace {  // the oracle's parts, this file's alone
 
 using Predicates = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Rational = CGAL::Simple_cartesian<CGAL::Gmpq>;
@@ -173,12 +173,11 @@ double certifiedSquaredDistance(const Compute& compute, double size) {
   return CGAL::to_double(compute(Rational{}));
 }
 
-}  // namespace detail
+}  // namespace
 
 /// Whether the two solid triangles share a point, decided exactly (touching counts). Zero-area
 /// triangles are the union of their edges.
 bool exactIntersect(const Triangle& first, const Triangle& second) {
-  using namespace detail;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   const auto a = corners(first), b = corners(second);
   if (!flatA && !flatB)
@@ -205,7 +204,6 @@ bool exactIntersect(const Triangle& first, const Triangle& second) {
 /// The exact squared distance of the two solid triangles (0 when they intersect) in exact rational
 /// arithmetic, rounded to double once, at the end. About 300 µs a pair.
 double exactSquaredDistanceRational(const Triangle& first, const Triangle& second) {
-  using namespace detail;
   if (exactIntersect(first, second)) return 0.0;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   CGAL::Gmpq best = candidate<Rational>(0, first, flatA, second, flatB);
@@ -218,7 +216,6 @@ double exactSquaredDistanceRational(const Triangle& first, const Triangle& secon
 /// within kCertifiedFraction × (pairSize + distance) of the exact distance (an interval filter,
 /// with exact rational arithmetic where the intervals are too wide).
 double exactSquaredDistance(const Triangle& first, const Triangle& second) {
-  using namespace detail;
   if (exactIntersect(first, second)) return 0.0;
   const bool flatA = degenerate(first), flatB = degenerate(second);
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
@@ -259,7 +256,6 @@ double exactSquaredDistance(const Triangle& first, const Triangle& second) {
 /// kCertifiedFraction × (longest edge + distance) of the exact distance (interval filter, exact
 /// rational fallback, as for two triangles).
 double exactSquaredDistance(const Vec3& p, const Triangle& triangle) {
-  using namespace detail;
   const bool flat = degenerate(triangle);
   return certifiedSquaredDistance(
       [&](auto kernel) { return pointTriangle<decltype(kernel)>(p, triangle, flat); },
@@ -268,7 +264,6 @@ double exactSquaredDistance(const Vec3& p, const Triangle& triangle) {
 
 /// The squared distance between two segments (either may have zero length), certified likewise.
 double exactSquaredDistance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
-  using namespace detail;
   return certifiedSquaredDistance(
       [&](auto kernel) { return segmentSegment<decltype(kernel)>(p0, p1, q0, q1); },
       std::max(distance(p0, p1), distance(q0, q1)));
@@ -277,7 +272,6 @@ double exactSquaredDistance(const Vec3& p0, const Vec3& p1, const Vec3& q0, cons
 /// CGAL's own Triangle_3–Triangle_3 squared distance in exact rationals (about 300 µs a pair),
 /// for non-degenerate triangles only; the tests cross-check the oracle above with it.
 double cgalTriangleSquaredDistance(const Triangle& first, const Triangle& second) {
-  using namespace detail;
   auto triangle = [](const Triangle& t) {
     return Rational::Triangle_3(point<Rational>(t.a), point<Rational>(t.b), point<Rational>(t.c));
   };
@@ -285,13 +279,12 @@ double cgalTriangleSquaredDistance(const Triangle& first, const Triangle& second
 }
 
 double exactSquaredDistanceRational(const Vec3& p, const Triangle& triangle) {
-  using namespace detail;
   return CGAL::to_double(pointTriangle<Rational>(p, triangle, degenerate(triangle)));
 }
 
 double exactSquaredDistanceRational(const Vec3& p0, const Vec3& p1, const Vec3& q0,
                                     const Vec3& q1) {
-  return CGAL::to_double(detail::segmentSegment<detail::Rational>(p0, p1, q0, q1));
+  return CGAL::to_double(segmentSegment<Rational>(p0, p1, q0, q1));
 }
 
 }  // namespace delta::test
