@@ -140,26 +140,54 @@ PairContacts meshSphereContacts(const QueryMesh& mesh, const Sphere& sphere, dou
   return result;
 }
 
-PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                          double filterDistance, bool compareInSecondFrame,
-                          contactdetection::ContactCache* cache) {
+namespace {
+
+/// Steps 2–4 of pairContacts on what step 1 found (with the meshes swapped when
+/// `compareInSecondFrame`); the inside test made on the points step 2 keeps when `insideLater`.
+PairContacts finishedPairContacts(std::vector<ContactPoint> found, const QueryMesh& first,
+                                  const QueryMesh& second, double epsilon, double filterDistance,
+                                  bool compareInSecondFrame, bool insideLater) {
   PairContacts result;
-  // Through the cache the inside test waits for the points filter(h) keeps.
-  const auto detected = [&](const QueryMesh& one, const QueryMesh& other) {
-    return cache ? contactdetection::contacts(one, other, epsilon, *cache, kernels::Solver::Hybrid,
-                                              contactdetection::InsideTest::later)
-                 : contactdetection::contacts(one, other, epsilon);
-  };
-  std::vector<ContactPoint> found =
-      compareInSecondFrame ? turnedRound(detected(second, first)) : detected(first, second);
+  if (compareInSecondFrame) found = turnedRound(std::move(found));
   result.trianglePairs = found.size();
   if (found.empty()) return result;
   std::vector<ContactPoint> kept = contactdetection::filter(found, filterDistance);
-  if (cache) contactdetection::markInside(first, second, epsilon, kept);
+  if (insideLater) contactdetection::markInside(first, second, epsilon, kept);
   for (ContactPoint& contact : kept)
     closestToP(contact, second);
   result.points = kept.size() > 1 ? contactdetection::filter(kept, filterDistance) : kept;
   return result;
+}
+
+}  // namespace
+
+PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                          double filterDistance, bool compareInSecondFrame,
+                          contactdetection::ContactCache* cache) {
+  // Through the cache the inside test waits for the points filter(h) keeps.
+  const QueryMesh& one = compareInSecondFrame ? second : first;
+  const QueryMesh& other = compareInSecondFrame ? first : second;
+  std::vector<ContactPoint> found =
+      cache ? contactdetection::contacts(one, other, epsilon, *cache, kernels::Solver::Hybrid,
+                                         contactdetection::InsideTest::later)
+            : contactdetection::contacts(one, other, epsilon);
+  return finishedPairContacts(std::move(found), first, second, epsilon, filterDistance,
+                              compareInSecondFrame, cache != nullptr);
+}
+
+std::size_t addPairContacts(contactdetection::ContactBatch& batch, const QueryMesh& first,
+                            const QueryMesh& second, double epsilon, bool compareInSecondFrame,
+                            contactdetection::ContactCache& cache) {
+  return compareInSecondFrame
+             ? batch.add(second, first, epsilon, cache, contactdetection::InsideTest::later)
+             : batch.add(first, second, epsilon, cache, contactdetection::InsideTest::later);
+}
+
+PairContacts batchedPairContacts(contactdetection::ContactBatch& batch, std::size_t index,
+                                 const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                 double filterDistance, bool compareInSecondFrame) {
+  return finishedPairContacts(std::move(batch.contacts(index)), first, second, epsilon,
+                              filterDistance, compareInSecondFrame, true);
 }
 
 }  // namespace delta::dem

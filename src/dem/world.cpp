@@ -26,6 +26,9 @@ namespace {
 /// Pairs per parallel chunk in the narrow phase: a pair costs from a few µs (distant boxes) to
 /// a few hundred (large meshes in contact), so small chunks under dynamic scheduling balance.
 constexpr std::size_t kPairGrain = 2;
+/// Pairs per parallel chunk in contact detection, and per kernel batch of the pairs whose
+/// caches hold (World::detectContacts): a pair at rest costs about a µs.
+constexpr std::size_t kDetectionGrain = 16;
 /// Pairs of two spheres per parallel chunk and per batch of their law: a few hundred
 /// nanoseconds of work each.
 constexpr std::size_t kSphereGrain = 64;
@@ -543,12 +546,31 @@ void World::routeContactCaches(std::span<const Interaction> pairs) {
       spareSphereCaches_, sphereCacheOf_, pairOf);
 }
 
+/// What detectPair needs of its caller's run of pairs: the law's ε and h, and scratch kept from
+/// pair to pair; the mesh pairs whose step 1 went to the kernel batch, for finishBatchedPairs.
+struct World::DetectionRun {
+  double epsilon, filterDistance;
+  bool volumeLaw;
+  contactdetection::OverlapOptions overlapOptions;
+  std::vector<ContactPoint> sphereFound;  ///< a sphere's contacts on an obstacle, raw
+  PairContacts onObstacle;                ///< and finished
+  contactdetection::ContactBatch& batch;
+  std::vector<std::pair<std::size_t, std::size_t>>& batched;  ///< (pair, index in the batch)
+
+  /// The calling thread's batch, kept with its memory from step to step.
+  static contactdetection::ContactBatch& threadBatch() {
+    thread_local contactdetection::ContactBatch batch;
+    return batch;
+  }
+  static std::vector<std::pair<std::size_t, std::size_t>>& threadBatched() {
+    thread_local std::vector<std::pair<std::size_t, std::size_t>> batched;
+    return batched;
+  }
+};
+
 void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes) {
   routeContactCaches(pairs);
-  const double epsilon = law_.epsilon, filterDistance = parameters_.filterDistance;
   const bool volumeLaw = law_.model == ContactModel::volume;
-  contactdetection::OverlapOptions overlapOptions;
-  overlapOptions.curves = false;
   routes_.resize(pairs.size());
   onePoints_.resize(pairs.size());
   // Pairs of two spheres have their own batched law (sphereSphereLaw); marked here.
@@ -563,73 +585,103 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
       routes_[p].route = PairRoute::general;
     }
   }
-  parallelFor(0, pairs.size(), kPairGrain, [&](std::size_t begin, std::size_t end) {
-    std::vector<ContactPoint> sphereFound;  // a sphere's contacts on an obstacle, raw
-    PairContacts onObstacle;                // and finished
-    for (std::size_t p = begin; p < end; ++p) {
-      if (p + 1 < end && cacheOf_[p + 1]) cacheOf_[p + 1]->prefetch();
-      if (p + 1 < end && overlapCacheOf_[p + 1]) overlapCacheOf_[p + 1]->prefetch();
-      const Interaction& pair = pairs[p];
-      RoutedPair& routed = routes_[p];
-      if (routed.route == PairRoute::onePoint && !pair.withObstacle) continue;  // two spheres
-      const bool firstSphere = shapes_[particles_[pair.first].shape].isSphere();
-      if (!volumeLaw && firstSphere && pair.withObstacle) {
-        // Through the pair's cache, the sphere in the obstacle's prepared frame.
-        const QueryMesh& obstacle = placedObstacles_[pair.second];
-        Sphere sphere = spheres_[pair.first];
-        if (obstacle.moved()) sphere.center = obstacle.inversePose().apply(sphere.center);
-        contactdetection::sphereContacts(sphere, obstacle, epsilon, *sphereCacheOf_[p],
-                                         sphereFound);
-        finishSphereMeshContacts(sphereFound, obstacle, filterDistance, onObstacle);
-        routed.rawPoints = onObstacle.trianglePairs;
-        if (onObstacle.points.size() <= 1) {  // most: one point, its law in a batch below
-          routed.route = onObstacle.points.empty() ? PairRoute::apart : PairRoute::onePoint;
-          if (!onObstacle.points.empty()) onePoints_[p].point.point = onObstacle.points.front();
-          continue;
-        }
-        routed.route = PairRoute::general;
-        outcomes[p].regions.clear();
-        outcomes[p].forces.points.clear();
-        outcomes[p].contacts.points.assign(onObstacle.points.begin(), onObstacle.points.end());
-        continue;
+  // In chunks of kDetectionGrain pairs; the mesh pairs of a chunk whose caches hold have their
+  // kept triangle pairs through the kernels in one batch (a pair at rest keeps a few: alone,
+  // they would leave most of a batch's lanes idle), finished after the chunk's other pairs.
+  parallelFor(0, pairs.size(), kDetectionGrain, [&](std::size_t chunkBegin, std::size_t chunkEnd) {
+    DetectionRun run{law_.epsilon,
+                     parameters_.filterDistance,
+                     volumeLaw,
+                     {},
+                     {},
+                     {},
+                     DetectionRun::threadBatch(),
+                     DetectionRun::threadBatched()};
+    run.overlapOptions.curves = false;
+    for (std::size_t begin = chunkBegin; begin < chunkEnd; begin += kDetectionGrain) {
+      const std::size_t end = std::min(chunkEnd, begin + kDetectionGrain);
+      run.batch.clear();
+      run.batched.clear();
+      for (std::size_t p = begin; p < end; ++p) {
+        if (p + 1 < end && cacheOf_[p + 1]) cacheOf_[p + 1]->prefetch();
+        if (p + 1 < end && overlapCacheOf_[p + 1]) overlapCacheOf_[p + 1]->prefetch();
+        detectPair(pairs[p], p, outcomes[p], run);
       }
-      routed.route = PairRoute::general;
-      PairOutcome& outcome = outcomes[p];
-      outcome.regions.clear();
-      outcome.forces.points.clear();
-      if (volumeLaw) {  // every shape and obstacle is a closed mesh (addShape, addObstacle)
-        const QueryMesh& other =
-            pair.withObstacle ? placedObstacles_[pair.second] : placed_[pair.second];
-        contactdetection::Overlap found = contactdetection::overlap(
-            placed_[pair.first], other, overlapOptions, *overlapCacheOf_[p]);
-        outcome.contacts.points.clear();
-        routed.rawPoints = found.segments;
-        outcome.regions = std::move(found.regions);
-        continue;
-      }
-      const Particle& one = particles_[pair.first];
-      PairContacts& found = outcome.contacts;
-      if (pair.withObstacle) {
-        found = pairContacts(placed_[pair.first], placedObstacles_[pair.second], epsilon,
-                             filterDistance, true, cacheOf_[p]);
-      } else {
-        const Particle& other = particles_[pair.second];
-        const bool secondSphere = shapes_[other.shape].isSphere();
-        if (firstSphere)
-          found = sphereMeshContacts(boundingSphere(one), placed_[pair.second], epsilon,
-                                     filterDistance);
-        else if (secondSphere)
-          found = meshSphereContacts(placed_[pair.first], boundingSphere(other), epsilon,
-                                     filterDistance);
-        else
-          found = pairContacts(placed_[pair.first], placed_[pair.second], epsilon, filterDistance,
-                               false, cacheOf_[p]);
-      }
-      routed.rawPoints = found.trianglePairs;
+      finishBatchedPairs(pairs, outcomes, run);
     }
   });
   sphereSphereLaw(pairs);
   onePointLaw(pairs);
+}
+
+void World::detectPair(const Interaction& pair, std::size_t p, PairOutcome& outcome,
+                       DetectionRun& run) {
+  RoutedPair& routed = routes_[p];
+  if (routed.route == PairRoute::onePoint && !pair.withObstacle) return;  // two spheres
+  const double epsilon = run.epsilon, filterDistance = run.filterDistance;
+  const bool firstSphere = shapes_[particles_[pair.first].shape].isSphere();
+  if (!run.volumeLaw && firstSphere && pair.withObstacle) {
+    // Through the pair's cache, the sphere in the obstacle's prepared frame.
+    const QueryMesh& obstacle = placedObstacles_[pair.second];
+    Sphere sphere = spheres_[pair.first];
+    if (obstacle.moved()) sphere.center = obstacle.inversePose().apply(sphere.center);
+    contactdetection::sphereContacts(sphere, obstacle, epsilon, *sphereCacheOf_[p],
+                                     run.sphereFound);
+    finishSphereMeshContacts(run.sphereFound, obstacle, filterDistance, run.onObstacle);
+    routed.rawPoints = run.onObstacle.trianglePairs;
+    if (run.onObstacle.points.size() <= 1) {  // most: one point, its law in a batch below
+      routed.route = run.onObstacle.points.empty() ? PairRoute::apart : PairRoute::onePoint;
+      if (!run.onObstacle.points.empty()) onePoints_[p].point.point = run.onObstacle.points.front();
+      return;
+    }
+    routed.route = PairRoute::general;
+    outcome.regions.clear();
+    outcome.forces.points.clear();
+    outcome.contacts.points.assign(run.onObstacle.points.begin(), run.onObstacle.points.end());
+    return;
+  }
+  routed.route = PairRoute::general;
+  outcome.regions.clear();
+  outcome.forces.points.clear();
+  const QueryMesh& other = pair.withObstacle ? placedObstacles_[pair.second] : placed_[pair.second];
+  if (run.volumeLaw) {  // every shape and obstacle is a closed mesh (addShape, addObstacle)
+    contactdetection::Overlap found = contactdetection::overlap(
+        placed_[pair.first], other, run.overlapOptions, *overlapCacheOf_[p]);
+    outcome.contacts.points.clear();
+    routed.rawPoints = found.segments;
+    outcome.regions = std::move(found.regions);
+    return;
+  }
+  const bool secondSphere = !pair.withObstacle && shapes_[particles_[pair.second].shape].isSphere();
+  PairContacts& found = outcome.contacts;
+  if (firstSphere) {
+    found =
+        sphereMeshContacts(boundingSphere(particles_[pair.first]), other, epsilon, filterDistance);
+  } else if (secondSphere) {
+    found = meshSphereContacts(placed_[pair.first], boundingSphere(particles_[pair.second]),
+                               epsilon, filterDistance);
+  } else if (cacheOf_[p]) {  // step 1 in the run's kernel batch (finishBatchedPairs)
+    run.batched.emplace_back(p, addPairContacts(run.batch, placed_[pair.first], other, epsilon,
+                                                pair.withObstacle, *cacheOf_[p]));
+    return;
+  } else {
+    found = pairContacts(placed_[pair.first], other, epsilon, filterDistance, pair.withObstacle);
+  }
+  routed.rawPoints = found.trianglePairs;
+}
+
+void World::finishBatchedPairs(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
+                               DetectionRun& run) {
+  run.batch.run();
+  for (const auto& [p, index] : run.batched) {
+    const Interaction& pair = pairs[p];
+    const QueryMesh& other =
+        pair.withObstacle ? placedObstacles_[pair.second] : placed_[pair.second];
+    PairContacts& found = outcomes[p].contacts;
+    found = batchedPairContacts(run.batch, index, placed_[pair.first], other, run.epsilon,
+                                run.filterDistance, pair.withObstacle);
+    routes_[p].rawPoints = found.trianglePairs;
+  }
 }
 
 /// What a run of the batched one-point law carries from pair to pair: the springs' cursor (the

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
@@ -334,21 +335,36 @@ void placePartnerLeaves(const detail::QueryMeshData& b, const detail::MatrixMoti
 
 using CandidatePair = ContactCache::KeptPair;
 
-/// The triangle pairs gathered in `work` (firsts[k] against seconds[k], ids firstIds[k] and
-/// secondIds[k]) through the kernels in one batch; those within `reach` appended to `out`.
-/// Returns the kernels' answers, pair by pair.
-const kernels::PairResults& batchedContacts(RunScratch& work, double reach, kernels::Solver solver,
-                                            std::vector<ContactPoint>& out) {
+/// The triangle pairs gathered in `work` (firsts[k] against seconds[k]) through the kernels in
+/// one batch; returns their answers, pair by pair.
+const kernels::PairResults& runKernels(RunScratch& work, kernels::Solver solver) {
   work.firstBatch.assign(work.firsts);
   work.secondBatch.assign(work.seconds);
   kernels::PairResults& results = work.results;
   results.reserve(work.firsts.size());  // the kernels fill at most the capacity
   kernels::distances(solver, work.firstBatch, work.secondBatch, results);
-  for (std::size_t k = 0; k < results.size(); ++k)
+  return results;
+}
+
+/// The gathered pairs [begin, end) of `work` that the kernels found within `reach`, appended to
+/// `out` as contacts.
+void appendWithin(const RunScratch& work, std::size_t begin, std::size_t end, double reach,
+                  std::vector<ContactPoint>& out) {
+  const kernels::PairResults& results = work.results;
+  for (std::size_t k = begin; k < end; ++k)
     if (results.distanceSquared(k) < reach * reach)
       out.push_back(contactPoint(work.firsts[k], work.seconds[k], results.p(k), results.q(k),
                                  results.intersect(k), results.converged(k), work.firstIds[k],
                                  work.secondIds[k]));
+}
+
+/// The triangle pairs gathered in `work` (firsts[k] against seconds[k], ids firstIds[k] and
+/// secondIds[k]) through the kernels in one batch; those within `reach` appended to `out`.
+/// Returns the kernels' answers, pair by pair.
+const kernels::PairResults& batchedContacts(RunScratch& work, double reach, kernels::Solver solver,
+                                            std::vector<ContactPoint>& out) {
+  const kernels::PairResults& results = runKernels(work, solver);
+  appendWithin(work, 0, results.size(), reach, out);
   return results;
 }
 
@@ -429,12 +445,17 @@ void contactsOfRun(std::size_t run, const detail::QueryMeshData& a, const MeshPa
       (*candidates)[candidates->size() - results.size() + k].distance = results.distance(k);
 }
 
-/// Phase 4: every run's contacts in one list, sorted by (first, second) id.
-std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoint>> perRun) {
-  std::vector<ContactPoint> found = detail::joined(perRun);
+/// Contacts sorted by (first, second) id.
+void sortByIds(std::vector<ContactPoint>& found) {
   std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
     return x.first != y.first ? x.first < y.first : x.second < y.second;
   });
+}
+
+/// Phase 4: every run's contacts in one list, sorted by (first, second) id.
+std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoint>> perRun) {
+  std::vector<ContactPoint> found = detail::joined(perRun);
+  sortByIds(found);
   return found;
 }
 
@@ -526,38 +547,28 @@ std::vector<ContactPoint> descendedContacts(const detail::QueryMeshData& a,
   return joinedAndSorted(std::span<const std::vector<ContactPoint>>(perRun.data(), runs));
 }
 
-/// The contacts closer than `reach` among the kept triangle pairs (sorted indices) whose
-/// distance when kept is below `nearer` (2ε plus the move since and the rounding allowance), in
-/// one kernel batch: phases 3–4 as a descent would give them, for the same pairs within reach.
-std::vector<ContactPoint> keptContacts(const detail::QueryMeshData& a,
-                                       const detail::QueryMeshData& b,
-                                       const detail::MatrixMotion* motion, double reach,
-                                       kernels::Solver solver,
-                                       const std::vector<ContactCache::KeptPair>& kept,
-                                       double nearer) {
-  std::vector<ContactPoint> found;
-  RunScratch& work = RunScratch::ofThread();
-  std::vector<Triangle>&firsts = work.firsts, &seconds = work.seconds;
-  std::vector<std::uint32_t>&firstIds = work.firstIds, &secondIds = work.secondIds;
-  firsts.clear();
-  seconds.clear();
-  firstIds.clear();
-  secondIds.clear();
+/// The kept triangle pairs (sorted indices) whose distance when kept is below `nearer` (2ε plus
+/// the move since and the rounding allowance), placed as a descent would place them, appended to
+/// the pairs gathered in `work`.
+void gatherKept(const detail::QueryMeshData& a, const detail::QueryMeshData& b,
+                const detail::MatrixMotion* motion, const std::vector<ContactCache::KeptPair>& kept,
+                double nearer, RunScratch& work) {
   // Sorted by distance: those that may be within 2ε now, rounding allowed for, come first (a
   // scan reads only them: a binary search's scattered reads missed the cache).
   for (std::size_t k = 0; k < kept.size() && kept[k].distance < nearer; ++k) {
-    firsts.push_back(a.triangle(kept[k].first));
+    work.firsts.push_back(a.triangle(kept[k].first));
     const Triangle other = b.triangle(kept[k].second);
-    seconds.push_back(motion ? motion->apply(other) : other);  // as placePartnerLeaves does
-    firstIds.push_back(a.order[kept[k].first]);
-    secondIds.push_back(b.order[kept[k].second]);
+    work.seconds.push_back(motion ? motion->apply(other) : other);  // as placePartnerLeaves does
+    work.firstIds.push_back(a.order[kept[k].first]);
+    work.secondIds.push_back(b.order[kept[k].second]);
   }
-  if (firsts.empty()) return found;
-  batchedContacts(work, reach, solver, found);
-  std::sort(found.begin(), found.end(), [](const ContactPoint& x, const ContactPoint& y) {
-    return x.first != y.first ? x.first < y.first : x.second < y.second;
-  });
-  return found;
+}
+
+void clearGathered(RunScratch& work) noexcept {
+  work.firsts.clear();
+  work.seconds.clear();
+  work.firstIds.clear();
+  work.secondIds.clear();
 }
 
 /// Phases 5–6: overlaps marked (both meshes closed; unless `inside` leaves it to the caller),
@@ -622,29 +633,48 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
   return found;
 }
 
-std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
-                                   ContactCache& cache, kernels::Solver solver, InsideTest inside) {
-  const PlacedPair pair = placedPair(first, second, epsilon);
-  std::vector<ContactPoint> found;
-  const double move =
-      cache.epsilon_ == epsilon && cache.solver_ == solver
-          ? cache.moveSince(first, second, pair.motion.rotation, pair.motion.translation)
-          : std::numeric_limits<double>::infinity();
-  if (cache.holds(move)) {
-    const double nearer = pair.reach + move + cache.allowance();
-    if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts
-      found =
-          keptContacts(pair.a, pair.b, pair.placement(), pair.reach, solver, cache.pairs_, nearer);
-    cache.answered();
-  } else if (cache.keeps()) {
+}  // namespace delta::contactdetection
+
+namespace delta::detail {
+
+using contactdetection::CandidatePair;
+using contactdetection::ContactCache;
+using contactdetection::descendedContacts;
+using contactdetection::gatherKept;
+using contactdetection::magnitudeOf;
+using contactdetection::PlacedPair;
+using contactdetection::RunScratch;
+
+/// What the cached queries read and write of a ContactCache (its friend).
+struct CachedContacts {
+  /// How far the second mesh has moved against the first since `cache` was made, +∞ where it was
+  /// made for another ε or solver.
+  static double moveSince(const ContactCache& cache, const PlacedPair& pair, const QueryMesh& first,
+                          const QueryMesh& second, double epsilon, kernels::Solver solver) {
+    return cache.epsilon_ == epsilon && cache.solver_ == solver
+               ? cache.moveSince(first, second, pair.motion.rotation, pair.motion.translation)
+               : std::numeric_limits<double>::infinity();
+  }
+
+  /// The contacts of a pair whose cache does not hold: phases 1–4, the cache made anew (from a
+  /// descent to 2ε + skin) where it keeps pairs.
+  static std::vector<ContactPoint> remade(const QueryMesh& first, const QueryMesh& second,
+                                          double epsilon, const PlacedPair& pair,
+                                          ContactCache& cache, kernels::Solver solver) {
+    if (!cache.keeps()) {
+      cache.madeWithoutKeeping();
+      return descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach, solver,
+                               nullptr);
+    }
     // The kept pairs are those the kernels could find within 2ε until the second has moved by
     // the skin less what rounding can add: the kernels' error at both poses (10⁻¹² of a pair's
     // size: kernels/hybrid.h), the triangles' placement and the move's bound (a few ulps of the
     // coordinates each); allowed 2⁻³⁶ of the largest coordinate, as the flat query's prune is
     // (2ε itself has the prune's slack in the boxes and planes already).
     std::vector<CandidatePair> candidates;
-    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach,
-                              pair.reach + cache.skin(), solver, &candidates);
+    std::vector<ContactPoint> found =
+        descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach + cache.skin(),
+                          solver, &candidates);
     // By distance (then ids, for a fixed order): a call hands the kernels a prefix. The penalty
     // solver's distances are not bounds: its pairs all go, as if at distance 0.
     if (solver == kernels::Solver::Penalty)
@@ -662,13 +692,117 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
     cache.solver_ = solver;
     cache.keep(first, second, pair.motion.rotation, pair.motion.translation,
                0x1p-36 * magnitudeOf(pair));
-  } else {
-    found = descendedContacts(pair.a, pair.b, pair.placement(), pair.reach, pair.reach, solver,
-                              nullptr);
-    cache.madeWithoutKeeping();
+    return found;
+  }
+
+  /// Phases 1–4 of a pair through its cache: where the cache holds, its kept pairs that may be
+  /// within 2ε now are appended to `work` (true: the kernels are the caller's); where it does
+  /// not, it is made anew and the contacts are in `found` (false).
+  static bool gatherOrRemake(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                             const PlacedPair& pair, ContactCache& cache, kernels::Solver solver,
+                             RunScratch& work, std::vector<ContactPoint>& found) {
+    const double move = moveSince(cache, pair, first, second, epsilon, solver);
+    if (!cache.holds(move)) {
+      found = remade(first, second, epsilon, pair, cache, solver);
+      return false;
+    }
+    const double nearer = pair.reach + move + cache.allowance();
+    if (cache.nearest_ < nearer)  // else every kept pair is still beyond 2ε: no contacts
+      gatherKept(pair.a, pair.b, pair.placement(), cache.pairs_, nearer, work);
+    cache.answered();
+    return true;
+  }
+};
+
+}  // namespace delta::detail
+
+namespace delta::contactdetection {
+
+std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                   ContactCache& cache, kernels::Solver solver, InsideTest inside) {
+  const PlacedPair pair = placedPair(first, second, epsilon);
+  std::vector<ContactPoint> found;
+  RunScratch& work = RunScratch::ofThread();
+  clearGathered(work);
+  if (detail::CachedContacts::gatherOrRemake(first, second, epsilon, pair, cache, solver, work,
+                                             found) &&
+      !work.firsts.empty()) {
+    batchedContacts(work, pair.reach, solver, found);
+    sortByIds(found);
   }
   finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
   return found;
+}
+
+/// A pair added to a ContactBatch: what its finish needs, and where its kept triangle pairs lie
+/// in the batch (none: answered when added).
+struct ContactBatch::Entry {
+  const QueryMesh* first;
+  const QueryMesh* second;
+  RigidTransform secondToFirst;
+  double epsilon;
+  InsideTest inside;
+  bool gathered;
+  std::size_t begin, end;
+};
+
+struct ContactBatch::State {
+  std::vector<Entry> entries;
+  std::vector<std::vector<ContactPoint>> found;  ///< one a pair, kept from batch to batch
+  RunScratch work;
+};
+
+ContactBatch::ContactBatch(kernels::Solver solver)
+    : solver_(solver), state_(std::make_unique<State>()) {}
+
+ContactBatch::~ContactBatch() = default;
+ContactBatch::ContactBatch(ContactBatch&&) noexcept = default;
+ContactBatch& ContactBatch::operator=(ContactBatch&&) noexcept = default;
+
+std::size_t ContactBatch::size() const noexcept {
+  return state_->entries.size();
+}
+
+void ContactBatch::clear() noexcept {
+  state_->entries.clear();
+  clearGathered(state_->work);
+}
+
+std::size_t ContactBatch::add(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                              ContactCache& cache, InsideTest inside) {
+  State& state = *state_;
+  const PlacedPair pair = placedPair(first, second, epsilon);
+  const std::size_t index = state.entries.size();
+  if (state.found.size() <= index) state.found.resize(index + 1);
+  std::vector<ContactPoint>& found = state.found[index];
+  found.clear();
+  Entry entry{&first, &second, pair.secondToFirst, epsilon, inside, false, 0, 0};
+  entry.begin = state.work.firsts.size();
+  entry.gathered = detail::CachedContacts::gatherOrRemake(first, second, epsilon, pair, cache,
+                                                          solver_, state.work, found);
+  entry.end = state.work.firsts.size();
+  if (!entry.gathered) finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
+  state.entries.push_back(entry);
+  return index;
+}
+
+void ContactBatch::run() {
+  State& state = *state_;
+  if (!state.work.firsts.empty()) runKernels(state.work, solver_);
+  for (std::size_t index = 0; index < state.entries.size(); ++index) {
+    const Entry& entry = state.entries[index];
+    if (!entry.gathered) continue;
+    std::vector<ContactPoint>& found = state.found[index];
+    appendWithin(state.work, entry.begin, entry.end, 2.0 * entry.epsilon, found);
+    sortByIds(found);
+    finishContacts(*entry.first, *entry.second, entry.secondToFirst, entry.epsilon, entry.inside,
+                   found);
+  }
+  clearGathered(state.work);
+}
+
+std::vector<ContactPoint>& ContactBatch::contacts(std::size_t index) noexcept {
+  return state_->found[index];
 }
 
 void markInside(const QueryMesh& first, const QueryMesh& second, double epsilon,

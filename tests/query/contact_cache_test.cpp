@@ -4,11 +4,12 @@
 // against the first by small steps (the cache answers most calls) and by jumps (it must be made
 // anew), both meshes moved or only one, on the scenes of pair_paths.h: granulates, icospheres, a
 // box face on a box face (coplanar, touching), a cylinder resting on a box a million units from
-// the origin, a tiny pair.
+// the origin, a tiny pair. ContactBatch: the same, every path's pair in one kernel batch.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -108,6 +109,80 @@ TEST(ContactCache, BadInputThrowsAsTheQueryDoes) {
   for (const double epsilon : {0.0, -1.0, std::nan("")})
     EXPECT_THROW(contacts(a, b, epsilon, cache), Error) << epsilon;
   EXPECT_EQ(cache.made(), 0u);
+}
+
+// Every scene's paths (both meshes moved or one) at once, a batch a step: each pair's contacts
+// are its fresh query's, bit for bit, whichever pairs share the kernels' batch with it.
+TEST(ContactBatch, EachPairGetsItsFreshQuerysContacts) {
+  struct Path {
+    double epsilon;
+    InsideTest inside;
+    std::vector<std::pair<QueryMesh, QueryMesh>> poses;  // a step each
+  };
+  constexpr int kSteps = 120;
+  std::vector<Path> paths;
+  for (const test::PairScene& scene : test::pairScenes(false))
+    for (const bool moveFirst : {false, true}) {
+      Path& path = paths.emplace_back(
+          Path{scene.epsilon, moveFirst ? InsideTest::later : InsideTest::now, {}});
+      test::walkPath(scene, moveFirst, kSteps, [&](int, const QueryMesh& a, const QueryMesh& b) {
+        path.poses.emplace_back(a, b);
+      });
+    }
+  std::vector<ContactCache> caches;
+  for (const Path& path : paths)
+    caches.emplace_back(0.5 * path.epsilon);
+  ContactBatch batch;
+  std::size_t gathered = 0, withContacts = 0;
+  for (int s = 0; s < kSteps; ++s) {
+    batch.clear();
+    std::vector<std::size_t> index;
+    for (std::size_t k = 0; k < paths.size(); ++k) {
+      const auto& [a, b] = paths[k].poses[static_cast<std::size_t>(s)];
+      const std::size_t reusedBefore = caches[k].reused();
+      index.push_back(batch.add(a, b, paths[k].epsilon, caches[k], paths[k].inside));
+      gathered += caches[k].reused() - reusedBefore;
+    }
+    ASSERT_EQ(batch.size(), paths.size());
+    batch.run();
+    for (std::size_t k = 0; k < paths.size(); ++k) {
+      const auto& [a, b] = paths[k].poses[static_cast<std::size_t>(s)];
+      const std::vector<ContactPoint> fresh = contacts(a, b, paths[k].epsilon);
+      std::vector<ContactPoint>& batched = batch.contacts(index[k]);
+      if (paths[k].inside == InsideTest::later) markInside(a, b, paths[k].epsilon, batched);
+      ASSERT_TRUE(sameContacts(batched, fresh)) << "path " << k << ", step " << s << ": "
+                                                << batched.size() << " against " << fresh.size();
+      withContacts += fresh.empty() ? 0 : 1;
+    }
+  }
+  // Most pairs went through the batch's kernels, most of them touching.
+  EXPECT_GT(gathered, paths.size() * kSteps / 2);
+  EXPECT_GT(withContacts, paths.size() * kSteps / 2);
+}
+
+TEST(ContactBatch, BadInputThrowsAndLeavesTheBatchUsable) {
+  const QueryMesh a(primitives::granulate(3));
+  QueryMesh b(primitives::granulate(4));
+  b.setPose(RigidTransform::translationBy({1.7, 0.1, 0.0}));
+  ContactCache cache(0.02), other(0.02);
+  ContactBatch batch;
+  EXPECT_EQ(batch.add(a, b, 0.05, cache), 0u);
+  EXPECT_THROW(batch.add(a, b, -1.0, other), Error);
+  EXPECT_THROW(batch.add(a, b, std::nan(""), other), Error);
+  EXPECT_EQ(batch.add(a, b, 0.05, other), 1u);
+  batch.run();
+  EXPECT_EQ(batch.size(), 2u);
+  EXPECT_TRUE(sameContacts(batch.contacts(0), contacts(a, b, 0.05)));
+  EXPECT_TRUE(sameContacts(batch.contacts(1), contacts(a, b, 0.05)));
+  EXPECT_FALSE(batch.contacts(0).empty());
+  // Answered from the caches the second time, through the kernels in one batch.
+  batch.clear();
+  EXPECT_EQ(batch.add(a, b, 0.05, cache), 0u);
+  EXPECT_EQ(batch.add(a, b, 0.05, other), 1u);
+  batch.run();
+  EXPECT_EQ(cache.reused(), 1u);
+  EXPECT_EQ(other.reused(), 1u);
+  EXPECT_TRUE(sameContacts(batch.contacts(1), contacts(a, b, 0.05)));
 }
 
 }  // namespace

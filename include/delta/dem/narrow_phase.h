@@ -52,6 +52,22 @@ PairContacts pairContacts(const QueryMesh& first, const QueryMesh& second, doubl
                           double filterDistance, bool compareInSecondFrame = false,
                           contactdetection::ContactCache* cache = nullptr);
 
+/// pairContacts through `cache` for many pairs at once, step 1 in one kernel batch
+/// (contactdetection::ContactBatch, hybrid solver): addPairContacts adds the pair's step 1 to
+/// `batch` and returns its index; after batch.run(), batchedPairContacts takes what step 1
+/// found there and runs steps 2–4, with the same meshes, ε, h and `compareInSecondFrame`. The
+/// points are pairContacts(first, second, ε, h, compareInSecondFrame, &cache)'s, bit for bit.
+///
+/// Throws as pairContacts (addPairContacts: ε; batchedPairContacts: h).
+///
+/// Threading: as pairContacts; `batch` is the calling thread's.
+std::size_t addPairContacts(contactdetection::ContactBatch& batch, const QueryMesh& first,
+                            const QueryMesh& second, double epsilon, bool compareInSecondFrame,
+                            contactdetection::ContactCache& cache);
+PairContacts batchedPairContacts(contactdetection::ContactBatch& batch, std::size_t index,
+                                 const QueryMesh& first, const QueryMesh& second, double epsilon,
+                                 double filterDistance, bool compareInSecondFrame);
+
 /// The narrow phase of two sphere particles (kernels::sphereSphere): one point when the gap
 /// between the surfaces, |c₁ − c₂| − r₁ − r₂, is below 2ε (strictly), none otherwise. As for
 /// every ContactPoint: x is halfway between the surfaces' closest points on the line of centres,

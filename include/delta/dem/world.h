@@ -445,8 +445,16 @@ class World {
   /// The forces at the current state, in phases: findPairs (the broad phase), detectContacts,
   /// applyContactLaw, exchangeGhostForces (with `exchange`), sumForces.
   void evaluateForces(bool halfStepVelocities, Exchange* exchange);
-  /// Each pair's contact points (the point law) or overlap regions (the volume law).
+  /// Each pair's contact points (the point law) or overlap regions (the volume law), in runs of
+  /// pairs: detectPair on each, then finishBatchedPairs.
   void detectContacts(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes);
+  struct DetectionRun;  // world.cpp
+  /// Pair p's contacts or regions into `outcome`; a mesh pair with a contact cache has its
+  /// step 1 added to the run's kernel batch instead (dem::addPairContacts).
+  void detectPair(const Interaction& pair, std::size_t p, PairOutcome& outcome, DetectionRun& run);
+  /// The run's kernel batch run, and the pairs added to it finished (dem::batchedPairContacts).
+  void finishBatchedPairs(std::span<const Interaction> pairs, std::span<PairOutcome> outcomes,
+                          DetectionRun& run);
   /// The law of the pairs of two spheres (spherePairs_), detection and forces at once: their
   /// routes_ and onePoints_.
   void sphereSphereLaw(std::span<const Interaction> pairs);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -9,6 +10,10 @@
 #include "delta/mesh/triangle_soa.h"
 #include "delta/query/pair_cache.h"
 #include "delta/query/query_mesh.h"
+
+namespace delta::detail {
+struct CachedContacts;
+}  // namespace delta::detail
 
 /// The seed's contact-detection API: mesh–mesh contacts and minimum distance, points–mesh
 /// distances and contacts, sphere–mesh contacts, and the redundancy filter. The queries validate
@@ -106,9 +111,7 @@ class ContactCache : public PairCache {
   void prefetch() const noexcept { __builtin_prefetch(pairs_.data()); }
 
  private:
-  friend std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& second,
-                                            double epsilon, ContactCache& cache,
-                                            kernels::Solver solver, InsideTest inside);
+  friend struct detail::CachedContacts;
   double epsilon_ = 0.0;
   kernels::Solver solver_ = kernels::Solver::Hybrid;
   std::vector<KeptPair> pairs_;  ///< by increasing distance, in one block (one cache miss)
@@ -132,6 +135,48 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
                                    ContactCache& cache,
                                    kernels::Solver solver = kernels::Solver::Hybrid,
                                    InsideTest inside = InsideTest::now);
+
+/// Many pairs' contacts through their caches, the kernels run once for all of them: each pair
+/// gets what contacts(first, second, ε, cache, solver, inside) gives it, bit for bit, but the
+/// triangle pairs of every pair whose cache holds go to the kernels in one batch. A pair at rest
+/// keeps a few (about five on a DEM hopper): alone, they leave most of a batch's lanes idle and
+/// pay the kernels' call each. A pair whose cache does not hold is answered when added, as by
+/// contacts().
+///
+///     batch.clear();
+///     for (...) batch.add(first, second, epsilon, cache);
+///     batch.run();
+///     for (...) use(batch.contacts(k));  // k: the index add() returned
+///
+/// Throws as contacts(first, second, ε, cache, solver, inside), from add().
+///
+/// Threading: a batch is used by one thread at a time; the meshes and caches added must stay
+/// as they are, and alive, until run() has returned.
+class ContactBatch {
+ public:
+  explicit ContactBatch(kernels::Solver solver = kernels::Solver::Hybrid);
+  ~ContactBatch();
+  ContactBatch(ContactBatch&&) noexcept;
+  ContactBatch& operator=(ContactBatch&&) noexcept;
+
+  /// Adds a pair; returns its index (0, 1, … in the order added since clear()).
+  std::size_t add(const QueryMesh& first, const QueryMesh& second, double epsilon,
+                  ContactCache& cache, InsideTest inside = InsideTest::now);
+  /// Runs the kernels on the pairs gathered and finishes every pair added.
+  void run();
+  /// The contacts of the pair added as `index`, after run() (the caller may move them out).
+  std::vector<ContactPoint>& contacts(std::size_t index) noexcept;
+  /// The pairs added since clear().
+  std::size_t size() const noexcept;
+  /// Forgets every pair added (keeps its memory for the next).
+  void clear() noexcept;
+
+ private:
+  struct Entry;
+  struct State;
+  kernels::Solver solver_;
+  std::unique_ptr<State> state_;
+};
 
 /// The inside test contacts() makes, on contacts found with InsideTest::later (in the world
 /// frame, as contacts() gives them, from the same meshes in the same order): each contact not
