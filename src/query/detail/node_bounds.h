@@ -1,11 +1,11 @@
 #pragma once
 
 // The point queries' node bounds (query_mesh_data.h's boxes and leaf cylinders), in builds of
-// the same arithmetic: plain loops for any ISA, and registers of eight lanes (AVX-512) or two of
-// four (AVX2) where the translation unit is compiled for them (the point tables,
-// query/isa/point_table.cpp). Each is a lower bound of the squared distance from the point to
-// every triangle below the node, as computed by the exact kernel; tests compare every ISA's with
-// it (through the tables).
+// the same arithmetic: plain loops for any ISA, and registers of eight lanes (AVX-512), two of
+// four (AVX2) or four of two (AArch64's Advanced SIMD, in its NEON and SVE tables) where the
+// translation unit is compiled for them (the point tables, query/isa/point_table.cpp). Each is a
+// lower bound of the squared distance from the point to every triangle below the node, as computed
+// by the exact kernel; tests compare every ISA's with it (through the tables).
 
 #include <algorithm>
 #include <bit>
@@ -21,6 +21,12 @@
 #define DELTA_NODE_BOUNDS_AVX512
 #endif
 #include "intrinsics.h"
+#endif
+// On AArch64 Advanced SIMD is the baseline: every table has it, and the point tables of more
+// than one lane (NEON's, SVE's) use it; the scalar table keeps the plain loops.
+#if defined(__aarch64__) && defined(__ARM_NEON) && defined(DELTA_ISA_LANES) && DELTA_ISA_LANES > 1
+#define DELTA_NODE_BOUNDS_NEON
+#include <arm_neon.h>
 #endif
 
 namespace delta::detail {
@@ -237,6 +243,118 @@ struct Avx2Bounds {
     return notAbove(_mm256_max_pd(_mm256_loadu_pd(lower), zero),
                     _mm256_max_pd(_mm256_loadu_pd(lower + 4), zero), prune, lower) &
            present;
+  }
+};
+#endif
+
+#if defined(DELTA_NODE_BOUNDS_NEON)
+/// The same bounds in AArch64's Advanced SIMD: each of Avx512Bounds' eight-lane operations as
+/// four registers of two lanes (lanes 0–1, 2–3, 4–5, 6–7), the same operations in the same
+/// order, with x86's maximum (a > b ? a : b, which gives b where either is NaN) and fused
+/// multiply-adds where AVX's are fused: the same bounds.
+struct NeonBounds {
+  /// Lanes H and H + 1 of `values`, widened.
+  template <std::size_t H>
+  static float64x2_t widened(const float (&values)[kFanout]) {
+    return vcvt_f64_f32(vld1_f32(values + H));
+  }
+  /// x86's maximum: a where a > b, else b.
+  static float64x2_t maximum(float64x2_t a, float64x2_t b) {
+    return vbslq_f64(vcgtq_f64(a, b), a, b);
+  }
+  template <std::size_t H>
+  static float64x2_t boxes(const BoxOctet& boxes, const Vec3& point) {
+    const float64x2_t zero = vdupq_n_f64(0.0);
+    const float64x2_t px = vdupq_n_f64(point.x), py = vdupq_n_f64(point.y),
+                      pz = vdupq_n_f64(point.z);
+    const float64x2_t dx = maximum(
+        maximum(vsubq_f64(widened<H>(boxes.lowerX), px), vsubq_f64(px, widened<H>(boxes.upperX))),
+        zero);
+    const float64x2_t dy = maximum(
+        maximum(vsubq_f64(widened<H>(boxes.lowerY), py), vsubq_f64(py, widened<H>(boxes.upperY))),
+        zero);
+    const float64x2_t dz = maximum(
+        maximum(vsubq_f64(widened<H>(boxes.lowerZ), pz), vsubq_f64(pz, widened<H>(boxes.upperZ))),
+        zero);
+    // dx·dx + (dy·dy + dz·dz), fused as AVX's fmadd(dx, dx, fmadd(dy, dy, dz·dz))
+    return vfmaq_f64(vfmaq_f64(vmulq_f64(dz, dz), dy, dy), dx, dx);
+  }
+  /// The two lanes of a comparison as bits 0 and 1.
+  static unsigned bits(uint64x2_t compared) {
+    const uint64x2_t ones = vshrq_n_u64(compared, 63);
+    return static_cast<unsigned>(vgetq_lane_u64(ones, 0) | vgetq_lane_u64(ones, 1) << 1);
+  }
+  /// Stores the four registers in `out`; the mask of the lanes not above `prune`.
+  static unsigned notAbove(const float64x2_t (&bounds)[4], double prune, double (&out)[kFanout]) {
+    const float64x2_t limit = vdupq_n_f64(prune);
+    unsigned mask = 0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      vst1q_f64(out + 2 * k, bounds[k]);
+      mask |= bits(vcleq_f64(bounds[k], limit)) << (2 * k);
+    }
+    return mask;
+  }
+  static unsigned children(const BoxOctet& octet, const Vec3& point, double prune,
+                           double (&out)[kFanout]) noexcept {
+    const float64x2_t bounds[4] = {boxes<0>(octet, point), boxes<2>(octet, point),
+                                   boxes<4>(octet, point), boxes<6>(octet, point)};
+    return notAbove(bounds, prune, out);
+  }
+  /// Avx512Bounds::leaves of lanes H and H + 1.
+  template <std::size_t H>
+  static float64x2_t leafBounds(const BoxOctet& octet, const CylinderOctet& cylinders,
+                                const Vec3& point, double shrink) {
+    const float64x2_t box = boxes<H>(octet, point);
+    const float64x2_t half = vdupq_n_f64(0.5), zero = vdupq_n_f64(0.0), by = vdupq_n_f64(shrink);
+    const float64x2_t wx =
+        vsubq_f64(vdupq_n_f64(point.x),
+                  vmulq_f64(vaddq_f64(widened<H>(octet.lowerX), widened<H>(octet.upperX)), half));
+    const float64x2_t wy =
+        vsubq_f64(vdupq_n_f64(point.y),
+                  vmulq_f64(vaddq_f64(widened<H>(octet.lowerY), widened<H>(octet.upperY)), half));
+    const float64x2_t wz =
+        vsubq_f64(vdupq_n_f64(point.z),
+                  vmulq_f64(vaddq_f64(widened<H>(octet.lowerZ), widened<H>(octet.upperZ)), half));
+    const float64x2_t nx = widened<H>(cylinders.normalX), ny = widened<H>(cylinders.normalY),
+                      nz = widened<H>(cylinders.normalZ);
+    const float64x2_t inverse =
+        vdivq_f64(vdupq_n_f64(1.0), vfmaq_f64(vfmaq_f64(vmulq_f64(nz, nz), ny, ny), nx, nx));
+    const float64x2_t h = vfmaq_f64(vfmaq_f64(vmulq_f64(nz, wz), ny, wy), nx, wx);
+    const float64x2_t along = vmulq_f64(h, inverse);
+    // w − n·along, fused as AVX's fnmadd
+    const float64x2_t lx = vfmsq_f64(wx, nx, along), ly = vfmsq_f64(wy, ny, along),
+                      lz = vfmsq_f64(wz, nz, along);
+    const float64x2_t lateral = vsqrtq_f64(vfmaq_f64(vfmaq_f64(vmulq_f64(lz, lz), ly, ly), lx, lx));
+    const float64x2_t across =
+        maximum(vsubq_f64(vsubq_f64(lateral, widened<H>(cylinders.radius)), by), zero);
+    const float64x2_t height = maximum(vsubq_f64(maximum(vsubq_f64(widened<H>(cylinders.low), h),
+                                                         vsubq_f64(h, widened<H>(cylinders.high))),
+                                                 by),
+                                       zero);
+    const float64x2_t cylinder =
+        vfmaq_f64(vmulq_f64(across, across), vmulq_f64(height, height), inverse);
+    return maximum(cylinder, box);  // the box where it is NaN
+  }
+  static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
+                         double shrink, double prune, double (&out)[kFanout]) noexcept {
+    const float64x2_t bounds[4] = {leafBounds<0>(octet, cylinders, point, shrink),
+                                   leafBounds<2>(octet, cylinders, point, shrink),
+                                   leafBounds<4>(octet, cylinders, point, shrink),
+                                   leafBounds<6>(octet, cylinders, point, shrink)};
+    return notAbove(bounds, prune, out);
+  }
+  static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
+                             unsigned present, double& prune) noexcept {
+    const float64x2_t limit = vdupq_n_f64(prune), zero = vdupq_n_f64(0.0);
+    unsigned below = 0;
+    for (std::size_t k = 0; k < 4; ++k)
+      below |= bits(vcltq_f64(vld1q_f64(upper + 2 * k), limit)) << (2 * k);
+    for (below &= present; below != 0; below &= below - 1)
+      prune = std::min(prune, upper[std::countr_zero(below)]);
+    const float64x2_t bounds[4] = {
+        maximum(vld1q_f64(lower), zero), maximum(vld1q_f64(lower + 2), zero),
+        maximum(vld1q_f64(lower + 4), zero), maximum(vld1q_f64(lower + 6), zero)};
+    return notAbove(bounds, prune, lower) & present;
   }
 };
 #endif

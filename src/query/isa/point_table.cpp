@@ -25,6 +25,8 @@ namespace {
 using Bounds = Avx512Bounds;
 #elif defined(DELTA_NODE_BOUNDS_AVX2)
 using Bounds = Avx2Bounds;  // Zen 2, ARCHER2's (GCC 12 leaves the plain loops scalar there)
+#elif defined(DELTA_NODE_BOUNDS_NEON)
+using Bounds = NeonBounds;  // AArch64's NEON and SVE tables
 #else
 using Bounds = PlainBounds;
 #endif
