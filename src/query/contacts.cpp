@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
@@ -735,14 +736,14 @@ std::vector<ContactPoint> contacts(const QueryMesh& first, const QueryMesh& seco
 }
 
 /// A pair added to a ContactBatch: what its finish needs, and where its kept triangle pairs lie
-/// in the batch (none: answered when added).
+/// in the batch while `pending` (the kernels' answers awaited: run()).
 struct ContactBatch::Entry {
   const QueryMesh* first;
   const QueryMesh* second;
   RigidTransform secondToFirst;
   double epsilon;
   InsideTest inside;
-  bool gathered;
+  bool pending;
   std::size_t begin, end;
 };
 
@@ -778,10 +779,10 @@ std::size_t ContactBatch::add(const QueryMesh& first, const QueryMesh& second, d
   found.clear();
   Entry entry{&first, &second, pair.secondToFirst, epsilon, inside, false, 0, 0};
   entry.begin = state.work.firsts.size();
-  entry.gathered = detail::CachedContacts::gatherOrRemake(first, second, epsilon, pair, cache,
-                                                          solver_, state.work, found);
+  entry.pending = detail::CachedContacts::gatherOrRemake(first, second, epsilon, pair, cache,
+                                                         solver_, state.work, found);
   entry.end = state.work.firsts.size();
-  if (!entry.gathered) finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
+  if (!entry.pending) finishContacts(first, second, pair.secondToFirst, epsilon, inside, found);
   state.entries.push_back(entry);
   return index;
 }
@@ -790,8 +791,9 @@ void ContactBatch::run() {
   State& state = *state_;
   if (!state.work.firsts.empty()) runKernels(state.work, solver_);
   for (std::size_t index = 0; index < state.entries.size(); ++index) {
-    const Entry& entry = state.entries[index];
-    if (!entry.gathered) continue;
+    Entry& entry = state.entries[index];
+    if (!entry.pending) continue;
+    entry.pending = false;
     std::vector<ContactPoint>& found = state.found[index];
     appendWithin(state.work, entry.begin, entry.end, 2.0 * entry.epsilon, found);
     sortByIds(found);
@@ -801,7 +803,12 @@ void ContactBatch::run() {
   clearGathered(state.work);
 }
 
-std::vector<ContactPoint>& ContactBatch::contacts(std::size_t index) noexcept {
+std::vector<ContactPoint>& ContactBatch::contacts(std::size_t index) {
+  if (index >= state_->entries.size())
+    throw Error("ContactBatch: contacts(" + std::to_string(index) + ") of a batch of " +
+                std::to_string(state_->entries.size()) + " pairs");
+  if (state_->entries[index].pending)
+    throw Error("ContactBatch: contacts(" + std::to_string(index) + ") before run()");
   return state_->found[index];
 }
 

@@ -179,10 +179,23 @@ TEST(ContactBatch, BadInputThrowsAndLeavesTheBatchUsable) {
   batch.clear();
   EXPECT_EQ(batch.add(a, b, 0.05, cache), 0u);
   EXPECT_EQ(batch.add(a, b, 0.05, other), 1u);
+  EXPECT_THROW(batch.contacts(0), Error);  // before run()
   batch.run();
   EXPECT_EQ(cache.reused(), 1u);
   EXPECT_EQ(other.reused(), 1u);
   EXPECT_TRUE(sameContacts(batch.contacts(1), contacts(a, b, 0.05)));
+  EXPECT_THROW(batch.contacts(2), Error);
+  // Run again, and with a pair added after a run: each pair's contacts once, as a fresh query's.
+  batch.run();
+  EXPECT_TRUE(sameContacts(batch.contacts(0), contacts(a, b, 0.05)));
+  ContactCache third(0.02);
+  EXPECT_EQ(batch.add(a, b, 0.05, third), 2u);
+  batch.run();
+  EXPECT_TRUE(sameContacts(batch.contacts(0), contacts(a, b, 0.05)));
+  EXPECT_TRUE(sameContacts(batch.contacts(2), contacts(a, b, 0.05)));
+  batch.clear();
+  EXPECT_EQ(batch.size(), 0u);
+  EXPECT_THROW(batch.contacts(0), Error);
 }
 
 }  // namespace

@@ -162,10 +162,12 @@ class ContactBatch {
   /// Adds a pair; returns its index (0, 1, … in the order added since clear()).
   std::size_t add(const QueryMesh& first, const QueryMesh& second, double epsilon,
                   ContactCache& cache, InsideTest inside = InsideTest::now);
-  /// Runs the kernels on the pairs gathered and finishes every pair added.
+  /// Runs the kernels on the pairs gathered since the last run() and finishes them; pairs may
+  /// be added after it, for another run().
   void run();
-  /// The contacts of the pair added as `index`, after run() (the caller may move them out).
-  std::vector<ContactPoint>& contacts(std::size_t index) noexcept;
+  /// The contacts of the pair added as `index` (the caller may move them out). Throws
+  /// delta::Error for an index not added since clear(), or a pair added since the last run().
+  std::vector<ContactPoint>& contacts(std::size_t index);
   /// The pairs added since clear().
   std::size_t size() const noexcept;
   /// Forgets every pair added (keeps its memory for the next).
