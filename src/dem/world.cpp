@@ -598,16 +598,16 @@ void World::detectContacts(std::span<const Interaction> pairs, std::span<PairOut
                      DetectionRun::threadBatch(),
                      DetectionRun::threadBatched()};
     run.overlapOptions.curves = false;
+    run.batch.clear();  // a step that threw may have left pairs in it
+    run.batched.clear();
     for (std::size_t begin = chunkBegin; begin < chunkEnd; begin += kDetectionGrain) {
       const std::size_t end = std::min(chunkEnd, begin + kDetectionGrain);
-      run.batch.clear();
-      run.batched.clear();
       for (std::size_t p = begin; p < end; ++p) {
         if (p + 1 < end && cacheOf_[p + 1]) cacheOf_[p + 1]->prefetch();
         if (p + 1 < end && overlapCacheOf_[p + 1]) overlapCacheOf_[p + 1]->prefetch();
         detectPair(pairs[p], p, outcomes[p], run);
       }
-      finishBatchedPairs(pairs, outcomes, run);
+      if (!run.batched.empty()) finishBatchedPairs(pairs, outcomes, run);  // none: spheres
     }
   });
   sphereSphereLaw(pairs);
@@ -682,6 +682,8 @@ void World::finishBatchedPairs(std::span<const Interaction> pairs, std::span<Pai
                                 run.filterDistance, pair.withObstacle);
     routes_[p].rawPoints = found.trianglePairs;
   }
+  run.batch.clear();  // for the next run of pairs
+  run.batched.clear();
 }
 
 /// What a run of the batched one-point law carries from pair to pair: the springs' cursor (the
