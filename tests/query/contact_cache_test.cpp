@@ -113,28 +113,38 @@ TEST(ContactCache, BadInputThrowsAsTheQueryDoes) {
 
 // Every scene's paths (both meshes moved or one) at once, a batch a step: each pair's contacts
 // are its fresh query's, bit for bit, whichever pairs share the kernels' batch with it.
-TEST(ContactBatch, EachPairGetsItsFreshQuerysContacts) {
-  struct Path {
-    double epsilon;
-    InsideTest inside;
-    std::vector<std::pair<QueryMesh, QueryMesh>> poses;  // a step each
-  };
-  constexpr int kSteps = 120;
+// A path of a pair of meshes: its ε, the inside test asked, and the poses, a step each.
+struct Path {
+  double epsilon;
+  InsideTest inside;
+  std::vector<std::pair<QueryMesh, QueryMesh>> poses;
+};
+
+// Every scene's paths (both meshes moved or one), `steps` long.
+std::vector<Path> everyScenesPaths(int steps) {
   std::vector<Path> paths;
   for (const test::PairScene& scene : test::pairScenes(false))
     for (const bool moveFirst : {false, true}) {
       Path& path = paths.emplace_back(
           Path{scene.epsilon, moveFirst ? InsideTest::later : InsideTest::now, {}});
-      test::walkPath(scene, moveFirst, kSteps, [&](int, const QueryMesh& a, const QueryMesh& b) {
+      test::walkPath(scene, moveFirst, steps, [&](int, const QueryMesh& a, const QueryMesh& b) {
         path.poses.emplace_back(a, b);
       });
     }
+  return paths;
+}
+
+// All the paths at once, a batch a step: each pair's contacts are its fresh query's, bit for
+// bit, whichever pairs share the kernels' batch with it.
+void expectFreshContactsInBatches(kernels::Solver solver, int steps) {
+  SCOPED_TRACE(kernels::name(solver));
+  const std::vector<Path> paths = everyScenesPaths(steps);
   std::vector<ContactCache> caches;
   for (const Path& path : paths)
     caches.emplace_back(0.5 * path.epsilon);
-  ContactBatch batch;
+  ContactBatch batch(solver);
   std::size_t gathered = 0, withContacts = 0;
-  for (int s = 0; s < kSteps; ++s) {
+  for (int s = 0; s < steps; ++s) {
     batch.clear();
     std::vector<std::size_t> index;
     for (std::size_t k = 0; k < paths.size(); ++k) {
@@ -147,7 +157,7 @@ TEST(ContactBatch, EachPairGetsItsFreshQuerysContacts) {
     batch.run();
     for (std::size_t k = 0; k < paths.size(); ++k) {
       const auto& [a, b] = paths[k].poses[static_cast<std::size_t>(s)];
-      const std::vector<ContactPoint> fresh = contacts(a, b, paths[k].epsilon);
+      const std::vector<ContactPoint> fresh = contacts(a, b, paths[k].epsilon, solver);
       std::vector<ContactPoint>& batched = batch.contacts(index[k]);
       if (paths[k].inside == InsideTest::later) markInside(a, b, paths[k].epsilon, batched);
       ASSERT_TRUE(sameContacts(batched, fresh)) << "path " << k << ", step " << s << ": "
@@ -156,8 +166,20 @@ TEST(ContactBatch, EachPairGetsItsFreshQuerysContacts) {
     }
   }
   // Most pairs went through the batch's kernels, most of them touching.
-  EXPECT_GT(gathered, paths.size() * kSteps / 2);
-  EXPECT_GT(withContacts, paths.size() * kSteps / 2);
+  const auto calls = paths.size() * static_cast<std::size_t>(steps);
+  EXPECT_GT(gathered, calls / 2);
+  EXPECT_GT(withContacts, calls / 2);
+}
+
+TEST(ContactBatch, EachPairGetsItsFreshQuerysContacts) {
+  expectFreshContactsInBatches(kernels::Solver::Hybrid, 120);
+}
+
+// The other solvers' pairs do not depend on their batch either (the penalty solver's lanes run a
+// fixed schedule each; brute force runs pair by pair).
+TEST(ContactBatch, EachPairGetsItsFreshQuerysContactsWithTheOtherSolvers) {
+  expectFreshContactsInBatches(kernels::Solver::Penalty, 40);
+  expectFreshContactsInBatches(kernels::Solver::BruteForce, 40);
 }
 
 TEST(ContactBatch, BadInputThrowsAndLeavesTheBatchUsable) {
