@@ -100,8 +100,6 @@ void requireVolumeLawMesh(const QueryMesh& mesh, const std::string& what) {
                 std::to_string(crossings) + " pairs of its triangles intersect)");
 }
 
-/// R·M·Rᵀ·v for the rotation q, without forming matrices; a·v where M = a·I (a sphere's inertia:
-/// turning it changes nothing, and the two rotations were a fifth of a sphere step).
 bool isotropic(const Mat3& m) noexcept {
   return m(0, 1) == 0.0 && m(0, 2) == 0.0 && m(1, 0) == 0.0 && m(1, 2) == 0.0 && m(2, 0) == 0.0 &&
          m(2, 1) == 0.0 && m(0, 0) == m(1, 1) && m(1, 1) == m(2, 2);
@@ -114,8 +112,11 @@ bool isotropic(const Mat3& m) noexcept {
   return q.rotate(m * q.conjugate().rotate(v));
 }
 
-Vec3 rotatedApply(const Quaternion& q, const Mat3& m, const Vec3& v) noexcept {
-  if (isotropic(m)) return v * m(0, 0);
+/// R·M·Rᵀ·v for the rotation q, without forming matrices; a·v where M = a·I (a sphere's inertia:
+/// turning it changes nothing, and the two rotations were a fifth of a sphere step), which the
+/// caller says (`isotropic`: a shape's isotropicInertia(), decided once, for its inverse inertia).
+Vec3 rotatedApply(const Quaternion& q, const Mat3& m, bool isotropic, const Vec3& v) noexcept {
+  if (isotropic) return v * m(0, 0);
   return rotatedApplyTurning(q, m, v);
 }
 
@@ -275,7 +276,8 @@ void World::setAngularVelocity(std::size_t index, const Vec3& angularVelocity) {
   requireFinite(angularVelocity, "dem: setAngularVelocity: angular velocity");
   particle.angularVelocity = angularVelocity;
   particle.angularMomentum =
-      rotatedApply(particle.orientation, shapes_[particle.shape].inertia(), angularVelocity);
+      rotatedApply(particle.orientation, shapes_[particle.shape].inertia(),
+                   isotropic(shapes_[particle.shape].inertia()), angularVelocity);
 }
 
 Vec3 World::angularVelocityOf(const Particle& particle,
@@ -285,7 +287,9 @@ Vec3 World::angularVelocityOf(const Particle& particle,
 
 Vec3 World::angularVelocityOf(const Particle& particle, const Quaternion& orientation,
                               const Vec3& angularMomentum) const noexcept {
-  return rotatedApply(orientation, shapes_[particle.shape].inverseInertia(), angularMomentum);
+  const ParticleShape& shape = shapes_[particle.shape];
+  return rotatedApply(orientation, shape.inverseInertia(), shape.isotropicInertia(),
+                      angularMomentum);
 }
 
 void World::placeBodies() {
@@ -777,7 +781,8 @@ void World::predictMotions(bool halfStepVelocities) {
       motions_[i] = {
           particle.position,
           particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * predict,
-          rotatedApply(particle.orientation, shape.inverseInertia(), momentum)};
+          rotatedApply(particle.orientation, shape.inverseInertia(), shape.isotropicInertia(),
+                       momentum)};
     }
   });
   obstacleMotions_.clear();
@@ -994,7 +999,7 @@ void World::kickAndDrift() {
       // body's ω changes as it turns at fixed L, and the start's ω made a free spin gain energy
       // at first order in dt (0.7% in 100,000 steps at 50 rad/s). A body of isotropic inertia
       // (a sphere's) turns at L/I whatever its orientation: the ω the kick gave it.
-      if (isotropic(shapes_[particle.shape].inverseInertia())) {
+      if (shapes_[particle.shape].isotropicInertia()) {
         particle.orientation = turned(particle.orientation, particle.angularVelocity, dt);
         continue;
       }

@@ -63,6 +63,26 @@ TEST(DemParticleShape, SphereHasExactMassProperties) {
   EXPECT_FALSE(ParticleShape(primitives::icosphere(1), 1.0).isSphere());
 }
 
+// isotropicInertia(): exactly where the inverse inertia is a multiple of the identity.
+TEST(DemParticleShape, IsotropicInertiaIsAMultipleOfTheIdentity) {
+  const auto multipleOfIdentity = [](const Mat3& m) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (m(r, c) != (r == c ? m(0, 0) : 0.0)) return false;
+    return true;
+  };
+  const ParticleShape sphere = ParticleShape::sphere(0.02, 2500.0);
+  EXPECT_TRUE(sphere.isotropicInertia());
+  Mesh turned = primitives::granulate(3, {1.0, 0.7, 0.5});
+  turned.rotate(Vec3{1, 2, 3}, 0.8);
+  for (const ParticleShape& shape :
+       {sphere, ParticleShape(primitives::box({2, 4, 6}), 3.0),
+        ParticleShape(primitives::box({1, 1, 1}), 1.0), ParticleShape(turned, 2.0),
+        ParticleShape(primitives::granulate(4), 1.0), ParticleShape(primitives::icosphere(2), 1.0)})
+    EXPECT_EQ(shape.isotropicInertia(), multipleOfIdentity(shape.inverseInertia()));
+  EXPECT_FALSE(ParticleShape(turned, 2.0).isotropicInertia());
+}
+
 TEST(DemParticleShape, SphereRejectsBadRadiiDensitiesAndSubdivisions) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(ParticleShape::sphere(0.0, 1.0), Error);

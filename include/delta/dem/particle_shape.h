@@ -79,6 +79,9 @@ class ParticleShape {
   const Mat3& inertia() const noexcept { return inertia_; }
   /// Its inverse; the world frame's is R·I⁻¹·Rᵀ for orientation R.
   const Mat3& inverseInertia() const noexcept { return inverseInertia_; }
+  /// Whether the inverse inertia is a multiple of the identity (a sphere's, a cube's): then
+  /// R·I⁻¹·Rᵀ = I⁻¹ whatever R, and a body turns at L/I. Decided once, when made.
+  bool isotropicInertia() const noexcept { return isotropic_; }
   /// The largest distance from the centre of mass to a vertex: the broad phase's sphere. For a
   /// sphere shape, its radius.
   double boundingRadius() const noexcept { return boundingRadius_; }
@@ -96,6 +99,7 @@ class ParticleShape {
   double mass_;
   Mat3 inertia_;
   Mat3 inverseInertia_;
+  bool isotropic_;
   double boundingRadius_;
   Vec3 centroid_;
   ParticleKind kind_;
