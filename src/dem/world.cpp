@@ -494,6 +494,18 @@ void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const W
                  double skin, std::vector<std::pair<std::uint64_t, Cache>>& caches,
                  std::vector<std::pair<std::uint64_t, Cache>>& spare, std::vector<Cache*>& cacheOf,
                  std::vector<std::size_t>& pairOf) {
+  // Most steps meet the same pairs as the step before (the neighbour list holds, and the same
+  // pairs come within 2ε): then every cache stays where it is.
+  std::size_t kept = 0;
+  bool same = true;
+  for (std::size_t p = begin; p < end && same; ++p)
+    if (wanted(pairs[p])) same = kept < caches.size() && caches[kept++].first == pairs[p].key;
+  if (same && kept == caches.size()) {
+    kept = 0;
+    for (std::size_t p = begin; p < end; ++p)
+      if (wanted(pairs[p])) cacheOf[p] = &caches[kept++].second;
+    return;
+  }
   pairOf.clear();
   spare.clear();
   std::size_t old = 0;
