@@ -87,11 +87,7 @@ ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
       mass_(prepared.properties.mass),
       inertia_(prepared.properties.inertia),
       inverseInertia_(inverse(prepared.properties.inertia)),
-      isotropic_(inverseInertia_(0, 1) == 0.0 && inverseInertia_(0, 2) == 0.0 &&
-                 inverseInertia_(1, 0) == 0.0 && inverseInertia_(1, 2) == 0.0 &&
-                 inverseInertia_(2, 0) == 0.0 && inverseInertia_(2, 1) == 0.0 &&
-                 inverseInertia_(0, 0) == inverseInertia_(1, 1) &&
-                 inverseInertia_(1, 1) == inverseInertia_(2, 2)),
+      isotropic_(isMultipleOfIdentity(inverseInertia_)),
       boundingRadius_(prepared.sphereRadius > 0.0 ? prepared.sphereRadius
                                                   : largestVertexDistance(mesh_)),
       centroid_(prepared.properties.centroid),

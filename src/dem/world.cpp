@@ -100,11 +100,6 @@ void requireVolumeLawMesh(const QueryMesh& mesh, const std::string& what) {
                 std::to_string(crossings) + " pairs of its triangles intersect)");
 }
 
-bool isotropic(const Mat3& m) noexcept {
-  return m(0, 1) == 0.0 && m(0, 2) == 0.0 && m(1, 0) == 0.0 && m(1, 2) == 0.0 && m(2, 0) == 0.0 &&
-         m(2, 1) == 0.0 && m(0, 0) == m(1, 1) && m(1, 1) == m(2, 2);
-}
-
 /// The general case of rotatedApply, out of line: a sphere's steps, which never take it, stay
 /// short enough to inline.
 [[gnu::noinline]] Vec3 rotatedApplyTurning(const Quaternion& q, const Mat3& m,
@@ -277,7 +272,7 @@ void World::setAngularVelocity(std::size_t index, const Vec3& angularVelocity) {
   particle.angularVelocity = angularVelocity;
   particle.angularMomentum =
       rotatedApply(particle.orientation, shapes_[particle.shape].inertia(),
-                   isotropic(shapes_[particle.shape].inertia()), angularVelocity);
+                   isMultipleOfIdentity(shapes_[particle.shape].inertia()), angularVelocity);
 }
 
 Vec3 World::angularVelocityOf(const Particle& particle,

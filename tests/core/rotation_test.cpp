@@ -79,5 +79,22 @@ TEST(RigidTransform, ComposesAndInverts) {
   expectNear(b.apply({5, -1, 2}), {5, -1, 2}, 1e-15);  // the pivot stays put
 }
 
+TEST(Mat3, MultipleOfIdentityOnlyExactly) {
+  Mat3 m;
+  for (int i = 0; i < 3; ++i)
+    m(i, i) = 2.5;
+  EXPECT_TRUE(isMultipleOfIdentity(m));
+  m(1, 0) = -0.0;  // a negative zero is zero
+  EXPECT_TRUE(isMultipleOfIdentity(m));
+  m(2, 1) = 1e-300;
+  EXPECT_FALSE(isMultipleOfIdentity(m));
+  m(2, 1) = 0.0;
+  m(2, 2) = std::nextafter(2.5, 3.0);
+  EXPECT_FALSE(isMultipleOfIdentity(m));
+  m(2, 2) = std::nan("");
+  EXPECT_FALSE(isMultipleOfIdentity(m));
+  EXPECT_TRUE(isMultipleOfIdentity(Mat3{}));  // zero: 0·I
+}
+
 }  // namespace
 }  // namespace delta

@@ -64,6 +64,15 @@ constexpr Mat3 operator*(const Mat3& a, double s) noexcept {
   return scaled;
 }
 
+/// Whether `m` is a multiple of the identity, exactly (R·m·Rᵀ = m for every rotation R: a
+/// sphere's inertia). False where an entry is NaN.
+///
+/// Threading: a pure function.
+constexpr bool isMultipleOfIdentity(const Mat3& m) noexcept {
+  return m(0, 1) == 0.0 && m(0, 2) == 0.0 && m(1, 0) == 0.0 && m(1, 2) == 0.0 && m(2, 0) == 0.0 &&
+         m(2, 1) == 0.0 && m(0, 0) == m(1, 1) && m(1, 1) == m(2, 2);
+}
+
 /// max |(MᵀM − I)ᵢⱼ|: how far `m` is from orthonormal (0 for a rotation or a reflection; NaN
 /// when an entry is NaN).
 ///
