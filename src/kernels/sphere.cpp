@@ -1,6 +1,7 @@
 #include "delta/kernels/sphere.h"
 
 #include <cmath>
+#include <type_traits>
 
 #include "detail/robust_geometry.h"
 
@@ -44,12 +45,34 @@ SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noex
 namespace {
 
 /// The kernel on a triangle in its local frame (its first corner at the origin), with
-/// `longestEdge` = √(local.longestEdgeSquared).
+/// `longestEdge` = √(local.longestEdgeSquared) and, for a triangle that is not flat,
+/// `unitNormal` = unit(local.normal) (`UnitNormal` a Vec3, or a callable that makes it).
+///
+/// Where the centre projects inside the face (most spheres on a wall), its distance is its height
+/// over the plane along the unit normal: one dot product, where the closest point's difference
+/// scaled and normalised took seven divisions and a square root in a chain. The height is exact
+/// to a few ulps of |centre − a| either way (the normal's rounding and the dot product's).
+template <typename UnitNormal>
 SphereContactResult sphereLocalTriangle(const Sphere& sphere, const Vec3& origin,
-                                        const detail::LocalTriangle& local,
-                                        double longestEdge) noexcept {
+                                        const detail::LocalTriangle& local, double longestEdge,
+                                        const UnitNormal& unitNormal) noexcept {
   const Vec3 center = sphere.center - origin;
-  const PointTriangleResult closest = detail::closestOnLocalTriangle(center, local);
+  const double onTriangle = kOnTriangleUlps * detail::kEpsilon * (maxAbs(center) + longestEdge);
+  detail::FaceAreas areas;
+  if (detail::insideLocalFace(center, local, areas)) {
+    Vec3 up;
+    if constexpr (std::is_invocable_v<UnitNormal>)
+      up = unitNormal();
+    else
+      up = unitNormal;
+    const double height = dot(up, center);  // the local triangle's first corner is the origin
+    const double distance = std::fabs(height);
+    const Vec3 normal = distance > onTriangle && height < 0.0 ? -up : up;
+    const double gap = distance - sphere.radius;
+    return {gap, sphere.center - normal * sphere.radius, (center - up * height) + origin, normal,
+            gap < 0.0};
+  }
+  const PointTriangleResult closest = detail::closestOnLocalEdges(center, local);
   const Vec3 away = center - closest.closest;
   // safeLength(away) and unit(away) from one scaled copy: the same bits, half the divisions.
   const double largest = maxAbs(away);
@@ -58,8 +81,7 @@ SphereContactResult sphereLocalTriangle(const Sphere& sphere, const Vec3& origin
   const double distance = largest > 0.0 ? largest * scaledLength : 0.0;
 
   Vec3 normal;
-  const double scale = maxAbs(center) + longestEdge;
-  if (distance > kOnTriangleUlps * detail::kEpsilon * scale) {
+  if (distance > onTriangle) {
     normal = scaled / scaledLength;
   } else if (!local.flat) {
     normal = unit(local.normal);
@@ -84,7 +106,8 @@ detail::LocalTriangle localTriangle(const Triangle& triangle) noexcept {
 
 SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept {
   const detail::LocalTriangle local = localTriangle(triangle);
-  return sphereLocalTriangle(sphere, triangle.a, local, std::sqrt(local.longestEdgeSquared));
+  return sphereLocalTriangle(sphere, triangle.a, local, std::sqrt(local.longestEdgeSquared),
+                             [&local] { return unit(local.normal); });
 }
 
 PreparedTriangle::PreparedTriangle(const Triangle& triangle) noexcept : origin_(triangle.a) {
@@ -97,6 +120,7 @@ PreparedTriangle::PreparedTriangle(const Triangle& triangle) noexcept : origin_(
   longestEdgeSquared_ = local.longestEdgeSquared;
   longestEdge_ = std::sqrt(local.longestEdgeSquared);
   flat_ = local.flat;
+  if (!flat_) unitNormal_ = unit(normal_);
 }
 
 SphereContactResult sphereTriangle(const Sphere& sphere,
@@ -114,7 +138,8 @@ SphereContactResult sphereTriangle(const Sphere& sphere,
   local.normalLengthSquared = triangle.normalLengthSquared_;
   local.longestEdgeSquared = triangle.longestEdgeSquared_;
   local.flat = triangle.flat_;
-  return sphereLocalTriangle(sphere, triangle.origin_, local, triangle.longestEdge_);
+  return sphereLocalTriangle(sphere, triangle.origin_, local, triangle.longestEdge_,
+                             triangle.unitNormal_);
 }
 
 }  // namespace delta::kernels

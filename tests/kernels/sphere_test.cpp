@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "delta/core/format.h"
 
@@ -142,6 +143,54 @@ TEST(SphereContact, SphereTriangleMatchesExactDistanceOnEveryFamily) {
       }
     }
   }
+}
+
+/// Centres over the face (where the kernel takes the height along the unit normal) and beside
+/// it, on both sides, at heights from 10⁻¹² to 10³ of the triangle's size, on triangles of every
+/// size and offset: the gap within a few ulps of the exact distance, the normal the face's on
+/// the centre's side (and the face's own where the centre is on the face), q on the triangle.
+TEST(SphereContact, CentresOverTheFaceMatchTheExactDistance) {
+  std::size_t checked = 0;
+  for (const double size : {1e-9, 1.0, 1e6})
+    for (const double offset : {0.0, 1.0, 1e6}) {
+      const Vec3 o{offset, -offset, 0.5 * offset};
+      const Triangle t{o, o + Vec3{size, 0.1 * size, 0}, o + Vec3{0.2 * size, size, 0.3 * size}};
+      const Vec3 unitNormal = normalized(cross(t.b - t.a, t.c - t.a));
+      for (const Vec3& barycentric :
+           {Vec3{0.2, 0.3, 0.5}, Vec3{0.9, 0.05, 0.05}, Vec3{0.5, 0.5, 0.0}, Vec3{1.2, -0.1, -0.1}})
+        for (const double height : {0.0, 1e-12, 1e-6, 0.3, 1e3})
+          for (const double side : {1.0, -1.0}) {
+            const Vec3 onPlane = t.a * barycentric.x + t.b * barycentric.y + t.c * barycentric.z;
+            const Vec3 centre = onPlane + unitNormal * (side * height * size);
+            const Sphere sphere{centre, 0.25 * size};
+            const SphereContactResult r = sphereTriangle(sphere, t);
+            ASSERT_TRUE(finite(r));
+            const double exact = std::sqrt(test::exactSquaredDistance(centre, t));
+            // The gap to a few ulps of |centre − a| (the kernel's frame), the points to a few of
+            // their coordinates.
+            const double eps = std::numeric_limits<double>::epsilon();
+            const double local = 16 * eps * (maxAbs(centre - t.a) + size);
+            EXPECT_NEAR(r.gap, exact - sphere.radius, local)
+                << "size " << size << " offset " << offset << " height " << side * height;
+            EXPECT_NEAR(length(r.normal), 1.0, 1e-15);
+            EXPECT_NEAR(distance(r.p, centre), sphere.radius, local + 16 * eps * maxAbs(centre));
+            EXPECT_NEAR(std::sqrt(test::exactSquaredDistance(r.q, t)), 0.0,
+                        local + 16 * eps * maxAbs(t.a));
+            // Over the face and clearly off it, the face's normal on the centre's side (where the
+            // points round little against the triangle: at an offset of 10⁶ a 10⁻⁹ triangle's
+            // points round by a tenth of its size, and the centre may fall beside it).
+            const bool roundsLittle = 16 * eps * maxAbs(t.a) < 1e-3 * size;
+            if (roundsLittle && barycentric.x > 0.0 && barycentric.y > 0.0 && barycentric.z > 0.0 &&
+                exact > 1e3 * local) {
+              const double above = dot(centre - t.a, unitNormal);
+              expectNear(r.normal, above > 0.0 ? unitNormal : -unitNormal, 1e-14);
+              ++checked;
+            }
+            if (roundsLittle && exact == 0.0 && barycentric.z > 0.1 && barycentric.y > 0.1)
+              expectNear(r.normal, unitNormal, 1e-14);  // on the face: its own normal
+          }
+    }
+  EXPECT_GT(checked, 50u);
 }
 
 bool sameBits(double x, double y) {

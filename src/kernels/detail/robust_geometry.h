@@ -127,45 +127,48 @@ inline SegmentPoint closestOnSegment(const Vec3& p, const Vec3& s0, const Vec3& 
   return {point, t, lengthSquared(p - point)};
 }
 
+/// The signed areas n·(eᵢ × (p − vᵢ)) of p against the edges of a local triangle, a opposite
+/// vertex 0 (edge 1), b opposite vertex 1 (edge 2), c opposite vertex 2 (edge 0).
+struct FaceAreas {
+  double a = 0.0, b = 0.0, c = 0.0;
+};
+
+/// Whether the projection of p onto a non-flat local triangle falls inside it (the face region
+/// of closestOnLocalTriangle), with the areas that decide it (set where it does); false
+/// otherwise, or for a flat triangle. The signs are exact up to a displacement of ε·|p − v|.
+inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
+  if (t.flat) return false;
+  const Vec3* v = t.vertex;
+  areas.c = dot(t.normal, cross(t.edge[0], p - v[0]));
+  if (!(areas.c >= 0.0)) return false;
+  areas.a = dot(t.normal, cross(t.edge[1], p - v[1]));
+  if (!(areas.a >= 0.0)) return false;
+  areas.b = dot(t.normal, cross(t.edge[2], p - v[2]));
+  return areas.b >= 0.0 && areas.a + areas.b + areas.c > 0.0;
+}
+
 /// The projection of p onto a non-flat local triangle when it falls inside (the face region of
 /// closestOnLocalTriangle); false otherwise, or for a flat triangle. Triangle–triangle distance
 /// needs only this of its vertex–face candidates: a vertex whose closest point is on an edge is
 /// an end of two edges, and the edge–edge candidates already cover that distance.
 inline bool closestOnLocalFace(const Vec3& p, const LocalTriangle& t,
                                kernels::PointTriangleResult& result) noexcept {
-  if (t.flat) return false;
-  const Vec3* v = t.vertex;
-  const Vec3 ap = p - v[0];
-  const double areaC = dot(t.normal, cross(t.edge[0], ap));
-  if (!(areaC >= 0.0)) return false;
-  const double areaA = dot(t.normal, cross(t.edge[1], p - v[1]));
-  if (!(areaA >= 0.0)) return false;
-  const double areaB = dot(t.normal, cross(t.edge[2], p - v[2]));
-  const double sum = areaA + areaB + areaC;
-  if (!(areaB >= 0.0 && sum > 0.0)) return false;
-  const Vec3 foot = p - t.normal * (dot(t.normal, ap) / t.normalLengthSquared);
-  result = {lengthSquared(p - foot), foot, areaB / sum, areaC / sum,
+  FaceAreas areas;
+  if (!insideLocalFace(p, t, areas)) return false;
+  const double sum = areas.a + areas.b + areas.c;
+  const Vec3 foot = p - t.normal * (dot(t.normal, p - t.vertex[0]) / t.normalLengthSquared);
+  result = {lengthSquared(p - foot), foot, areas.b / sum, areas.c / sum,
             kernels::TriangleFeature::Face};
   return true;
 }
 
-/// The closest point of a local triangle to p, with its barycentrics (point ≈ v0 + u·(v1 − v0) +
-/// v·(v2 − v0)) and feature.
-///
-/// The face is chosen when the projection of p lies inside all three edges (signs of
-/// n·(e × (p − v)), exact up to a displacement of ε·|p − v| of p); the point is then p's
-/// projection along the accurate normal. Otherwise the nearest of the three edges, which is the
-/// answer whenever the projection is outside. A misclassification can only happen within
-/// rounding of an edge, where both answers agree to that rounding.
-///
-/// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
-/// in the triangle (to an ulp); for a needle of height h they carry the needle's conditioning, an
-/// error of ε·L/h (the point itself does not).
-inline kernels::PointTriangleResult closestOnLocalTriangle(const Vec3& p,
-                                                           const LocalTriangle& t) noexcept {
-  kernels::PointTriangleResult best;
-  if (closestOnLocalFace(p, t, best)) return best;
+/// The closest point of p on the three edges of a local triangle (the answer of
+/// closestOnLocalTriangle where p's projection falls outside, or the triangle is flat), with its
+/// barycentrics and feature.
+inline kernels::PointTriangleResult closestOnLocalEdges(const Vec3& p,
+                                                        const LocalTriangle& t) noexcept {
   // The nearest edge; edge i runs from vertex i to vertex i + 1.
+  kernels::PointTriangleResult best;
   const Vec3* v = t.vertex;
   best.distanceSquared = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 3; ++i) {
@@ -195,6 +198,25 @@ inline kernels::PointTriangleResult closestOnLocalTriangle(const Vec3& p,
     }
   }
   return best;
+}
+
+/// The closest point of a local triangle to p, with its barycentrics (point ≈ v0 + u·(v1 − v0) +
+/// v·(v2 − v0)) and feature.
+///
+/// The face is chosen when the projection of p lies inside all three edges (signs of
+/// n·(e × (p − v)), exact up to a displacement of ε·|p − v| of p); the point is then p's
+/// projection along the accurate normal. Otherwise the nearest of the three edges, which is the
+/// answer whenever the projection is outside. A misclassification can only happen within
+/// rounding of an edge, where both answers agree to that rounding.
+///
+/// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
+/// in the triangle (to an ulp); for a needle of height h they carry the needle's conditioning, an
+/// error of ε·L/h (the point itself does not).
+inline kernels::PointTriangleResult closestOnLocalTriangle(const Vec3& p,
+                                                           const LocalTriangle& t) noexcept {
+  kernels::PointTriangleResult best;
+  if (closestOnLocalFace(p, t, best)) return best;
+  return closestOnLocalEdges(p, t);
 }
 
 /// Closest points of segments p0 + s·(p1 − p0) and q0 + t·(q1 − q0), s, t ∈ [0, 1].
