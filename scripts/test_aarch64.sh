@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The kernels' and queries' tests on AArch64, on this x86-64 machine: Debian's cross toolchain
+# The kernels' and queries' tests on AArch64, and the DEM's of its law and turns in vector lanes
+# (src/dem/detail/two_lanes.h: Advanced SIMD there), on this x86-64 machine: Debian's cross toolchain
 # builds Δ for arm64 (with its NEON and SVE tables) against Debian's arm64 libraries (multiarch),
 # and qemu-user runs the tests (its default CPU has SVE, so the tests that run every supported ISA
 # take NEON's and SVE's paths, and the default is SVE; then the dispatch tests on a CPU without).
@@ -21,7 +22,7 @@ build=${1:-build-aarch64}
 cmake -S . -B "$build" -G Ninja -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DDELTA_BUILD_BENCH=OFF \
   -DDELTA_BUILD_APPS=OFF -DDELTA_BUILD_PYTHON=OFF -DDELTA_WITH_MPI=OFF \
-  "-DDELTA_TEST_LAYERS=kernels;query" >/dev/null
+  "-DDELTA_TEST_LAYERS=kernels/;query/;dem/one_point_law;dem/sphere_particles" >/dev/null
 cmake --build "$build"
 # Every kernels' and queries' test but the slowest whole-algorithm checks (thread counts, tie
 # rules, winding-number signs, whole meshes and paths against brute force or a fresh query, the

@@ -3,12 +3,20 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 
+#include "detail/two_lanes.h"
+
 namespace delta::dem {
 namespace {
+
+using delta::detail::splat;
+using delta::detail::Two;
+using delta::detail::Two3;
+using delta::detail::TwoMask;
 
 /// The largest damping ratio dampingRatio() searches (restitution ≈ 1e-4 there).
 constexpr double kLargestDampingRatio = 50.0;
@@ -144,103 +152,125 @@ PairDamping pairDamping(const ContactLaw& law, double effectiveMass) noexcept {
 
 namespace {
 
-/// Pairs side by side in one batch of the one-point law: every step of the law a loop over the
-/// lanes, so that the pairs' chains of square roots and divisions overlap instead of waiting
-/// one after the other (a pair alone is a chain of four of each).
-constexpr std::size_t kLanes = 4;
+/// Pairs side by side in one batch of the one-point law: every step of the law on two pairs at
+/// once (two lanes of a vector register: SSE2 on x86-64, Advanced SIMD on AArch64), and on four
+/// such pairs of lanes before the next step, so that the pairs' chains of square roots and
+/// divisions overlap instead of waiting one after the other (a pair alone is a chain of four of
+/// each). Each lane's arithmetic is the scalar law's, operation for operation: the same bits.
+constexpr std::size_t kLanes = 8;
+constexpr std::size_t kHalves = kLanes / 2;
 
-/// What the one-point law reads of each lane's pair, and what it gives.
-struct LawLanes {
-  Vec3 x[kLanes];  ///< the contact point
-  Vec3 n[kLanes];  ///< its unit direction, from the second body toward the first
-  double gap[kLanes];
-  const BodyMotion* first[kLanes];
-  const BodyMotion* second[kLanes];
-  PairDamping damping[kLanes];
-  Vec3 previous[kLanes];  ///< the sliding spring of the step before
+/// A body's BodyMotion in two lanes.
+struct MotionTwo {
+  Two3 centre, velocity, spin;
 
-  double depth[kLanes];
-  double normalForce[kLanes];
-  Vec3 force[kLanes];
-  Vec3 displacement[kLanes];  ///< the sliding spring to keep
-  bool sliding[kLanes];
+  /// velocityAt: velocity + ω × (x − centre).
+  Two3 velocityAt(const Two3& x) const noexcept { return velocity + cross(spin, x - centre); }
+};
+
+/// What the one-point law reads of two lanes' pairs, and what it gives.
+struct LawTwo {
+  Two3 x;  ///< the contact point
+  Two3 n;  ///< its unit direction, from the second body toward the first
+  Two gap;
+  MotionTwo first, second;
+  Two normalDamping, tangentialDamping;
+  Two3 previous;  ///< the sliding spring of the step before
+
+  Two depth;
+  Two normalForce;
+  Two3 force;
+  Two3 displacement;  ///< the sliding spring to keep
+  TwoMask sliding;
 };
 
 /// The point law of one point (onePointForces' arithmetic, without its sums of one term) on
-/// every lane.
-[[gnu::always_inline]] inline void pointLaw(LawLanes& lanes, double timeStep,
+/// every lane of `lanes`: each step for all of them before the next, so that their chains of
+/// square roots and divisions (four of each, one after the other) run side by side.
+[[gnu::always_inline]] inline void pointLaw(LawTwo (&lanes)[kHalves], double timeStep,
                                             const ContactLaw& law) noexcept {
-  const double shell = 2.0 * law.epsilon;
-  Vec3 relative[kLanes];
-  double normalVelocity[kLanes];
-  for (std::size_t k = 0; k < kLanes; ++k) {
-    lanes.depth[k] = shell - lanes.gap[k];  // 2ε − gap, overlapping or not (depthOf)
-    relative[k] = lanes.first[k]->velocityAt(lanes.x[k]) - lanes.second[k]->velocityAt(lanes.x[k]);
-    normalVelocity[k] = dot(relative[k], lanes.n[k]);
+  const Two zero{};
+  Two3 relative[kHalves];
+  Two normalVelocity[kHalves];
+  for (std::size_t h = 0; h < kHalves; ++h) {
+    LawTwo& two = lanes[h];
+    two.depth = splat(2.0 * law.epsilon) - two.gap;  // 2ε − gap, overlapping or not (depthOf)
+    relative[h] = two.first.velocityAt(two.x) - two.second.velocityAt(two.x);
+    normalVelocity[h] = dot(relative[h], two.n);
   }
   // The normal law, its dashpot charged from the onset (onsetFactor).
-  for (std::size_t k = 0; k < kLanes; ++k) {
-    const double approach = -normalVelocity[k] * timeStep;
-    const double depth = lanes.depth[k];
-    const double onset = approach > 0.0 && depth < approach ? 0.5 + depth / approach : 1.0;
-    lanes.normalForce[k] =
-        std::max(0.0, law.stiffness * depth - lanes.damping[k].normal * onset * normalVelocity[k]);
-    lanes.force[k] = lanes.n[k] * lanes.normalForce[k];
-    lanes.displacement[k] = Vec3{};
-    lanes.sliding[k] = false;
+  for (std::size_t h = 0; h < kHalves; ++h) {
+    LawTwo& two = lanes[h];
+    const Two approach = -normalVelocity[h] * splat(timeStep);
+    const Two share = splat(0.5) + two.depth / approach;  // taken only where approach > 0
+    const Two onset = approach > zero && two.depth < approach ? share : splat(1.0);
+    const Two normal =
+        splat(law.stiffness) * two.depth - two.normalDamping * onset * normalVelocity[h];
+    two.normalForce = zero < normal ? normal : zero;  // std::max(0.0, normal)
+    two.force = two.n * two.normalForce;
+    two.displacement = Two3{};
+    two.sliding = TwoMask{};
   }
   if (!(law.friction > 0.0 && law.tangentialStiffness > 0.0)) return;
   // The sliding spring turned into the tangent plane at its length, stretched (frictionAt).
-  Vec3 slidingVelocity[kLanes], tangential[kLanes];
-  double previousLength[kLanes], projectedLength[kLanes], magnitude[kLanes];
-  for (std::size_t k = 0; k < kLanes; ++k) {
-    const Vec3& n = lanes.n[k];
-    slidingVelocity[k] = relative[k] - n * normalVelocity[k];
-    previousLength[k] = length(lanes.previous[k]);
-    lanes.displacement[k] = lanes.previous[k] - n * dot(lanes.previous[k], n);
-    projectedLength[k] = length(lanes.displacement[k]);
+  Two3 slidingVelocity[kHalves], displacement[kHalves], tangential[kHalves];
+  Two previousLength[kHalves], projectedLength[kHalves], magnitude[kHalves];
+  for (std::size_t h = 0; h < kHalves; ++h) {
+    const LawTwo& two = lanes[h];
+    slidingVelocity[h] = relative[h] - two.n * normalVelocity[h];
+    previousLength[h] = length(two.previous);
+    displacement[h] = two.previous - two.n * dot(two.previous, two.n);
+    projectedLength[h] = length(displacement[h]);
   }
-  for (std::size_t k = 0; k < kLanes; ++k) {
-    Vec3& displacement = lanes.displacement[k];
-    displacement =
-        projectedLength[k] > 0.0 ? displacement * (previousLength[k] / projectedLength[k]) : Vec3{};
-    displacement += slidingVelocity[k] * timeStep;
-    tangential[k] =
-        displacement * -law.tangentialStiffness - slidingVelocity[k] * lanes.damping[k].tangential;
-    magnitude[k] = length(tangential[k]);
+  for (std::size_t h = 0; h < kHalves; ++h) {
+    const Two ratio = previousLength[h] / projectedLength[h];  // taken only where it is > 0
+    displacement[h] = select(projectedLength[h] > zero, displacement[h] * ratio, Two3{}) +
+                      slidingVelocity[h] * splat(timeStep);
+    tangential[h] = displacement[h] * splat(-law.tangentialStiffness) -
+                    slidingVelocity[h] * lanes[h].tangentialDamping;
+    magnitude[h] = length(tangential[h]);
   }
-  for (std::size_t k = 0; k < kLanes; ++k) {
-    const double limit = law.friction * lanes.normalForce[k];
-    if (magnitude[k] > limit) {
-      tangential[k] = magnitude[k] > 0.0 ? tangential[k] * (limit / magnitude[k]) : Vec3{};
-      lanes.displacement[k] = tangential[k] * (-1.0 / law.tangentialStiffness);
-      lanes.sliding[k] = true;
-    }
-    lanes.force[k] += tangential[k];
+  for (std::size_t h = 0; h < kHalves; ++h) {
+    LawTwo& two = lanes[h];
+    const Two limit = splat(law.friction) * two.normalForce;
+    const TwoMask slides = magnitude[h] > limit;
+    const Two cut = limit / magnitude[h];  // taken only where the magnitude is > 0
+    const Two3 cutBack = select(magnitude[h] > zero, tangential[h] * cut, Two3{});
+    tangential[h] = select(slides, cutBack, tangential[h]);
+    two.displacement =
+        select(slides, tangential[h] * splat(-1.0 / law.tangentialStiffness), displacement[h]);
+    two.sliding = slides;
+    two.force = two.force + tangential[h];
   }
 }
 
-/// Lane k's motions, dashpots and spring from `pair`.
-void takeLaw(LawLanes& lanes, std::size_t k, const OnePointLaw& pair) noexcept {
-  lanes.first[k] = pair.firstMotion;
-  lanes.second[k] = pair.secondMotion;
-  lanes.damping[k] = pair.damping;
-  lanes.previous[k] = pair.previous ? pair.previous->displacement : Vec3{};
+/// Lane k of `lanes`' motions, dashpots and spring from `pair`.
+void takeLaw(LawTwo& lanes, std::size_t k, const OnePointLaw& pair) noexcept {
+  for (auto [motion, into] :
+       {std::pair{pair.firstMotion, &lanes.first}, std::pair{pair.secondMotion, &lanes.second}}) {
+    into->centre.setLane(k, motion->centre);
+    into->velocity.setLane(k, motion->velocity);
+    into->spin.setLane(k, motion->angularVelocity);
+  }
+  lanes.normalDamping[k] = pair.damping.normal;
+  lanes.tangentialDamping[k] = pair.damping.tangential;
+  lanes.previous.setLane(k, pair.previous ? pair.previous->displacement : Vec3{});
 }
 
 /// Lane k's forces into `result` (its point set by the caller).
-void laneForces(const LawLanes& lanes, std::size_t k, const ContactLaw& law,
+void laneForces(const LawTwo& lanes, std::size_t k, const ContactLaw& law,
                 OnePointForces& result) noexcept {
   PointForce& out = result.point;
-  out.depth = lanes.depth[k];
-  out.force = lanes.force[k];
+  const double depth = lanes.depth[k];
+  out.depth = depth;
+  out.force = lanes.force.lane(k);
   out.couple = Vec3{};
   out.volume = 0.0;
-  result.deepest = lanes.depth[k];
-  result.springEnergy = 0.5 * law.stiffness * lanes.depth[k] * lanes.depth[k];
+  result.deepest = depth;
+  result.springEnergy = 0.5 * law.stiffness * depth * depth;
   result.normalForce = lanes.normalForce[k];
-  result.spring = {lanes.displacement[k], 0.0};
-  result.sliding = lanes.sliding[k];
+  result.spring = {lanes.displacement.lane(k), 0.0};
+  result.sliding = lanes.sliding[k] != 0;
 }
 
 }  // namespace
@@ -252,40 +282,52 @@ void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, cons
     // A short last batch repeats its first pair.
     const std::size_t count = std::min(kLanes, pairs.size() - base);
     const SpherePair* lane[kLanes];
-    LawLanes lanes;
-    Vec3 difference[kLanes], half[kLanes];
-    double centres[kLanes];
-    for (std::size_t k = 0; k < kLanes; ++k) {
+    for (std::size_t k = 0; k < kLanes; ++k)
       lane[k] = &pairs[base + (k < count ? k : 0)];
-      difference[k] = lane[k]->first->center - lane[k]->second->center;
-      centres[k] = length(difference[k]);
+    LawTwo lanes[kHalves];
+    Two3 first[kHalves], difference[kHalves], half[kHalves];
+    Two firstRadius[kHalves], secondRadius[kHalves], centres[kHalves];
+    for (std::size_t h = 0; h < kHalves; ++h) {
+      Two3 second;
+      for (std::size_t k = 0; k < 2; ++k) {
+        const SpherePair& pair = *lane[2 * h + k];
+        first[h].setLane(k, pair.first->center);
+        second.setLane(k, pair.second->center);
+        firstRadius[h][k] = pair.first->radius;
+        secondRadius[h][k] = pair.second->radius;
+        takeLaw(lanes[h], k, pair.law);
+      }
+      difference[h] = first[h] - second;
+      centres[h] = length(difference[h]);
     }
-    for (std::size_t k = 0; k < kLanes; ++k) {
-      const Sphere& first = *lane[k]->first;
-      const double gap = centres[k] - first.radius - lane[k]->second->radius;
-      const Vec3 n = centres[k] > 0.0 ? difference[k] * (1.0 / centres[k]) : Vec3{1, 0, 0};
+    for (std::size_t h = 0; h < kHalves; ++h) {
+      LawTwo& two = lanes[h];
+      const Two gap = centres[h] - firstRadius[h] - secondRadius[h];
+      const Two3 n = select(centres[h] > Two{}, difference[h] * (splat(1.0) / centres[h]),
+                            Two3{splat(1.0), Two{}, Two{}});
       // Halfway between the surfaces' closest points c₁ − r₁n and c₂ + r₂n; P − x is half the
       // gap.
-      half[k] = n * (0.5 * gap);
-      lanes.x[k] = first.center - n * first.radius - half[k];
-      lanes.n[k] = n;
-      lanes.gap[k] = gap;
-      takeLaw(lanes, k, lane[k]->law);
+      half[h] = n * (splat(0.5) * gap);
+      two.x = first[h] - n * firstRadius[h] - half[h];
+      two.n = n;
+      two.gap = gap;
     }
     pointLaw(lanes, timeStep, law);
     for (std::size_t k = 0; k < count; ++k) {
-      touching[base + k] = lanes.gap[k] < shell;
+      const LawTwo& two = lanes[k / 2];
+      const double gap = two.gap[k % 2];
+      touching[base + k] = gap < shell;
       if (!touching[base + k]) continue;
       OnePointForces& result = *lane[k]->law.result;
       ContactPoint& point = result.point.point;
-      point.x = lanes.x[k];
-      point.normal = half[k];
-      point.direction = lanes.n[k];
-      point.distance = std::fabs(lanes.gap[k]);
-      point.overlap = lanes.gap[k] < 0.0;
+      point.x = two.x.lane(k % 2);
+      point.normal = half[k / 2].lane(k % 2);
+      point.direction = two.n.lane(k % 2);
+      point.distance = std::fabs(gap);
+      point.overlap = gap < 0.0;
       point.converged = true;
       point.first = point.second = 0;
-      laneForces(lanes, k, law, result);
+      laneForces(two, k % 2, law, result);
     }
   }
 }
@@ -295,20 +337,25 @@ void onePointForces(std::span<const OnePointPair> pairs, double timeStep,
   for (std::size_t base = 0; base < pairs.size(); base += kLanes) {
     const std::size_t count = std::min(kLanes, pairs.size() - base);
     const OnePointPair* lane[kLanes];
-    LawLanes lanes;
-    for (std::size_t k = 0; k < kLanes; ++k) {
+    for (std::size_t k = 0; k < kLanes; ++k)
       lane[k] = &pairs[base + (k < count ? k : 0)];
-      const ContactPoint& point = *lane[k]->point;
-      lanes.x[k] = point.x;
-      lanes.n[k] = point.direction;
-      lanes.gap[k] = point.overlap ? -point.distance : point.distance;
-      takeLaw(lanes, k, lane[k]->law);
+    LawTwo lanes[kHalves];
+    for (std::size_t h = 0; h < kHalves; ++h) {
+      LawTwo& two = lanes[h];
+      for (std::size_t k = 0; k < 2; ++k) {
+        const OnePointPair& pair = *lane[2 * h + k];
+        const ContactPoint& point = *pair.point;
+        two.x.setLane(k, point.x);
+        two.n.setLane(k, point.direction);
+        two.gap[k] = point.overlap ? -point.distance : point.distance;
+        takeLaw(two, k, pair.law);
+      }
     }
     pointLaw(lanes, timeStep, law);
     for (std::size_t k = 0; k < count; ++k) {
       ContactPoint& point = lane[k]->law.result->point.point;
       if (&point != lane[k]->point) point = *lane[k]->point;
-      laneForces(lanes, k, law, *lane[k]->law.result);
+      laneForces(lanes[k / 2], k % 2, law, *lane[k]->law.result);
     }
   }
 }

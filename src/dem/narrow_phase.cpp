@@ -107,21 +107,27 @@ void finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMe
   std::vector<ContactPoint>& kept = result.points;
   kept.clear();
   result.trianglePairs = found.size();
-  if (found.empty()) return;
-  for (const ContactPoint& contact : found)
-    if (found.size() == 1 || !dominated(contact, found, mesh.triangles())) {
-      kept.push_back(contact);
-      kept.back().first = 0;
-    }
-  if (kept.size() > 1) kept = contactdetection::filter(kept, filterDistance);
-  if (mesh.moved()) {
-    const RigidTransform& pose = mesh.pose();
-    for (ContactPoint& contact : kept) {
-      contact.x = pose.apply(contact.x);
-      contact.normal = pose.rotation.rotate(contact.normal);
-      contact.direction = pose.rotation.rotate(contact.direction);
-    }
+  if (found.size() == 1) {
+    kept.emplace_back();
+    finishSphereMeshContact(found.front(), mesh, kept.front());
+    return;
   }
+  for (const ContactPoint& contact : found)
+    if (!dominated(contact, found, mesh.triangles())) kept.push_back(contact);
+  if (kept.size() > 1) kept = contactdetection::filter(kept, filterDistance);
+  for (ContactPoint& contact : kept)
+    finishSphereMeshContact(contact, mesh, contact);
+}
+
+void finishSphereMeshContact(const ContactPoint& found, const QueryMesh& mesh,
+                             ContactPoint& out) noexcept {
+  if (&out != &found) out = found;
+  out.first = 0;
+  if (!mesh.moved()) return;
+  const RigidTransform& pose = mesh.pose();
+  out.x = pose.apply(out.x);
+  out.normal = pose.rotation.rotate(out.normal);
+  out.direction = pose.rotation.rotate(out.direction);
 }
 
 PairContacts sphereMeshContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,

@@ -216,7 +216,6 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
   checkSphere(sphere, 0);
   out.clear();
   const detail::QueryMeshData& data = mesh.data();
-  const double scale = std::max(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));  // finite
   const double reach = 2.0 * epsilon;
   const bool same = cache.valid_ && cache.meshData_.get() == &data && cache.epsilon_ == epsilon &&
                     cache.radius_ == sphere.radius;
@@ -233,6 +232,7 @@ void sphereContacts(const Sphere& sphere, const QueryMesh& mesh, double epsilon,
     ++cache.reused_;
     return;
   }
+  const double scale = std::max(maxAbs(data.bounds.lower), maxAbs(data.bounds.upper));  // finite
   const double skin = cache.skin_;
   if (!(std::isfinite(skin) && skin > 0.0)) {
     contactsOf(sphere, 0, data, scale, epsilon, out);

@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -125,6 +128,50 @@ TEST(DemSpheres, ClosedSystemConservesMomentaToRoundOff) {
   EXPECT_LT(angularError, 1e-13);
   RecordProperty("linear_momentum_error", scientific(linearError));
   RecordProperty("angular_momentum_error", scientific(angularError));
+}
+
+/// The spheres' turns, taken eight to a batch in vector lanes (and the whole batch by the plain
+/// formula where one of them is at rest or spins past its small-angle series), give each sphere
+/// the orientation it gets alone in a World (where it takes the plain formula), bit for bit.
+TEST(DemSpheres, TurnsInBatchesMatchEachSphereAlone) {
+  const ParticleShape sphere = ParticleShape::sphere(kRadius, kDensity);
+  const Parameters parameters = test::centimetreParameters(sphere.mass(), 1.0, 0.5, 0.0, {});
+  std::mt19937_64 random(11);
+  const auto uniform = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53 - 0.5; };
+  // 21 spheres far apart: two batches of eight and five alone. Sphere 12 is at rest and sphere
+  // 13 turns by more than 2⁻⁶ rad a half step (the series' reach), so the second batch takes the
+  // plain formula.
+  const double fast = 0.1 / parameters.timeStep;
+  std::vector<ParticleState> states(21);
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    ParticleState& state = states[i];
+    state.position = {10.0 * kRadius * static_cast<double>(i), 0.0, 0.0};
+    state.orientation = Quaternion::fromAxisAngle({uniform(), uniform(), 1.0}, 6.0 * uniform());
+    const double rate = std::pow(10.0, 4.0 * uniform());  // 0.01 to 100 rad/s
+    state.angularVelocity = Vec3{uniform(), uniform(), uniform()} * rate;
+  }
+  states[12].angularVelocity = {};
+  states[13].angularVelocity = {fast, -fast, 0.5 * fast};
+  World together(parameters);
+  together.addShape(sphere);
+  for (const ParticleState& state : states)
+    together.addParticle(0, state);
+  together.run(5);
+  const auto bits = [](const Quaternion& q) {
+    return std::array<std::uint64_t, 4>{
+        std::bit_cast<std::uint64_t>(q.w), std::bit_cast<std::uint64_t>(q.x),
+        std::bit_cast<std::uint64_t>(q.y), std::bit_cast<std::uint64_t>(q.z)};
+  };
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    World alone(parameters);
+    alone.addShape(sphere);
+    alone.addParticle(0, states[i]);
+    alone.run(5);
+    EXPECT_EQ(bits(together.particles()[i].orientation), bits(alone.particles()[0].orientation))
+        << "sphere " << i;
+  }
+  // They did turn: at ω ≥ 0.01 rad/s, by more than rounding in five steps.
+  EXPECT_NE(bits(together.particles()[0].orientation), bits(states[0].orientation));
 }
 
 /// The highest the particle's centre rises after its first bounce on a floor, dropped from

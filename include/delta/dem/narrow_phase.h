@@ -131,5 +131,11 @@ PairContacts finishSphereMeshContacts(std::span<const ContactPoint> found, const
 /// Threading: as sphereMeshContacts; `result` is the caller's.
 void finishSphereMeshContacts(std::span<const ContactPoint> found, const QueryMesh& mesh,
                               double filterDistance, PairContacts& result);
+/// finishSphereMeshContacts of a lone point (`found`, as above), which steps 2 and 3 keep as it
+/// is: its step 4 alone, into `out` (the only point of the result, without a PairContacts).
+///
+/// Threading: a pure function; `out` is the caller's.
+void finishSphereMeshContact(const ContactPoint& found, const QueryMesh& mesh,
+                             ContactPoint& out) noexcept;
 
 }  // namespace delta::dem
