@@ -244,17 +244,18 @@ struct LawTwo {
   }
 }
 
-/// Lane k of `lanes`' motions, dashpots and spring from `pair`.
-void takeLaw(LawTwo& lanes, std::size_t k, const OnePointLaw& pair) noexcept {
-  for (auto [motion, into] :
-       {std::pair{pair.firstMotion, &lanes.first}, std::pair{pair.secondMotion, &lanes.second}}) {
-    into->centre.setLane(k, motion->centre);
-    into->velocity.setLane(k, motion->velocity);
-    into->spin.setLane(k, motion->angularVelocity);
-  }
-  lanes.normalDamping[k] = pair.damping.normal;
-  lanes.tangentialDamping[k] = pair.damping.tangential;
-  lanes.previous.setLane(k, pair.previous ? pair.previous->displacement : Vec3{});
+/// The motions, dashpots and springs of `a` (lane 0) and `b` (lane 1).
+void takeLaws(LawTwo& lanes, const OnePointLaw& a, const OnePointLaw& b) noexcept {
+  const auto motion = [](const BodyMotion& one, const BodyMotion& two) {
+    return MotionTwo{Two3::of(one.centre, two.centre), Two3::of(one.velocity, two.velocity),
+                     Two3::of(one.angularVelocity, two.angularVelocity)};
+  };
+  lanes.first = motion(*a.firstMotion, *b.firstMotion);
+  lanes.second = motion(*a.secondMotion, *b.secondMotion);
+  lanes.normalDamping = Two{a.damping.normal, b.damping.normal};
+  lanes.tangentialDamping = Two{a.damping.tangential, b.damping.tangential};
+  lanes.previous = Two3::of(a.previous ? a.previous->displacement : Vec3{},
+                            b.previous ? b.previous->displacement : Vec3{});
 }
 
 /// Lane k's forces into `result` (its point set by the caller).
@@ -288,16 +289,13 @@ void sphereSphereForces(std::span<const SpherePair> pairs, double timeStep, cons
     Two3 first[kHalves], difference[kHalves], half[kHalves];
     Two firstRadius[kHalves], secondRadius[kHalves], centres[kHalves];
     for (std::size_t h = 0; h < kHalves; ++h) {
-      Two3 second;
-      for (std::size_t k = 0; k < 2; ++k) {
-        const SpherePair& pair = *lane[2 * h + k];
-        first[h].setLane(k, pair.first->center);
-        second.setLane(k, pair.second->center);
-        firstRadius[h][k] = pair.first->radius;
-        secondRadius[h][k] = pair.second->radius;
-        takeLaw(lanes[h], k, pair.law);
-      }
-      difference[h] = first[h] - second;
+      const SpherePair& a = *lane[2 * h];
+      const SpherePair& b = *lane[2 * h + 1];
+      first[h] = Two3::of(a.first->center, b.first->center);
+      firstRadius[h] = Two{a.first->radius, b.first->radius};
+      secondRadius[h] = Two{a.second->radius, b.second->radius};
+      takeLaws(lanes[h], a.law, b.law);
+      difference[h] = first[h] - Two3::of(a.second->center, b.second->center);
       centres[h] = length(difference[h]);
     }
     for (std::size_t h = 0; h < kHalves; ++h) {
@@ -341,15 +339,16 @@ void onePointForces(std::span<const OnePointPair> pairs, double timeStep,
       lane[k] = &pairs[base + (k < count ? k : 0)];
     LawTwo lanes[kHalves];
     for (std::size_t h = 0; h < kHalves; ++h) {
+      const OnePointPair& a = *lane[2 * h];
+      const OnePointPair& b = *lane[2 * h + 1];
       LawTwo& two = lanes[h];
-      for (std::size_t k = 0; k < 2; ++k) {
-        const OnePointPair& pair = *lane[2 * h + k];
-        const ContactPoint& point = *pair.point;
-        two.x.setLane(k, point.x);
-        two.n.setLane(k, point.direction);
-        two.gap[k] = point.overlap ? -point.distance : point.distance;
-        takeLaw(two, k, pair.law);
-      }
+      two.x = Two3::of(a.point->x, b.point->x);
+      two.n = Two3::of(a.point->direction, b.point->direction);
+      const auto gap = [](const ContactPoint& point) {
+        return point.overlap ? -point.distance : point.distance;
+      };
+      two.gap = Two{gap(*a.point), gap(*b.point)};
+      takeLaws(two, a.law, b.law);
     }
     pointLaw(lanes, timeStep, law);
     for (std::size_t k = 0; k < count; ++k) {

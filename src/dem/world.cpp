@@ -156,14 +156,13 @@ void turnLanes(Particle* const (&lanes)[kTurnLanes], double timeStep) noexcept {
   Two w[kHalves], x[kHalves], y[kHalves], z[kHalves], h2[kHalves];
   bool series = true;
   for (std::size_t h = 0; h < kHalves; ++h) {
-    for (std::size_t k = 0; k < 2; ++k) {
-      const Particle& particle = *lanes[2 * h + k];
-      rate[h].setLane(k, particle.angularVelocity);
-      w[h][k] = particle.orientation.w;
-      x[h][k] = particle.orientation.x;
-      y[h][k] = particle.orientation.y;
-      z[h][k] = particle.orientation.z;
-    }
+    const Particle& a = *lanes[2 * h];
+    const Particle& b = *lanes[2 * h + 1];
+    rate[h] = Two3::of(a.angularVelocity, b.angularVelocity);
+    w[h] = Two{a.orientation.w, b.orientation.w};
+    x[h] = Two{a.orientation.x, b.orientation.x};
+    y[h] = Two{a.orientation.y, b.orientation.y};
+    z[h] = Two{a.orientation.z, b.orientation.z};
     const Two rate2 = dot(rate[h], rate[h]);
     h2[h] = splat(0.25) * rate2 * splat(timeStep) * splat(timeStep);
     const auto covered = rate2 > Two{} && h2[h] <= splat(0x1p-12);

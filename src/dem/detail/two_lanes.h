@@ -42,12 +42,13 @@ using TwoMask = long long __attribute__((vector_size(16)));
 struct Two3 {
   Two x, y, z;
 
-  Vec3 lane(std::size_t k) const noexcept { return {x[k], y[k], z[k]}; }
-  void setLane(std::size_t k, const Vec3& v) noexcept {
-    x[k] = v.x;
-    y[k] = v.y;
-    z[k] = v.z;
+  /// a in lane 0, b in lane 1, put together in registers: a lane written to memory on its own and
+  /// read back in a vector waits for the store (no store forwards into a wider load).
+  static Two3 of(const Vec3& a, const Vec3& b) noexcept {
+    return {Two{a.x, b.x}, Two{a.y, b.y}, Two{a.z, b.z}};
   }
+
+  Vec3 lane(std::size_t k) const noexcept { return {x[k], y[k], z[k]}; }
 };
 
 [[gnu::always_inline]] inline Two3 operator+(const Two3& a, const Two3& b) noexcept {
