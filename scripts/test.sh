@@ -39,7 +39,7 @@ CC=clang CXX=clang++ scripts/setup.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebIn
 (cd build-tsan && OMP_NUM_THREADS=2 TSAN_OPTIONS="halt_on_error=1 ignore_noninstrumented_modules=1" \
   ctest -j"$jobs" -R "Thread|ParallelFor" --no-tests=error --output-on-failure)
 
-echo "== AArch64 (Debian's cross toolchain, tests under qemu-user): the kernels' and queries' tests"
+echo "== AArch64 (Debian's cross toolchain, tests under qemu-user): the kernels' and queries' tests, and the DEM's lanes'"
 scripts/test_aarch64.sh build-aarch64
 
 echo "== install: the packages as users get them, and the examples against the installed copy"
