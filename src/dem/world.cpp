@@ -147,8 +147,8 @@ constexpr std::size_t kTurnLanes = 8;
 /// small-angle series and the product with q (operator*, renormalised) on two particles to a
 /// vector, each step for all of them before the next, so that their chains of some forty
 /// dependent operations, a square root and a division run side by side (one after the other
-/// they were a tenth of a sphere step). A batch with a particle at rest or turning by more than
-/// the series covers takes turned() itself.
+/// they were about 8% of the 100-sphere pile's step). A batch with a particle at rest or
+/// turning by more than the series covers takes turned() itself.
 void turnLanes(Particle* const (&lanes)[kTurnLanes], double timeStep) noexcept {
   using delta::detail::splat;
   using delta::detail::Two;
@@ -960,10 +960,9 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
   contactsPending_ = true;  // the records wait for contacts()
   particleSprings_.clear();
   obstacleSprings_.clear();
-  // Tallied in locals and stored once: as members, each pair's sums waited on the stores of the
-  // pair before (a division and a maximum in that chain), a tenth of the sums' time. The largest
-  // depth is divided once: a division by a positive number keeps the order, so the largest
-  // ratio is the same number.
+  // Tallied in locals and stored once (as members, each pair's tallies were stored and loaded
+  // again, with a division and a maximum in that chain). The largest depth is divided once: a
+  // division by a positive number keeps the order, so the largest ratio is the same number.
   std::size_t pairsInContact = 0, rawPoints = 0, contactPoints = 0, overlapping = 0;
   double deepest = 0.0, elastic = 0.0;
   const bool friction = law_.friction > 0.0;
