@@ -119,19 +119,31 @@ Vec3 rotatedApply(const Quaternion& q, const Mat3& m, bool isotropic, const Vec3
   return rotatedApplyTurning(q, m, v);
 }
 
+/// cos h from h² (h ≤ 2⁻⁶), and sin(h)/h: Taylor series whose first terms left out are below
+/// 10⁻¹⁹ of theirs, so within rounding without a call. For doubles and for two to a vector
+/// (turnLanes), with the same arithmetic.
+template <class T>
+T cosineOfSquare(T h2) noexcept {
+  return 1.0 - h2 * (1.0 / 2 - h2 * (1.0 / 24 - h2 * (1.0 / 720 - h2 * (1.0 / 40320))));
+}
+template <class T>
+T sincOfSquare(T h2) noexcept {
+  return 1.0 - h2 * (1.0 / 6 - h2 * (1.0 / 120 - h2 * (1.0 / 5040)));
+}
+
+/// The largest h² = (|ω|·dt/2)² the series take.
+constexpr double kSeriesReach = 0x1p-12;
+
 /// The rotation by the vector ω·dt (angle |ω|·dt about ω), composed before q: the quaternion
 /// (cos h, ω·sin(h)/|ω|), h = |ω|·dt/2. A step turns a particle by little (h ≤ 2⁻⁶): there the
-/// Taylor series of cos h and sin(h)/h in h², whose first terms left out are below 10⁻¹⁹ of
-/// theirs, give them within rounding without a square root, a division or a call.
+/// series above give them without a square root, a division or a call.
 Quaternion turned(const Quaternion& q, const Vec3& angularVelocity, double timeStep) noexcept {
   const double rate2 = lengthSquared(angularVelocity);
   if (!(rate2 > 0.0)) return q;
   const double h2 = 0.25 * rate2 * timeStep * timeStep;
-  if (h2 <= 0x1p-12) {
-    const double cosine =
-        1.0 - h2 * (1.0 / 2 - h2 * (1.0 / 24 - h2 * (1.0 / 720 - h2 * (1.0 / 40320))));
-    const double sinc = 1.0 - h2 * (1.0 / 6 - h2 * (1.0 / 120 - h2 * (1.0 / 5040)));
-    const Vec3 axis = angularVelocity * (0.5 * timeStep * sinc);
+  if (h2 <= kSeriesReach) {
+    const double cosine = cosineOfSquare(h2);
+    const Vec3 axis = angularVelocity * (0.5 * timeStep * sincOfSquare(h2));
     return Quaternion{cosine, axis.x, axis.y, axis.z} * q;  // renormalises
   }
   const double rate = std::sqrt(rate2);
@@ -154,20 +166,20 @@ void turnLanes(Particle* const (&lanes)[kTurnLanes], double timeStep) noexcept {
   using delta::detail::Two;
   using delta::detail::Two3;
   constexpr std::size_t kHalves = kTurnLanes / 2;
+  using Parts = delta::detail::QuaternionParts<Two>;
   Two3 rate[kHalves];
-  Two w[kHalves], x[kHalves], y[kHalves], z[kHalves], h2[kHalves];
+  Parts orientation[kHalves];
+  Two h2[kHalves];
   bool series = true;
   for (std::size_t h = 0; h < kHalves; ++h) {
     const Particle& a = *lanes[2 * h];
     const Particle& b = *lanes[2 * h + 1];
     rate[h] = Two3::of(a.angularVelocity, b.angularVelocity);
-    w[h] = Two{a.orientation.w, b.orientation.w};
-    x[h] = Two{a.orientation.x, b.orientation.x};
-    y[h] = Two{a.orientation.y, b.orientation.y};
-    z[h] = Two{a.orientation.z, b.orientation.z};
+    orientation[h] = {Two{a.orientation.w, b.orientation.w}, Two{a.orientation.x, b.orientation.x},
+                      Two{a.orientation.y, b.orientation.y}, Two{a.orientation.z, b.orientation.z}};
     const Two rate2 = dot(rate[h], rate[h]);
     h2[h] = splat(0.25) * rate2 * splat(timeStep) * splat(timeStep);
-    const auto covered = rate2 > Two{} && h2[h] <= splat(0x1p-12);
+    const auto covered = rate2 > Two{} && h2[h] <= splat(kSeriesReach);
     series = series && covered[0] && covered[1];
   }
   if (!series) {
@@ -175,26 +187,19 @@ void turnLanes(Particle* const (&lanes)[kTurnLanes], double timeStep) noexcept {
       particle->orientation = turned(particle->orientation, particle->angularVelocity, timeStep);
     return;
   }
-  const Two one = splat(1.0);
-  Two tw[kHalves], tx[kHalves], ty[kHalves], tz[kHalves], norm[kHalves];
+  Parts turn[kHalves];
+  Two norm[kHalves];
   for (std::size_t h = 0; h < kHalves; ++h) {
-    const Two s = h2[h];
-    const Two cosine =
-        one - s * (splat(1.0 / 2) -
-                   s * (splat(1.0 / 24) - s * (splat(1.0 / 720) - s * splat(1.0 / 40320))));
-    const Two sinc = one - s * (splat(1.0 / 6) - s * (splat(1.0 / 120) - s * splat(1.0 / 5040)));
-    const Two3 axis = rate[h] * (splat(0.5 * timeStep) * sinc);
+    const Two3 axis = rate[h] * (splat(0.5 * timeStep) * sincOfSquare(h2[h]));
     // Quaternion{cosine, axis} * q, before operator*'s renormalisation.
-    tw[h] = cosine * w[h] - axis.x * x[h] - axis.y * y[h] - axis.z * z[h];
-    tx[h] = cosine * x[h] + axis.x * w[h] + axis.y * z[h] - axis.z * y[h];
-    ty[h] = cosine * y[h] - axis.x * z[h] + axis.y * w[h] + axis.z * x[h];
-    tz[h] = cosine * z[h] + axis.x * y[h] - axis.y * x[h] + axis.z * w[h];
-    norm[h] =
-        delta::detail::squareRoot(tw[h] * tw[h] + tx[h] * tx[h] + ty[h] * ty[h] + tz[h] * tz[h]);
+    turn[h] = delta::detail::product<Two>({cosineOfSquare(h2[h]), axis.x, axis.y, axis.z},
+                                          orientation[h]);
+    const auto& t = turn[h];
+    norm[h] = delta::detail::squareRoot(t.w * t.w + t.x * t.x + t.y * t.y + t.z * t.z);
   }
   for (std::size_t h = 0; h < kHalves; ++h) {
-    const Two qw = tw[h] / norm[h], qx = tx[h] / norm[h], qy = ty[h] / norm[h],
-              qz = tz[h] / norm[h];
+    const Two qw = turn[h].w / norm[h], qx = turn[h].x / norm[h], qy = turn[h].y / norm[h],
+              qz = turn[h].z / norm[h];
     for (std::size_t k = 0; k < 2; ++k)  // a unit factor's product is never zero or NaN
       lanes[2 * h + k]->orientation =
           norm[h][k] > 0.0 ? Quaternion{qw[k], qx[k], qy[k], qz[k]} : Quaternion{};

@@ -57,6 +57,21 @@ inline Quaternion normalizedOrIdentity(double w, double x, double y, double z) n
   if (!(n > 0.0)) return Quaternion{};
   return {w / n, x / n, y / n, z / n};
 }
+
+/// A quaternion's components in any number type with +, − and × (two quaternions to a vector
+/// register in the DEM's turns, src/dem/world.cpp).
+template <class T>
+struct QuaternionParts {
+  T w, x, y, z;
+};
+
+/// The product a·b, not normalised: operator*'s arithmetic, in its order, for any such type.
+template <class T>
+QuaternionParts<T> product(const QuaternionParts<T>& a, const QuaternionParts<T>& b) noexcept {
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+}
 }  // namespace detail
 
 /// The rotation `a` after `b` (first `b`, then `a`), renormalised (the identity should the product
@@ -64,9 +79,9 @@ inline Quaternion normalizedOrIdentity(double w, double x, double y, double z) n
 ///
 /// Threading: a pure function.
 inline Quaternion operator*(const Quaternion& a, const Quaternion& b) noexcept {
-  return detail::normalizedOrIdentity(
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w);
+  const detail::QuaternionParts<double> p =
+      detail::product<double>({a.w, a.x, a.y, a.z}, {b.w, b.x, b.y, b.z});
+  return detail::normalizedOrIdentity(p.w, p.x, p.y, p.z);
 }
 
 /// A rigid motion p ↦ R p + t, with the rotation kept as a unit quaternion. Compose with `*`
