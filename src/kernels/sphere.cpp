@@ -1,7 +1,6 @@
 #include "delta/kernels/sphere.h"
 
 #include <cmath>
-#include <type_traits>
 
 #include "detail/robust_geometry.h"
 
@@ -46,7 +45,7 @@ namespace {
 
 /// The kernel on a triangle in its local frame (its first corner at the origin), with
 /// `longestEdge` = √(local.longestEdgeSquared) and, for a triangle that is not flat,
-/// `unitNormal` = unit(local.normal) (`UnitNormal` a Vec3, or a callable that makes it).
+/// `unitNormal()` = unit(local.normal) (called only where the face is taken).
 ///
 /// Where the centre projects inside the face (most spheres on a wall), its distance is its height
 /// over the plane along the unit normal: one dot product, where the closest point's difference
@@ -60,11 +59,7 @@ SphereContactResult sphereLocalTriangle(const Sphere& sphere, const Vec3& origin
   const double onTriangle = kOnTriangleUlps * detail::kEpsilon * (maxAbs(center) + longestEdge);
   detail::FaceAreas areas;
   if (detail::insideLocalFace(center, local, areas)) {
-    Vec3 up;
-    if constexpr (std::is_invocable_v<UnitNormal>)
-      up = unitNormal();
-    else
-      up = unitNormal;
+    const Vec3 up = unitNormal();
     const double height = dot(up, center);  // the local triangle's first corner is the origin
     const double distance = std::fabs(height);
     const Vec3 normal = distance > onTriangle && height < 0.0 ? -up : up;
@@ -139,7 +134,7 @@ SphereContactResult sphereTriangle(const Sphere& sphere,
   local.longestEdgeSquared = triangle.longestEdgeSquared_;
   local.flat = triangle.flat_;
   return sphereLocalTriangle(sphere, triangle.origin_, local, triangle.longestEdge_,
-                             triangle.unitNormal_);
+                             [&triangle] { return triangle.unitNormal_; });
 }
 
 }  // namespace delta::kernels
