@@ -16,7 +16,48 @@ namespace {
 
 thread_local bool tInsideLoop = false;
 thread_local bool tSerialLoops = false;
-thread_local int tThreadIndex = 0;  ///< loopThreadIndex()
+thread_local int tThreadIndex = 0;       ///< loopThreadIndex()
+thread_local double tSpunSeconds = 0.0;  ///< threadWorkSeconds()
+
+/// How long a thread of the pool watches for what it waits on before it sleeps in the kernel: a
+/// worker for the next loop, a caller for the last chunks of its own. Woken from the kernel, a
+/// thread on this workplace's virtual machines ran 25 µs late after a short sleep and over
+/// 100 µs after a long one, which took from a DEM step's regions of 50 to 150 µs most of what a
+/// second thread gave them; a step's regions follow each other within this. Passive past it:
+/// with other processes on every core, a waiting thread holds its core no longer (and a World
+/// under such load runs its steps on one thread, world.h, which judges the load by the CPU time
+/// its thread worked: threadWorkSeconds leaves out these spins, as the sleeps they stand for).
+constexpr std::chrono::microseconds kSpin{50};
+
+/// A pause in a spin: the core's hint, where it has one.
+inline void relax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield");
+#endif
+}
+
+/// Returns once `value` no longer holds `old` (as std::atomic::wait), having watched it for up
+/// to kSpin before sleeping.
+template <typename T>
+void await(const std::atomic<T>& value, T old, std::memory_order order) {
+  if (value.load(order) != old) return;
+  const auto start = std::chrono::steady_clock::now();
+  for (unsigned spins = 1;; ++spins) {
+    relax();
+    const bool changed = value.load(order) != old;
+    if (changed || spins % 64 == 0) {
+      const std::chrono::duration<double> spun = std::chrono::steady_clock::now() - start;
+      if (changed || spun > kSpin) {
+        tSpunSeconds += spun.count();
+        if (changed) return;
+        break;
+      }
+    }
+  }
+  value.wait(old, order);
+}
 
 /// Marks this thread as running chunks while it lives.
 class InsideLoop {
@@ -72,12 +113,12 @@ class Pool {
     }
     for (std::size_t done = done_.load(std::memory_order_acquire); done < chunks;
          done = done_.load(std::memory_order_acquire))
-      done_.wait(done, std::memory_order_acquire);
+      await(done_, done, std::memory_order_acquire);
     // Sequentially consistent, as the workers' joining: either a worker's increment of active_
     // comes first and this waits for it, or the worker then sees the loop closed.
     open_.store(false);
     for (int active = active_.load(); active != 0; active = active_.load())
-      active_.wait(active);
+      await(active_, active, std::memory_order_seq_cst);
     if (failure_) {
       std::exception_ptr failure = failure_;
       failure_ = nullptr;
@@ -115,7 +156,7 @@ class Pool {
   void work(int index, std::uint64_t seen) {
     tThreadIndex = index + 1;
     while (true) {
-      generation_.wait(seen, std::memory_order_acquire);
+      await(generation_, seen, std::memory_order_acquire);
       seen = generation_.load(std::memory_order_acquire);
       active_.fetch_add(1);
       if (open_.load() && index < threads_.load(std::memory_order_relaxed) - 1) {
@@ -167,6 +208,10 @@ double threadCpuSeconds() noexcept {
   if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &time) == 0)
     return static_cast<double>(time.tv_sec) + 1e-9 * static_cast<double>(time.tv_nsec);
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double threadWorkSeconds() noexcept {
+  return threadCpuSeconds() - tSpunSeconds;
 }
 
 SerialLoops::SerialLoops() noexcept : enclosing_(tSerialLoops) {

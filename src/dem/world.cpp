@@ -1149,7 +1149,7 @@ void World::advance(Exchange* exchange) {
   }
   const bool judging = !alone && exchange == nullptr && threadCount() > 1;
   if (judging && !loadWindow_.open)
-    loadWindow_ = {true, Clock::now(), delta::detail::threadCpuSeconds()};
+    loadWindow_ = {true, Clock::now(), delta::detail::threadWorkSeconds()};
   const Clock::time_point start = Clock::now();
   double communication = 0.0;
   const auto refreshGhosts = [&] {
@@ -1187,7 +1187,7 @@ void World::advance(Exchange* exchange) {
   const double wall = secondsSince(loadWindow_.start);
   if (wall < kJudgedWall) return;
   loadWindow_.open = false;
-  if (delta::detail::threadCpuSeconds() - loadWindow_.cpuStart < 0.6 * wall) {
+  if (delta::detail::threadWorkSeconds() - loadWindow_.cpuStart < 0.6 * wall) {
     serialSteps_ = serialPeriod_;
     serialPeriod_ = std::min(2 * serialPeriod_, kLongestSerial);
   } else {

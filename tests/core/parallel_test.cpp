@@ -103,6 +103,47 @@ TEST(ParallelFor, ThreadCpuTimeCountsWorkNotSleep) {
   EXPECT_GE(detail::threadCpuSeconds() - start - slept, 0.02);
 }
 
+// The pool's threads watch for a while before they sleep (parallel.cpp), and a World judges the
+// load on its cores by the CPU time its thread worked: a caller waiting for a worker's chunk did
+// not work, whether it slept or watched. (Counted as work, the watching made a caller waiting 60 µs
+// look busy for most of it.)
+TEST(ParallelFor, WaitingForAWorkerIsNotCountedAsWork) {
+  if (threadCount() < 2) GTEST_SKIP() << "one thread";
+  using Clock = std::chrono::steady_clock;
+  const auto busy = [](std::chrono::microseconds time) {
+    for (const auto until = Clock::now() + time; Clock::now() < until;) {
+    }
+  };
+  // Over the loops in which a worker took one chunk: from the end of the caller's chunk (which
+  // waits for the worker to start the other) to the end of the loop.
+  double waited = 0.0, worked = 0.0;
+  for (int loop = 0; loop < 2000 && waited < 0.02; ++loop) {
+    std::atomic<bool> workerStarted{false};
+    bool split = false;
+    Clock::time_point callerDone;
+    double workAtCallerDone = 0.0;
+    parallelFor(0, 2, 1, [&](std::size_t, std::size_t) {
+      if (loopThreadIndex() != 0) {
+        workerStarted = true;
+        busy(std::chrono::microseconds(60));
+        return;
+      }
+      if (split) return;  // the caller took both chunks
+      for (const auto until = Clock::now() + std::chrono::milliseconds(1);
+           !workerStarted && Clock::now() < until;) {
+      }
+      split = workerStarted;
+      callerDone = Clock::now();
+      workAtCallerDone = detail::threadWorkSeconds();
+    });
+    if (!split) continue;
+    waited += std::chrono::duration<double>(Clock::now() - callerDone).count();
+    worked += detail::threadWorkSeconds() - workAtCallerDone;
+  }
+  ASSERT_GT(waited, 0.0) << "no worker took a chunk";
+  EXPECT_LT(worked, 0.3 * waited);
+}
+
 TEST(ParallelFor, CapsTheThreadsAskedFor) {
   // OMP_NUM_THREADS=100000 asked libgomp for a team it set up on the caller's stack: a segfault.
   const int before = omp_get_max_threads();
