@@ -81,6 +81,11 @@ struct Search {
   double lower[kDeferred];
   std::uint32_t deferred[kDeferred];  ///< sorted triangle indices
   std::size_t count = 0;
+  /// Whether to ask for a leaf's triangles and the exact kernels' vertices ahead: for a limited
+  /// search, whose points (an ε-limited batch's, left in doubt by the grid) lie sparse and find
+  /// them in memory (its hits −10%); an unlimited one's dense points find them in the cache, and
+  /// the requests cost W1 1.5%.
+  bool prefetch = false;
 };
 
 /// The exact kernel on sorted triangle `k`.
@@ -148,6 +153,11 @@ void exactlyEight(const QueryMeshData& mesh, const Vec3& point, std::size_t firs
     search.lower[at] = lower;
     search.deferred[at] = k;
   }
+  // The kernels' vertices asked for together (their corners were, when they were deferred).
+  if (search.prefetch)
+    for (std::size_t c = 0; c < kept; ++c)
+      for (const std::uint32_t v : mesh.corners[search.deferred[c]])
+        __builtin_prefetch(&mesh.vertices[v]);
   if (kExactLanes > 0 && kept > 2) {
     for (std::size_t c = 0; c < kept && !(search.lower[c] > search.best.distanceSquared);
          c += kFanout)
@@ -177,6 +187,7 @@ template <typename Bounds>
     if (search.count == kDeferred) settle(mesh, point, search);
     search.lower[search.count] = lower[i];
     search.deferred[search.count++] = static_cast<std::uint32_t>(leaf * kFanout + i);
+    if (search.prefetch) __builtin_prefetch(&mesh.corners[leaf * kFanout + i]);  // for settle
   }
 }
 
@@ -189,6 +200,13 @@ template <typename Block>
     __builtin_prefetch(bytes + line);
 }
 
+/// Asks for every cache line of leaf `leaf`'s single-precision triangles (visitLeaf's).
+[[gnu::always_inline]] inline void prefetchLeaf(const Leaves& leaves, std::size_t leaf) noexcept {
+  const char* bytes = reinterpret_cast<const char*>(leaves.triangles.leaves + leaf * 72);
+  for (std::size_t line = 0; line < 72 * sizeof(float); line += 64)
+    __builtin_prefetch(bytes + line);
+}
+
 /// The descent, with the node bounds of `Bounds` (this ISA's).
 template <typename Bounds>
 [[gnu::always_inline]] inline Nearest descend(const QueryMeshData& mesh, const Leaves& leaves,
@@ -196,6 +214,7 @@ template <typename Bounds>
   Search search;
   search.best.distanceSquared = limitSquared;
   search.prune = limitSquared;
+  search.prefetch = limitSquared < std::numeric_limits<double>::max();
   // Nearest-first, depth first: children are pushed farthest first, and every entry is checked
   // against the pruning bound again when it is popped. A node is skipped only when its box is
   // strictly farther than the bound, so ties still reach the smaller id.
@@ -218,10 +237,14 @@ template <typename Bounds>
     if (entry.level() == 1) {
       // The children are leaves: visited here, nearest first, each checked against the bound as
       // it tightens (the order the stack gave them, without pushing and popping each).
-      for (unsigned rest =
-               Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
-                              point, shrink, search.prune, bounds);
-           rest != 0;) {
+      // Their triangles are asked for first (Search::prefetch): a leaf's bounds read 288 bytes.
+      unsigned rest =
+          Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
+                         point, shrink, search.prune, bounds);
+      if (search.prefetch)
+        for (unsigned more = rest; more != 0; more &= more - 1)
+          prefetchLeaf(leaves, first + static_cast<std::uint32_t>(std::countr_zero(more)));
+      while (rest != 0) {
         std::uint32_t nearest = static_cast<std::uint32_t>(std::countr_zero(rest));
         for (unsigned more = rest & (rest - 1); more != 0; more &= more - 1) {
           const auto i = static_cast<std::uint32_t>(std::countr_zero(more));
