@@ -553,12 +553,14 @@ namespace {
 
 /// Carries the caches keyed like `caches` over to the pairs [begin, end) that `wanted` picks
 /// (sorted by key; new ones made with `skin`, those of pairs gone dropped into `spare`, whose
-/// capacity is kept), and points cacheOf[p] at pair p's; `pairOf` is scratch.
-template <class Cache, class Pairs, class Wanted>
+/// capacity is kept), and points cacheOf[p] at pair p's; `pairOf` is scratch. The caches stay
+/// where they are in memory: only their keys and pointers move (a flowing hopper's 2,700 caches
+/// of 224 bytes, moved each step the pairs changed, took 110 µs a step on the calling thread).
+template <class Caches, class Cache, class Pairs, class Wanted>
 void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const Wanted& wanted,
-                 double skin, std::vector<std::pair<std::uint64_t, Cache>>& caches,
-                 std::vector<std::pair<std::uint64_t, Cache>>& spare, std::vector<Cache*>& cacheOf,
+                 double skin, Caches& caches, Caches& spare, std::vector<Cache*>& cacheOf,
                  std::vector<std::size_t>& pairOf) {
+  using Held = typename Caches::value_type::second_type;  // World::Held<Cache>
   // Most steps meet the same pairs as the step before (the neighbour list holds, and the same
   // pairs come within 2ε): then every cache stays where it is.
   std::size_t kept = 0;
@@ -568,7 +570,7 @@ void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const W
   if (same && kept == caches.size()) {
     kept = 0;
     for (std::size_t p = begin; p < end; ++p)
-      if (wanted(pairs[p])) cacheOf[p] = &caches[kept++].second;
+      if (wanted(pairs[p])) cacheOf[p] = caches[kept++].second.get();
     return;
   }
   pairOf.clear();
@@ -582,12 +584,12 @@ void routeCaches(const Pairs& pairs, std::size_t begin, std::size_t end, const W
     if (old < caches.size() && caches[old].first == pair.key)
       spare.emplace_back(pair.key, std::move(caches[old].second));
     else
-      spare.emplace_back(pair.key, Cache(skin));
+      spare.emplace_back(pair.key, Held(skin));
     pairOf.push_back(p);
   }
   caches.swap(spare);
   for (std::size_t k = 0; k < pairOf.size(); ++k)
-    cacheOf[pairOf[k]] = &caches[k].second;
+    cacheOf[pairOf[k]] = caches[k].second.get();
 }
 
 }  // namespace

@@ -123,6 +123,29 @@ TEST_P(CheckpointRestart, NPlusMStepsEqualAnUninterruptedRunBitForBit) {
 
 INSTANTIATE_TEST_SUITE_P(Threads, CheckpointRestart, testing::Values(1, 2));
 
+// A World's copy holds copies of its pairs' contact and overlap caches (World::Held), not the
+// same ones: the copy and the original, stepped in turn, each step as an uninterrupted run.
+TEST(Checkpoint, ACopiedWorldStepsAsTheOriginalWithCachesOfItsOwn) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    Scenario whole = c.make();
+    Scenario original = c.make();
+    whole.world.run(c.before);
+    original.world.run(c.before);
+    World copy = original.world;
+    for (std::size_t s = 0; s < c.after; ++s) {
+      original.world.step();
+      copy.step();
+      if (s == c.after / 2) original.world.run(3);  // apart: the copy's caches left behind
+    }
+    whole.world.run(c.after + 3);
+    expectSameState(whole.world, original.world);
+    Scenario reference = c.make();
+    reference.world.run(c.before + c.after);
+    expectSameState(reference.world, copy);
+  }
+}
+
 TEST(Checkpoint, DigestIsTheSameOnOneAndTwoThreads) {
   std::string one, two;
   withThreads(1, [&] {

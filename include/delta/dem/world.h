@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <span>
 #include <string>
@@ -527,19 +528,40 @@ class World {
   std::vector<std::uint32_t> ids_;   ///< each particle's id: its index, unless distributed
   std::size_t owned_ = 0;
   std::vector<Obstacle> obstacles_;
+  /// A pair's cache on the heap, made with the pair's skin: routeContactCaches moves only its
+  /// pointer from step to step. Copied with the World (a moved-from one copies as empty).
+  template <class Cache>
+  class Held {
+   public:
+    explicit Held(double skin) : held_(std::make_unique<Cache>(skin)) {}
+    Held(const Held& other)
+        : held_(other.held_ ? std::make_unique<Cache>(*other.held_) : nullptr) {}
+    Held(Held&&) noexcept = default;
+    Held& operator=(const Held& other) {
+      if (this != &other) held_ = other.held_ ? std::make_unique<Cache>(*other.held_) : nullptr;
+      return *this;
+    }
+    Held& operator=(Held&&) noexcept = default;
+    ~Held() = default;
+    Cache* get() const noexcept { return held_.get(); }
+
+   private:
+    std::unique_ptr<Cache> held_;
+  };
   /// Each mesh pair's contact cache (query/contacts.h), keyed and sorted like the springs:
   /// the pairs of the last evaluation that had triangles on both sides, under the point law.
-  using ContactCaches = std::vector<std::pair<std::uint64_t, contactdetection::ContactCache>>;
+  using ContactCaches = std::vector<std::pair<std::uint64_t, Held<contactdetection::ContactCache>>>;
   ContactCaches particleCaches_, obstacleCaches_;
   ContactCaches spareCaches_;  ///< routeContactCaches' scratch (the caches of pairs gone)
   /// Each pair's cache for this evaluation (null: none), for detectContacts.
   std::vector<contactdetection::ContactCache*> cacheOf_;
   /// Each sphere–obstacle pair's cache (query/sphere_contacts.h), keyed and sorted likewise.
-  using SphereCaches = std::vector<std::pair<std::uint64_t, contactdetection::SphereContactCache>>;
+  using SphereCaches =
+      std::vector<std::pair<std::uint64_t, Held<contactdetection::SphereContactCache>>>;
   SphereCaches sphereObstacleCaches_, spareSphereCaches_;
   std::vector<contactdetection::SphereContactCache*> sphereCacheOf_;
   /// Under the volume law, each pair's overlap cache (query/overlap.h), keyed and sorted likewise.
-  using OverlapCaches = std::vector<std::pair<std::uint64_t, contactdetection::OverlapCache>>;
+  using OverlapCaches = std::vector<std::pair<std::uint64_t, Held<contactdetection::OverlapCache>>>;
   OverlapCaches particleOverlapCaches_, obstacleOverlapCaches_, spareOverlapCaches_;
   std::vector<contactdetection::OverlapCache*> overlapCacheOf_;
   /// Each particle's shape at its pose, for the narrow phase (sized and set by findPairs).
