@@ -136,6 +136,10 @@ class Pool {
     const std::size_t chunks = chunks_.load(std::memory_order_relaxed);
     const auto call = call_.load(std::memory_order_relaxed);
     const void* body = body_.load(std::memory_order_relaxed);
+    // The chunks this thread ran are counted done once, when it finds none left: one update of
+    // the shared count a thread, not a chunk (the two threads took turns at its cache line for
+    // each of a sphere step's chunks of a few microseconds).
+    std::size_t ran = 0;
     for (std::size_t chunk = next_.fetch_add(1, std::memory_order_relaxed); chunk < chunks;
          chunk = next_.fetch_add(1, std::memory_order_relaxed)) {
       if (!failed_.load(std::memory_order_relaxed)) {
@@ -147,8 +151,10 @@ class Pool {
           failed_.store(true, std::memory_order_relaxed);
         }
       }
-      if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done_.notify_all();
+      ++ran;
     }
+    if (ran > 0 && done_.fetch_add(ran, std::memory_order_acq_rel) + ran == chunks)
+      done_.notify_all();
   }
 
   /// Worker `index`: sleeps until the generation moves past `seen`, then joins the loop if it is
