@@ -25,11 +25,10 @@ namespace delta::dem {
 
 namespace {
 
-/// Pairs per parallel chunk of the general contact law (applyContactLaw): most pairs are skipped
-/// (apart, or one point, whose law runs in batches), the others cost 0.1 to a few µs. Chunks of
-/// two pairs made the threads take turns at the chunk counter's cache line, more than the law's
-/// own work: the law did not run faster on two threads than on one.
-constexpr std::size_t kLawGrain = 32;
+/// Pairs per parallel chunk of the general contact law (applyContactLaw), which runs on the pairs
+/// it acts on only (0.1 to a few µs each): a few microseconds a chunk and more. (Chunks of two
+/// made the threads take turns at the chunk counter's cache line more than the law worked.)
+constexpr std::size_t kLawGrain = 8;
 /// Pairs per parallel chunk in contact detection, and per kernel batch of the pairs whose
 /// caches hold (World::detectContacts): a pair at rest costs about a µs.
 constexpr std::size_t kDetectionGrain = 16;
@@ -887,13 +886,18 @@ void World::applyContactLaw(std::span<const Interaction> pairs, std::span<PairOu
   const bool volumeLaw = law_.model == ContactModel::volume;
   const double dt = parameters_.timeStep;
   const std::vector<BodyMotion>& motions = motions_;
-  parallelFor(0, pairs.size(), kLawGrain, [&](std::size_t begin, std::size_t end) {
+  // Only the pairs in contact on the general route, picked first: in a pile of spheres almost
+  // every pair took the batched law, and chunks of pairs to skip cost two threads more than one.
+  lawPairs_.clear();
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    if (routes_[p].route == PairRoute::general &&
+        !(outcomes[p].contacts.points.empty() && outcomes[p].regions.empty()))
+      lawPairs_.push_back(p);
+  parallelFor(0, lawPairs_.size(), kLawGrain, [&](std::size_t begin, std::size_t end) {
     // The particle pairs, then the obstacle pairs, each run in increasing key order.
     SpringCursor particleSprings(particleSprings_), obstacleSprings(obstacleSprings_);
-    for (std::size_t p = begin; p < end; ++p) {
-      if (routes_[p].route != PairRoute::general ||
-          (outcomes[p].contacts.points.empty() && outcomes[p].regions.empty()))
-        continue;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t p = lawPairs_[k];
       const Interaction& pair = pairs[p];
       const Particle& one = particles_[pair.first];
       const BodyMotion& firstMotion = motions[pair.first];
@@ -1189,11 +1193,13 @@ void World::advance(Exchange* exchange) {
   const double wall = secondsSince(loadWindow_.start);
   if (wall < kJudgedWall) return;
   loadWindow_.open = false;
-  if (delta::detail::threadWorkSeconds() - loadWindow_.cpuStart < 0.6 * wall) {
+  if (delta::detail::threadWorkSeconds() - loadWindow_.cpuStart >= 0.6 * wall) {
+    loadedWindows_ = 0;
+    serialPeriod_ = kSerialSteps;
+  } else if (++loadedWindows_ == 2) {
+    loadedWindows_ = 0;
     serialSteps_ = serialPeriod_;
     serialPeriod_ = std::min(2 * serialPeriod_, kLongestSerial);
-  } else {
-    serialPeriod_ = kSerialSteps;
   }
 }
 

@@ -218,8 +218,10 @@ struct Energies {
 /// long step, or several short ones: a stall lasts a scheduler's time slice, longer than a
 /// sphere step). When the calling thread ran for less than 60% of their wall time (the rest put
 /// aside by the operating system, or waiting for a worker that was: every core busy with other
-/// processes), the next 64 steps run on the calling thread alone (detail::SerialLoops), then
-/// the threads are judged again; while the cores stay busy the steps alone double, up to 1024.
+/// processes) in two such windows in a row (one alone is most often a single stall: a virtual
+/// machine's core taken for a moment, which sent a quiet hopper's next 64 steps, a fifth of a
+/// run, to one thread), the next 64 steps run on the calling thread alone (detail::SerialLoops),
+/// then the threads are judged again; while the cores stay busy the steps alone double, up to 1024.
 /// The results are the same bits either way; a two-thread run on a machine whose cores are all
 /// busy then steps about as fast as a one-thread run, where short steps of many parallel loops
 /// each waiting for a descheduled worker took 1.6 to 1.8 times as long. Not in a
@@ -584,6 +586,8 @@ class World {
   std::vector<RoutedPair> routes_;
   /// The pairs of two spheres, then the obstacle pairs of one point (scratch).
   std::vector<std::size_t> spherePairs_;
+  /// The pairs the general law acts on this step (applyContactLaw's scratch).
+  std::vector<std::size_t> lawPairs_;
   std::vector<OnePointForces> onePoints_;  ///< the onePoint pairs' (scratch)
   /// Each pair's contacts and forces of this evaluation (scratch, kept for its buffers).
   std::vector<PairOutcome> outcomes_;
@@ -612,6 +616,8 @@ class World {
   /// how many the next judgement of busy cores gives (64, doubling to 1024 while they stay busy).
   std::size_t serialSteps_ = 0;
   std::size_t serialPeriod_ = 64;
+  /// Judged windows in a row whose calling thread was held up (two go to steps alone).
+  std::size_t loadedWindows_ = 0;
   /// The threaded steps being judged together: when they began, and the calling thread's CPU
   /// clock then.
   struct LoadWindow {
