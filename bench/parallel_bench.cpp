@@ -43,7 +43,6 @@ void LoopAfterSerialWork(benchmark::State& state) {
         spinFor(work / kChunks);
     });
   }
-  state.counters["loop_us"] = work;
 }
 
 void arguments(benchmark::internal::Benchmark* benchmark) {
