@@ -164,17 +164,21 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   return result;
 }
 
-/// Points per block of the grid's sieve (its offsets are 16-bit).
+/// Points per block of the grid's sieve.
 constexpr std::size_t kSieveBlock = 16 * kGrain;
-static_assert(kSieveBlock <= std::size_t{1} << 16);
+/// Points the sieve carries into the mesh's frame at a time (a moved mesh's, or points that are
+/// not one array of Vec3).
+constexpr std::size_t kCarried = 256;
 
 /// The points of a batch that the distance-bound grid leaves in doubt (not beyond ε), gathered
-/// (as given, in the world frame) in input order with their indices, and the order in which to
-/// search them: along a Morton curve of the mesh's box.
+/// (as given, in the world frame) in input order with their indices, the order in which to
+/// search them (along a Morton curve of the mesh's box), and where each block's begin.
 struct Survivors {
   std::vector<std::uint32_t> indices;
   std::vector<Vec3> points;
   std::vector<std::uint32_t> order;
+  /// The survivors of sieve block b are [firstOfBlock[b], firstOfBlock[b + 1]).
+  std::vector<std::size_t> firstOfBlock;
 };
 
 /// A point a block of the sieve keeps: as given (world frame), its index, and its Morton code in
@@ -186,16 +190,17 @@ struct Kept {
 };
 
 /// The seed's early "no contact" for a whole batch: streams through the points once, in
-/// parallel blocks, answers those the grid puts beyond √limit (not found) in place and keeps the
-/// others, each block in a buffer of its own while its points are still in the cache (a second
-/// pass over the input, as this was, read a tenth of the points back from memory: a fifth of an
-/// ε-limited batch). The blocks' buffers are then laid end to end, so the survivors and their
-/// keys are in input order whatever the thread count. Also the batch's validation: throws for
-/// the first non-finite point.
+/// parallel blocks, in the vector lanes of the point tables (detail::sieveByGrid), and keeps those
+/// the grid does not put beyond √limit, each block in a buffer of its own while its points are
+/// still in the cache (a second pass over the input, as this was, read a tenth of the points back
+/// from memory: a fifth of an ε-limited batch). The blocks' buffers are then laid end to end, so
+/// the survivors and their keys are in input order whatever the thread count. `contiguous`: the
+/// points as one array (pointAt(i) is contiguous[i]), or null. Also the batch's validation:
+/// throws for the first point with a non-finite coordinate or one out of range.
 template <typename PointAt>
-Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt, double limit,
-                std::span<PointDistance> out) {
-  const detail::BoundGrid& grid = mesh.data().boundGrid;
+Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
+                const Vec3* contiguous, double limit) {
+  const detail::GridView grid = mesh.data().boundGrid.view();
   const Aabb& box = mesh.data().bounds;
   const auto local = [&mesh, &pointAt](std::size_t i) {
     return mesh.moved() ? mesh.inversePose().apply(pointAt(i)) : pointAt(i);
@@ -204,42 +209,56 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
   std::vector<std::vector<Kept>> kept(blocks);
   std::vector<std::size_t> firstBad(blocks, count);
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
+    std::array<std::uint32_t, kSieveBlock> inDoubt;  // offsets in the block
+    std::array<Vec3, kCarried> carried;
     for (std::size_t block = firstBlock; block < endBlock; ++block) {
       const std::size_t begin = block * kSieveBlock;
       const std::size_t end = std::min(count, begin + kSieveBlock);
-      // Without a branch on the grid's answer, which a tenth of the points take the other way
-      // at random: every point is answered "not found" and every point's offset written, the
-      // next overwriting it unless it is in doubt.
-      std::array<std::uint16_t, kSieveBlock> inDoubt;
       std::size_t doubtful = 0;
-      for (std::size_t i = begin; i < end; ++i) {
-        const Vec3 inMeshFrame = local(i);
-        if (firstBad[block] == count && !inRange(pointAt(i), inMeshFrame)) firstBad[block] = i;
-        out[i] = PointDistance{};
-        inDoubt[doubtful] = static_cast<std::uint16_t>(i - begin);
-        doubtful += !(grid.lowerBoundSquared(inMeshFrame) > limit);
+      bool fine = true;
+      if (contiguous != nullptr && !mesh.moved()) {
+        doubtful =
+            detail::sieveByGrid(grid, contiguous + begin, end - begin, limit, inDoubt.data(), fine);
+      } else {
+        for (std::size_t at = begin; at < end; at += kCarried) {
+          const std::size_t n = std::min(kCarried, end - at);
+          for (std::size_t j = 0; j < n; ++j) {
+            const Vec3 point = pointAt(at + j);
+            fine = fine && inCoordinateRange(point);  // the grid's sieve checks the carried one
+            carried[j] = mesh.moved() ? mesh.inversePose().apply(point) : point;
+          }
+          std::uint32_t* const more = inDoubt.data() + doubtful;
+          const std::size_t added = detail::sieveByGrid(grid, carried.data(), n, limit, more, fine);
+          for (std::size_t k = 0; k < added; ++k)
+            more[k] += static_cast<std::uint32_t>(at - begin);
+          doubtful += added;
+        }
       }
+      if (!fine)
+        for (std::size_t i = begin; i < end && firstBad[block] == count; ++i)
+          if (!inRange(pointAt(i), local(i))) firstBad[block] = i;
       std::vector<Kept>& mine = kept[block];
       mine.resize(doubtful);
       for (std::size_t k = 0; k < doubtful; ++k) {
         const std::size_t i = begin + inDoubt[k];
-        // The survivor lies within ε of the mesh's box (a NaN has code 0).
+        // The survivor lies within ε of the mesh's box.
         mine[k] = {pointAt(i), static_cast<std::uint32_t>(i), detail::mortonCode(local(i), box)};
       }
     }
   });
   for (std::size_t block = 0; block < blocks; ++block)
     if (firstBad[block] != count) throwBadPoint(mesh, firstBad[block], pointAt(firstBad[block]));
-  std::vector<std::size_t> offset(blocks + 1, 0);
-  for (std::size_t block = 0; block < blocks; ++block)
-    offset[block + 1] = offset[block] + kept[block].size();
   Survivors survivors;
-  survivors.indices.resize(offset[blocks]);
-  survivors.points.resize(offset[blocks]);
-  std::vector<std::uint64_t> keys(offset[blocks]);
+  survivors.firstOfBlock.assign(blocks + 1, 0);
+  for (std::size_t block = 0; block < blocks; ++block)
+    survivors.firstOfBlock[block + 1] = survivors.firstOfBlock[block] + kept[block].size();
+  const std::size_t total = survivors.firstOfBlock[blocks];
+  survivors.indices.resize(total);
+  survivors.points.resize(total);
+  std::vector<std::uint64_t> keys(total);
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
     for (std::size_t block = firstBlock; block < endBlock; ++block)
-      for (std::size_t at = offset[block]; const Kept& k : kept[block]) {
+      for (std::size_t at = survivors.firstOfBlock[block]; const Kept& k : kept[block]) {
         survivors.indices[at] = k.index;
         survivors.points[at] = k.point;
         keys[at] = k.code << 32 | at;
@@ -250,15 +269,15 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
   return survivors;
 }
 
-/// Answers the points `pointAt(k)` (world frame), k in `order`, into out[indexOf(k)], with the
-/// upper bounds `boundOf(indexOf(k))`. Along a Morton curve, consecutive points descend to the
-/// same nodes and triangles, which the previous descents left in the cache: scattered input (a
-/// user's points in any order) runs as fast as sorted input. Each answer is that point's alone,
-/// so the order changes no result.
-template <typename PointAt, typename IndexOf, typename BoundOf>
+/// Answers the points `pointAt(k)` (world frame), k in `order`, into out[k], with the upper
+/// bounds `boundOf(k)`. Along a Morton curve, consecutive points descend to the same nodes and
+/// triangles, which the previous descents left in the cache: scattered input (a user's points
+/// in any order) runs as fast as sorted input. Each answer is that point's alone, so the order
+/// changes no result.
+template <typename PointAt, typename BoundOf>
 void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& order,
-                   const PointAt& pointAt, const IndexOf& indexOf, const BoundOf& boundOf,
-                   const PointQuery& query, bool screened, std::span<PointDistance> out) {
+                   const PointAt& pointAt, const BoundOf& boundOf, const PointQuery& query,
+                   bool screened, std::span<PointDistance> out) {
   const std::size_t count = order.size();
   // Each run of kGrain points is gathered before and its answers scattered after the searches:
   // the scattered reads and writes then overlap in tight loops instead of each stalling a search.
@@ -271,18 +290,33 @@ void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& orde
       for (std::size_t k = run; k < runEnd; ++k)
         points[k - run] = pointAt(order[k]);
       for (std::size_t k = run; k < runEnd; ++k)
-        answers[k - run] =
-            answer(mesh, points[k - run], query, boundOf(indexOf(order[k])), &hint, screened);
+        answers[k - run] = answer(mesh, points[k - run], query, boundOf(order[k]), &hint, screened);
       for (std::size_t k = run; k < runEnd; ++k)
-        out[indexOf(order[k])] = answers[k - run];
+        out[order[k]] = answers[k - run];
     }
   });
 }
 
-/// `upperBounds` is empty or one bound per point.
+/// out[i] for i in [begin, end): found[k] where indices[k] is i (k in [first, last),
+/// ascending), "not found" elsewhere, each written once, in order. (Non-temporal stores, which
+/// spare the read of the output's lines, measured slower here on Zen 5.)
+void writeMerged(std::span<PointDistance> out, std::size_t begin, std::size_t end,
+                 std::span<const PointDistance> found, std::span<const std::uint32_t> indices,
+                 std::size_t first, std::size_t last) noexcept {
+  static constexpr PointDistance kNotFound{};
+  std::size_t k = first;
+  for (std::size_t i = begin; i < end; ++i) {
+    const bool survivor = k < last && indices[k] == i;
+    out[i] = survivor ? found[k] : kNotFound;
+    k += survivor;
+  }
+}
+
+/// `upperBounds` is empty or one bound per point; `contiguous` is the points as one array
+/// (pointAt(i) is contiguous[i]) or null.
 template <typename PointAt>
 void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
-               const PointQuery& asked, std::span<PointDistance> out,
+               const Vec3* contiguous, const PointQuery& asked, std::span<PointDistance> out,
                std::span<const double> upperBounds = {}) {
   const PointQuery query = validate(mesh, asked);
   const auto boundOf = [upperBounds](std::size_t i) {
@@ -296,18 +330,30 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
         out[i] = answer(mesh, pointAt(i), query, boundOf(i));
     });
   } else if (std::isfinite(limit) && !mesh.data().boundGrid.empty()) {
-    // The points the grid puts beyond ε are answered first, in input order (one cell read each,
-    // streaming through the input and output); only the others are searched.
-    const Survivors survivors = sieve(mesh, count, pointAt, limit, out);
+    // The points the grid puts beyond ε are not searched (one cell read each, streaming through
+    // the input); the others are, into a buffer of their own, which is then merged with the
+    // rest in input order: the output is written once, in order (scattered into it, the answers
+    // cost a tenth of the batch in cache misses).
+    const Survivors survivors = sieve(mesh, count, pointAt, contiguous, limit);
+    std::vector<PointDistance> found(survivors.indices.size());
     searchInOrder(
         mesh, survivors.order, [&survivors](std::size_t k) { return survivors.points[k]; },
-        [&survivors](std::size_t k) { return std::size_t{survivors.indices[k]}; }, boundOf, query,
-        true, out);
+        [&survivors, upperBounds](std::size_t k) {
+          // Without bounds the index (a read at random) is not needed.
+          return upperBounds.empty() ? std::numeric_limits<double>::infinity()
+                                     : upperBounds[survivors.indices[k]];
+        },
+        query, true, found);
+    const std::size_t blocks = survivors.firstOfBlock.size() - 1;
+    parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
+      for (std::size_t block = firstBlock; block < endBlock; ++block)
+        writeMerged(out, block * kSieveBlock, std::min(count, (block + 1) * kSieveBlock), found,
+                    survivors.indices, survivors.firstOfBlock[block],
+                    survivors.firstOfBlock[block + 1]);
+    });
   } else {
     validatePoints(mesh, count, pointAt);
-    searchInOrder(
-        mesh, detail::mortonOrder(count, pointAt), pointAt, [](std::size_t k) { return k; },
-        boundOf, query, false, out);
+    searchInOrder(mesh, detail::mortonOrder(count, pointAt), pointAt, boundOf, query, false, out);
   }
 }
 
@@ -319,7 +365,8 @@ void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQ
     throw Error("point distances: " + std::to_string(points.size()) + " points but room for " +
                 std::to_string(out.size()) + " answers");
   answerAll(
-      mesh, points.size(), [points](std::size_t i) { return points[i]; }, query, out);
+      mesh, points.size(), [points](std::size_t i) { return points[i]; }, points.data(), query,
+      out);
 }
 
 void distances(const QueryMesh& mesh, std::span<const Vec3> points,
@@ -334,7 +381,8 @@ void distances(const QueryMesh& mesh, std::span<const Vec3> points,
       throw Error("point distances: the upper bound " + toString(upperBounds[i]) + " of point " +
                   std::to_string(i) + " is negative or NaN");
   answerAll(
-      mesh, points.size(), [points](std::size_t i) { return points[i]; }, query, out, upperBounds);
+      mesh, points.size(), [points](std::size_t i) { return points[i]; }, points.data(), query, out,
+      upperBounds);
 }
 
 std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const Vec3> points,
@@ -357,7 +405,7 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
       [x, y, z](std::size_t i) {
         return Vec3{x[i], y[i], z[i]};
       },
-      query, out);
+      nullptr, query, out);
   return out;
 }
 

@@ -254,7 +254,7 @@ void markOccupied(const TriangleSoA& triangles, const Frame& frame,
 }
 
 /// The codes of the squared distances (kSquaredCellsOfCode): the largest that stands for at most
-/// each.
+/// each, followed by kCellPadding zero bytes.
 std::vector<std::uint8_t> encode(const std::vector<std::int32_t>& squared) {
   std::array<std::uint8_t, kCap + 1> codeOf{};
   std::size_t code = 0;
@@ -263,7 +263,7 @@ std::vector<std::uint8_t> encode(const std::vector<std::int32_t>& squared) {
       ++code;
     codeOf[d] = static_cast<std::uint8_t>(code);
   }
-  std::vector<std::uint8_t> codes(squared.size());
+  std::vector<std::uint8_t> codes(squared.size() + kCellPadding, 0);
   parallelFor(0, squared.size(), kCellsPerChunk, [&](std::size_t first, std::size_t end) {
     for (std::size_t i = first; i < end; ++i)
       codes[i] = codeOf[static_cast<std::size_t>(squared[i])];
@@ -292,11 +292,12 @@ BoundGrid::BoundGrid(const TriangleSoA& triangles, const Aabb& bounds, double ce
   // The grid covers the box grown by that margin, rounded outward, and points are clamped to
   // it: none maps below cell 0.
   const double margin = 1e-8 * bounds.diagonal();
+  std::array<double, 3> lower{}, upper{};
   for (std::size_t axis = 0; axis < 3; ++axis) {
-    lower_[axis] = std::nextafter(bounds.lower[axis] - margin, -kInfinity);
-    upper_[axis] = std::nextafter(bounds.upper[axis] + margin, kInfinity);
+    lower[axis] = std::nextafter(bounds.lower[axis] - margin, -kInfinity);
+    upper[axis] = std::nextafter(bounds.upper[axis] + margin, kInfinity);
   }
-  const Vec3 extent{upper_[0] - lower_[0], upper_[1] - lower_[1], upper_[2] - lower_[2]};
+  const Vec3 extent{upper[0] - lower[0], upper[1] - lower[1], upper[2] - lower[2]};
 #ifndef NDEBUG
   for (std::size_t t = 0; t < count; ++t) {
     const Aabb box = triangles.triangle(t).bounds();
@@ -310,19 +311,28 @@ BoundGrid::BoundGrid(const TriangleSoA& triangles, const Aabb& bounds, double ce
   for (std::size_t axis = 0; axis < 3; ++axis)
     dims_[axis] =
         side > 0.0 ? static_cast<std::size_t>(std::max(std::ceil(extent[axis] / side), 1.0)) : 1;
-  strides_ = {1, dims_[0], dims_[0] * dims_[1]};
+  const std::array<std::size_t, 3> strides{1, dims_[0], dims_[0] * dims_[1]};
   cellSize_ = side;
-  inverseCellSize_ = side > 0.0 ? 1.0 / side : 0.0;
+  const double inverseCellSize = side > 0.0 ? 1.0 / side : 0.0;
   const auto most = static_cast<double>(std::max({dims_[0], dims_[1], dims_[2]}));
-  shrink_ = 1.0 - 1e-9 - 64.0 * kEpsilon * (most + 1.0);
-  cellSquaredShrunk_ = side * side * shrink_;
+  const double shrink = 1.0 - 1e-9 - 64.0 * kEpsilon * (most + 1.0);
 
   std::vector<std::int32_t> squared(dims_[0] * dims_[1] * dims_[2], kCap);
-  markOccupied(triangles, {lower_, side, inverseCellSize_, dims_, strides_}, squared);
+  markOccupied(triangles, {lower, side, inverseCellSize, dims_, strides}, squared);
   transformRows(squared, dims_[0]);
-  transformAxis(squared, dims_, strides_, 1);
-  transformAxis(squared, dims_, strides_, 2);
+  transformAxis(squared, dims_, strides, 1);
+  transformAxis(squared, dims_, strides, 2);
   cells_ = encode(squared);
+
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    view_.lower[axis] = lower[axis];
+    view_.upper[axis] = upper[axis];
+    view_.lastCell[axis] = static_cast<std::uint32_t>(dims_[axis] - 1);
+    view_.stride[axis] = static_cast<std::uint32_t>(strides[axis]);
+  }
+  view_.inverseCellSize = inverseCellSize;
+  view_.shrink = shrink;
+  view_.cellSquaredShrunk = side * side * shrink;
 }
 
 }  // namespace delta::detail

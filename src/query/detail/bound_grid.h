@@ -43,6 +43,47 @@ inline constexpr std::array<double, 256> kSquaredCellsOfCode = [] {
 ///
 /// Threading: built on OpenMP threads (parallelFor; the same grid on any number); immutable
 /// afterwards: any number of threads may call lowerBoundSquared at once.
+/// What a lookup in a BoundGrid reads (BoundGrid::view), for the batch sieves that run it in
+/// vector lanes (grid_sieve.h): the same arithmetic as lowerBoundSquared, which calls it.
+struct GridView {
+  /// The grid's box: the mesh's box grown by a margin for rounding. Points are clamped to it.
+  double lower[3], upper[3];
+  double inverseCellSize;
+  double shrink;              ///< the factor (just below 1) that allows for rounding
+  double cellSquaredShrunk;   ///< h²·shrink: a stored squared distance's unit
+  std::uint32_t lastCell[3];  ///< dims − 1 along each axis (cells along an axis ≤ 2²⁰)
+  std::uint32_t stride[3];    ///< cells ≤ 2³⁰: every offset fits 32 bits
+  /// One byte a cell, x fastest, then y, then z, followed by kCellPadding bytes (a four-byte
+  /// gather at the last cell stays inside).
+  const std::uint8_t* cells;
+
+  /// lowerBoundSquared's answer, for a grid that is not empty.
+  [[gnu::always_inline]] double lowerBoundSquared(const Vec3& point) const noexcept {
+    // The mesh lies in the box, so for q, the point clamped to the box, and any m of the mesh,
+    // |p − m|² ≥ |p − q|² + |q − m|² (the angle at q is not acute).
+    double outsideSquared = 0.0;
+    std::uint32_t cell = 0;
+    // Not point[axis]: the point tables inline what they call, and Vec3's operator[] is not
+    // always_inline (with the sanitizers, clang left it out of line).
+    const double coordinates[3] = {point.x, point.y, point.z};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double coordinate = coordinates[axis];
+      // This argument order sends a NaN to the lower face (a valid cell); the NaN stays in the
+      // gap.
+      const double clamped = std::min(std::max(lower[axis], coordinate), upper[axis]);
+      const double gap = coordinate - clamped;
+      outsideSquared += gap * gap;
+      // In [0, dims·(1 + 2⁻⁵²)]: the truncation fits 32 bits.
+      const auto index = static_cast<std::uint32_t>((clamped - lower[axis]) * inverseCellSize);
+      cell += std::min(index, lastCell[axis]) * stride[axis];
+    }
+    return outsideSquared * shrink + kSquaredCellsOfCode[cells[cell]] * cellSquaredShrunk;
+  }
+};
+
+/// Bytes after a grid's last cell (GridView::cells).
+inline constexpr std::size_t kCellPadding = 4;
+
 class BoundGrid {
  public:
   /// Cells per triangle when the caller does not say. For ε = 1% of the box diagonal, of the
@@ -75,40 +116,27 @@ class BoundGrid {
   bool empty() const noexcept { return cells_.empty(); }
   /// The cells along x, y, z (all 0 when empty).
   const std::array<std::size_t, 3>& dims() const noexcept { return dims_; }
-  std::size_t cellCount() const noexcept { return cells_.size(); }
+  std::size_t cellCount() const noexcept { return dims_[0] * dims_[1] * dims_[2]; }
   /// The side of a cell (0 when empty).
   double cellSize() const noexcept { return cellSize_; }
   /// Bytes held on the heap.
   std::size_t memoryBytes() const noexcept { return cells_.capacity(); }
+  /// The lookup's data (not for an empty grid), pointing into this grid.
+  GridView view() const noexcept {
+    GridView view = view_;
+    view.cells = cells_.data();
+    return view;
+  }
 
  private:
-  /// The grid's box: the mesh's box grown by a margin for rounding. Points are clamped to it.
-  std::array<double, 3> lower_{}, upper_{};
-  double inverseCellSize_ = 0.0;
+  GridView view_{};  ///< all but `cells` (a copied grid has cells of its own)
   double cellSize_ = 0.0;
-  double shrink_ = 1.0;             ///< the factor (just below 1) that allows for rounding
-  double cellSquaredShrunk_ = 0.0;  ///< h²·shrink_: a stored squared distance's unit
   std::array<std::size_t, 3> dims_{};
-  std::array<std::size_t, 3> strides_{};
-  std::vector<std::uint8_t> cells_;  ///< x fastest, then y, then z
+  std::vector<std::uint8_t> cells_;  ///< GridView::cells
 };
 
 inline double BoundGrid::lowerBoundSquared(const Vec3& point) const noexcept {
-  if (cells_.empty()) return 0.0;
-  // The mesh lies in the box, so for q, the point clamped to the box, and any m of the mesh,
-  // |p − m|² ≥ |p − q|² + |q − m|² (the angle at q is not acute).
-  double outsideSquared = 0.0;
-  std::size_t cell = 0;
-  for (std::size_t axis = 0; axis < 3; ++axis) {
-    const double coordinate = point[axis];
-    // This argument order sends a NaN to the lower face (a valid cell); the NaN stays in the gap.
-    const double clamped = std::min(std::max(lower_[axis], coordinate), upper_[axis]);
-    const double gap = coordinate - clamped;
-    outsideSquared += gap * gap;
-    const auto index = static_cast<std::int64_t>((clamped - lower_[axis]) * inverseCellSize_);
-    cell += std::min(static_cast<std::size_t>(index), dims_[axis] - 1) * strides_[axis];
-  }
-  return outsideSquared * shrink_ + kSquaredCellsOfCode[cells_[cell]] * cellSquaredShrunk_;
+  return cells_.empty() ? 0.0 : view().lowerBoundSquared(point);
 }
 
 }  // namespace delta::detail

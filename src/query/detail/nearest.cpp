@@ -44,6 +44,17 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double lim
   return pointKernels(isa).nearest(mesh, point, limitSquared);
 }
 
+std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t count, double limit,
+                        std::uint32_t* kept, bool& inRange) noexcept {
+  static const PointKernels& table = pointKernels(kernels::defaultIsa());
+  return table.sieve(grid, points, count, limit, kept, inRange);
+}
+
+std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t count, double limit,
+                        std::uint32_t* kept, bool& inRange, kernels::Isa isa) noexcept {
+  return pointKernels(isa).sieve(grid, points, count, limit, kept, inRange);
+}
+
 Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
                          const Nearest& nearest) noexcept {
   // A winner whose square is positive is the least square, which no triangle underflowed to

@@ -30,6 +30,10 @@ struct PointKernels {
   /// The same for eight leaves, raised by their cylinders (shrunk by `shrink`).
   unsigned (*leaves)(const BoxOctet& boxes, const CylinderOctet& cylinders, const Vec3& point,
                      double shrink, double prune, double (&out)[kFanout]) noexcept;
+  /// The distance-bound grid's sieve of `count` points (grid_sieve.h's sievePoints): the
+  /// offsets of those not beyond `limit` into `kept`, and their number.
+  std::size_t (*sieve)(const GridView& grid, const Vec3* points, std::size_t count, double limit,
+                       std::uint32_t* kept, bool& inRange) noexcept;
 };
 
 /// The table of `isa`, lowered to a supported one (kernels::supportedIsaAtMost).

@@ -300,6 +300,16 @@ Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double lim
 Nearest nearestTriangle(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
                         kernels::Isa isa) noexcept;
 
+/// The distance-bound grid's sieve of `count` points (mesh frame), in the lanes of
+/// kernels::defaultIsa() or of `isa` (the same answer on every ISA): the offsets of the points
+/// whose grid bound (BoundGrid::lowerBoundSquared) is not above `limit`, ascending, into `kept`
+/// (room for `count`), and their number. Clears `inRange` where a point is not
+/// inCoordinateRange (coordinate_range.h), and leaves it otherwise.
+std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t count, double limit,
+                        std::uint32_t* kept, bool& inRange) noexcept;
+std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t count, double limit,
+                        std::uint32_t* kept, bool& inRange, kernels::Isa isa) noexcept;
+
 /// Below this squared distance (2⁻⁹⁶⁰) a square may have lost precision to underflow, or be 0
 /// for a distance below about 1e-162 (coordinate_range.h).
 inline constexpr double kUnderflowingSquare = 0x1p-960;

@@ -14,6 +14,7 @@
 #include "delta/kernels/point_triangle.h"
 
 #include "query/detail/exact_lanes.h"
+#include "query/detail/grid_sieve.h"
 #include "query/detail/node_bounds.h"
 #include "query/detail/point_kernels.h"
 #include "query/detail/query_mesh_data.h"
@@ -308,11 +309,16 @@ template <typename Bounds>
   return Bounds::leaves(boxes, cylinders, point, shrink, prune, out);
 }
 
+[[gnu::flatten]] std::size_t sieve(const GridView& grid, const Vec3* points, std::size_t count,
+                                   double limit, std::uint32_t* kept, bool& inRange) noexcept {
+  return sievePoints(grid, points, count, limit, kept, inRange);
+}
+
 }  // namespace
 
 const PointKernels& pointKernels() noexcept {
   static constexpr PointKernels kernels{
-      &nearest, kExactLanes > 0 ? &exactDistancesSquared8 : nullptr, &children, &leaves};
+      &nearest, kExactLanes > 0 ? &exactDistancesSquared8 : nullptr, &children, &leaves, &sieve};
   return kernels;
 }
 
