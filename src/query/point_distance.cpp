@@ -15,6 +15,7 @@
 #include "delta/query/self_intersections.h"
 
 #include "detail/morton.h"
+#include "detail/point_kernels.h"
 #include "detail/query_mesh_data.h"
 
 namespace delta::contactdetection {
@@ -117,9 +118,12 @@ struct Hint {
 /// that was too small finds nothing and the search runs again with ε (the hint's cannot be too
 /// small: it is the distance to a triangle). So the answer is the same whatever the bounds.
 /// `screened`: the caller has already asked the distance-bound grid (answerAll's sieve).
+/// `near`: null, or leaves that hold every triangle within ε of the point (a cluster's), searched
+/// instead of the tree.
 PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQuery& query,
                      double upperBound = std::numeric_limits<double>::infinity(),
-                     Hint* hint = nullptr, bool screened = false) {
+                     Hint* hint = nullptr, bool screened = false,
+                     const detail::LeafCandidates* near = nullptr) {
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
   const double limit = query.epsilon * query.epsilon;
@@ -136,8 +140,12 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
     first = std::min(
         first,
         grown(kernels::closestPointOnTriangle(point, data.triangle(hint->sorted)).distanceSquared));
-  detail::Nearest nearest = detail::nearestTriangle(data, point, first);
-  if (!nearest.found() && first < limit) nearest = detail::nearestTriangle(data, point, limit);
+  const auto search = [&](double limitSquared) {
+    return near ? detail::nearestAmong(data, point, limitSquared, *near)
+                : detail::nearestTriangle(data, point, limitSquared);
+  };
+  detail::Nearest nearest = search(first);
+  if (!nearest.found() && first < limit) nearest = search(limit);
   PointDistance result;
   if (!nearest.found()) {
     if (std::isinf(query.epsilon))
@@ -172,11 +180,15 @@ constexpr std::size_t kCarried = 256;
 
 /// The points of a batch that the distance-bound grid leaves in doubt (not beyond ε), gathered
 /// (as given, in the world frame) in input order with their indices, the order in which to
-/// search them (along a Morton curve of the mesh's box), and where each block's begin.
+/// search them (along a Morton curve of the grid's cells, or where the grid has more than 1024
+/// cells along an axis, of the mesh's box), and where each block's begin.
 struct Survivors {
   std::vector<std::uint32_t> indices;
   std::vector<Vec3> points;
   std::vector<std::uint32_t> order;
+  /// Per position in `order`, the Morton code of its point's cell; empty where the order is not
+  /// by cells.
+  std::vector<std::uint32_t> cells;
   /// The survivors of sieve block b are [firstOfBlock[b], firstOfBlock[b + 1]).
   std::vector<std::size_t> firstOfBlock;
 };
@@ -204,6 +216,13 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
   const Aabb& box = mesh.data().bounds;
   const auto local = [&mesh, &pointAt](std::size_t i) {
     return mesh.moved() ? mesh.inversePose().apply(pointAt(i)) : pointAt(i);
+  };
+  // The survivors of a cell, searched one after another, share its leaves (searchInOrder).
+  const bool byCells = std::max({grid.lastCell[0], grid.lastCell[1], grid.lastCell[2]}) < 1024;
+  const auto codeOf = [&](const Vec3& inMeshFrame) {
+    if (!byCells) return detail::mortonCode(inMeshFrame, box);
+    const std::array<std::uint32_t, 3> cell = grid.cellOf(inMeshFrame);
+    return detail::mortonOfCell(cell[0], cell[1], cell[2]);
   };
   const std::size_t blocks = (count + kSieveBlock - 1) / kSieveBlock;
   std::vector<std::vector<Kept>> kept(blocks);
@@ -242,7 +261,7 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
       for (std::size_t k = 0; k < doubtful; ++k) {
         const std::size_t i = begin + inDoubt[k];
         // The survivor lies within ε of the mesh's box.
-        mine[k] = {pointAt(i), static_cast<std::uint32_t>(i), detail::mortonCode(local(i), box)};
+        mine[k] = {pointAt(i), static_cast<std::uint32_t>(i), codeOf(local(i))};
       }
     }
   });
@@ -266,18 +285,43 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
       }
   });
   survivors.order = detail::orderOfKeys(keys);
+  if (byCells) {
+    survivors.cells.resize(total);
+    for (std::size_t k = 0; k < total; ++k)
+      survivors.cells[k] = static_cast<std::uint32_t>(keys[k] >> 32);  // sorted with the order
+  }
   return survivors;
+}
+
+/// Runs of at least this many points of one cell share its leaves (gatherNear): for fewer, the
+/// gathering costs more than the searches from the root it saves.
+constexpr std::size_t kClusterFrom = 2;
+
+/// Into `near`, the leaves that hold every triangle within ε of any of `points` (world frame):
+/// those whose bound from the centre of the points' box (mesh frame) is within ε + r, r half
+/// its diagonal, grown by far more than the rounding. False where there are too many.
+bool gatherNear(const QueryMesh& mesh, std::span<const Vec3> points, double epsilon,
+                detail::LeafCandidates& near) {
+  Aabb box;
+  for (const Vec3& point : points)
+    box.extend(localPoint(mesh, point));
+  const double radius = (epsilon + 0.5 * box.diagonal()) * (1.0 + 0x1p-20);
+  return near.collect(mesh.data(), box.center(), radius * radius);
 }
 
 /// Answers the points `pointAt(k)` (world frame), k in `order`, into out[k], with the upper
 /// bounds `boundOf(k)`. Along a Morton curve, consecutive points descend to the same nodes and
 /// triangles, which the previous descents left in the cache: scattered input (a user's points
-/// in any order) runs as fast as sorted input. Each answer is that point's alone, so the order
-/// changes no result.
+/// in any order) runs as fast as sorted input. `cells`: empty, or per position in `order` the
+/// cell of a grid of its point, where the points of a cell, consecutive in the order, are
+/// searched among the leaves near them all (gatherNear) instead of from the root: an ε-limited
+/// batch's survivors, a few a cell, whose descents from the root passed the same nodes. Each
+/// answer is that point's alone, so neither the order nor the sharing changes a result.
 template <typename PointAt, typename BoundOf>
 void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& order,
                    const PointAt& pointAt, const BoundOf& boundOf, const PointQuery& query,
-                   bool screened, std::span<PointDistance> out) {
+                   bool screened, std::span<PointDistance> out,
+                   std::span<const std::uint32_t> cells = {}) {
   const std::size_t count = order.size();
   // Each run of kGrain points is gathered before and its answers scattered after the searches:
   // the scattered reads and writes then overlap in tight loops instead of each stalling a search.
@@ -285,12 +329,26 @@ void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& orde
     std::array<Vec3, kGrain> points;
     std::array<PointDistance, kGrain> answers;
     Hint hint;
+    detail::LeafCandidates near;
     for (std::size_t run = begin; run < end; run += kGrain) {
       const std::size_t runEnd = std::min(run + kGrain, end);
       for (std::size_t k = run; k < runEnd; ++k)
         points[k - run] = pointAt(order[k]);
-      for (std::size_t k = run; k < runEnd; ++k)
-        answers[k - run] = answer(mesh, points[k - run], query, boundOf(order[k]), &hint, screened);
+      for (std::size_t k = run; k < runEnd;) {
+        std::size_t clusterEnd = k + 1;
+        if (!cells.empty())
+          while (clusterEnd < runEnd && cells[clusterEnd] == cells[k])
+            ++clusterEnd;
+        const detail::LeafCandidates* shared =
+            clusterEnd - k >= kClusterFrom &&
+                    gatherNear(mesh, std::span(points).subspan(k - run, clusterEnd - k),
+                               query.epsilon, near)
+                ? &near
+                : nullptr;
+        for (; k < clusterEnd; ++k)
+          answers[k - run] =
+              answer(mesh, points[k - run], query, boundOf(order[k]), &hint, screened, shared);
+      }
       for (std::size_t k = run; k < runEnd; ++k)
         out[order[k]] = answers[k - run];
     }
@@ -343,7 +401,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
           return upperBounds.empty() ? std::numeric_limits<double>::infinity()
                                      : upperBounds[survivors.indices[k]];
         },
-        query, true, found);
+        query, true, found, survivors.cells);
     const std::size_t blocks = survivors.firstOfBlock.size() - 1;
     parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
       for (std::size_t block = firstBlock; block < endBlock; ++block)

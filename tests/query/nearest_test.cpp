@@ -17,6 +17,7 @@
 #include "delta/query/query_mesh.h"
 
 #include "kernels/triangle_pairs.h"
+#include "query/detail/point_kernels.h"
 #include "query/detail/query_mesh_data.h"
 #include "query/probe_points.h"
 
@@ -81,6 +82,75 @@ TEST(NearestDescent, ManyExactTiesWaitForTheExactKernel) {
                                  {{0, 0, 1}, {0, 0, 0.5}, {0, 0, 1e-9}});
   expectEveryIsaLikeAllTriangles(primitives::icosphere(3), "icosphere centre",
                                  {{0, 0, 0}, {1e-9, -2e-9, 3e-9}, {1e-3, 0, 0}, {0, 0.05, 0.01}});
+}
+
+/// Clusters of points (within `spread` of a centre near the surface) and limits: for each, the
+/// leaves gathered from the cluster's box (as point_distance.cpp's gatherNear) give every point
+/// the descent's answer, bit for bit, on every ISA; a limit so large that too many leaves are
+/// near gathers none.
+void expectClustersLikeTheDescent(const Mesh& mesh, const char* name, double spread) {
+  const QueryMesh query(mesh);
+  const QueryMeshData& data = query.data();
+  std::mt19937_64 random(29);
+  const double diagonal = mesh.bounds().diagonal();
+  LeafCandidates near;
+  std::size_t gathered = 0, refused = 0;
+  for (std::size_t cluster = 0; cluster < 40; ++cluster) {
+    const Triangle t = mesh.triangle(random() % mesh.triangleCount());
+    const Vec3 centre =
+        t.centroid() + normalized(t.areaVector()) * (spread * (test::unit(random) - 0.5));
+    std::vector<Vec3> points;
+    Aabb box;
+    for (std::size_t i = 0; i < 9; ++i) {
+      const Vec3 p = i == 0 ? t.a
+                            : centre + Vec3{test::unit(random) - 0.5, test::unit(random) - 0.5,
+                                            test::unit(random) - 0.5} *
+                                           spread;
+      points.push_back(p);
+      box.extend(p);
+    }
+    for (const double epsilon :
+         {1e-3 * diagonal, 0.02 * diagonal, 0.2 * diagonal, 3.0 * diagonal}) {
+      const double radius = (epsilon + 0.5 * box.diagonal()) * (1.0 + 0x1p-20);
+      for (kernels::Isa isa : kernels::supportedIsas()) {
+        if (!near.collect(data, box.center(), radius * radius, isa)) {
+          ++refused;
+          EXPECT_EQ(near.size(), 0u);
+          continue;
+        }
+        ++gathered;
+        for (const Vec3& p : points)
+          for (const double limit : {epsilon * epsilon, 0.25 * epsilon * epsilon}) {
+            const Nearest expected = nearestTriangle(data, p, limit, isa);
+            const Nearest found = nearestAmong(data, p, limit, near, isa);
+            ASSERT_EQ(found.found(), expected.found()) << name << ", " << kernels::name(isa);
+            ASSERT_EQ(found.distanceSquared, expected.distanceSquared) << name;
+            ASSERT_EQ(found.triangle, expected.triangle) << name;
+            ASSERT_EQ(found.closest.closest, expected.closest.closest) << name;
+          }
+      }
+    }
+  }
+  if (data.levels.size() == 1) {
+    EXPECT_EQ(gathered, 0u) << name;  // one leaf: searched from the root, which is the leaf
+  } else {
+    EXPECT_GT(gathered, 0u) << name;
+  }
+  if (mesh.triangleCount() > kFanout * kMostCandidates) {
+    EXPECT_GT(refused, 0u) << name;  // every leaf is near at the largest limit
+  }
+}
+
+TEST(NearestDescent, LeavesGatheredForAClusterGiveTheDescentsAnswers) {
+  Mesh far = primitives::granulate(3, {1, 0.4, 0.2}, 400);
+  far.translate({1e6, -3e6, 2e5});
+  expectClustersLikeTheDescent(primitives::box({1, 2, 3}), "box (ties)", 0.05);
+  expectClustersLikeTheDescent(primitives::quad(2, 1), "quad (one leaf)", 0.05);
+  expectClustersLikeTheDescent(primitives::icosphere(4), "icosphere", 0.05);
+  expectClustersLikeTheDescent(far, "granulate at 1e6", 0.02);
+  expectClustersLikeTheDescent(
+      io::load(std::filesystem::path(DELTA_DATA_DIR) / "meshes" / "armadillo.off"), "armadillo",
+      2.0);
 }
 
 }  // namespace

@@ -214,6 +214,57 @@ TEST(PointDistance, WithinEpsilonAgreesWithTheFullQuery) {
   }
 }
 
+TEST(PointDistance, ClusteredPointsWithinEpsilonGetTheirOwnAnswers) {
+  // An ε-limited batch searches the points the grid leaves in doubt a cell at a time, among the
+  // leaves near the cell's points: clusters of points around vertices, edges and faces (the
+  // box's ties, a sphere's curved faces), on a mesh where it was built and moved, through the
+  // Vec3 and the coordinate-array calls and with bounds, must each get the answer the point
+  // gets alone.
+  QueryMesh sphere(primitives::icosphere(3));
+  sphere.transform(
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, -2, 3}, 0.9), {2.0, -1.0, 0.5}));
+  for (const QueryMesh& mesh : {QueryMesh(primitives::box({1, 2, 3})), sphere}) {
+    std::mt19937_64 random(41);
+    const Mesh& shape = mesh.mesh();
+    const double epsilon = 0.05 * shape.bounds().diagonal();
+    std::vector<Vec3> points;
+    while (points.size() < 6000) {
+      const Triangle t = shape.triangle(random() % shape.triangleCount());
+      const Vec3 centre = random() % 2 ? t.a : (t.a + t.b) * 0.5;
+      const double spread = random() % 2 ? 0.3 * epsilon : 3.0 * epsilon;
+      for (std::size_t i = 0; i < 24; ++i)
+        points.push_back(mesh.pose().apply(
+            centre + Vec3{unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5} * spread));
+    }
+    std::vector<double> x, y, z, bounds;
+    for (const Vec3& p : points) {
+      x.push_back(p.x);
+      y.push_back(p.y);
+      z.push_back(p.z);
+      bounds.push_back(unit(random) * 2.0 * epsilon);
+    }
+    const PointQuery query{.epsilon = epsilon};
+    const std::vector<PointDistance> batch = distances(mesh, points, query);
+    const std::vector<PointDistance> arrays = distances(mesh, x, y, z, query);
+    std::vector<PointDistance> bounded(points.size());
+    distances(mesh, points, bounds, query, bounded);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const PointDistance alone = distance(mesh, points[i], query);
+      found += alone.found();
+      for (const std::vector<PointDistance>* answers :
+           {&batch, &arrays, static_cast<const std::vector<PointDistance>*>(&bounded)}) {
+        const PointDistance& a = (*answers)[i];
+        ASSERT_EQ(a.triangle, alone.triangle) << i;
+        ASSERT_EQ(a.distance, alone.distance) << i;
+        ASSERT_EQ(a.closest, alone.closest) << i;
+      }
+    }
+    EXPECT_GT(found, points.size() / 3);
+    EXPECT_LT(found, points.size());
+  }
+}
+
 /// Inside by the generalized winding number over all triangles.
 void expectSignsOfTheWindingNumber(const Mesh& mesh, const std::vector<Vec3>& points,
                                    const char* name) {

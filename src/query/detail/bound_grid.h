@@ -57,6 +57,19 @@ struct GridView {
   /// gather at the last cell stays inside).
   const std::uint8_t* cells;
 
+  /// The cell `point` maps to along each axis (lowerBoundSquared's), for a grid that is not
+  /// empty.
+  std::array<std::uint32_t, 3> cellOf(const Vec3& point) const noexcept {
+    const double coordinates[3] = {point.x, point.y, point.z};
+    std::array<std::uint32_t, 3> cell{};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double clamped = std::min(std::max(lower[axis], coordinates[axis]), upper[axis]);
+      cell[axis] = std::min(static_cast<std::uint32_t>((clamped - lower[axis]) * inverseCellSize),
+                            lastCell[axis]);
+    }
+    return cell;
+  }
+
   /// lowerBoundSquared's answer, for a grid that is not empty.
   [[gnu::always_inline]] double lowerBoundSquared(const Vec3& point) const noexcept {
     // The mesh lies in the box, so for q, the point clamped to the box, and any m of the mesh,

@@ -32,6 +32,10 @@ std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept {
   return code;
 }
 
+std::uint64_t mortonOfCell(std::uint32_t x, std::uint32_t y, std::uint32_t z) noexcept {
+  return spreadBits(x) | spreadBits(y) << 1 | spreadBits(z) << 2;
+}
+
 std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys, int codeBits) {
   // Passes of a 10-bit radix sort over the code (bits 32 and up), least significant digit
   // first: stable, so equal codes keep their index order.

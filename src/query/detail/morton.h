@@ -13,6 +13,9 @@ namespace delta::detail {
 /// outside the box takes the nearest cell).
 std::uint64_t mortonCode(const Vec3& point, const Aabb& box) noexcept;
 
+/// The 30-bit Morton code of cell (x, y, z) of a grid, each below 1024.
+std::uint64_t mortonOfCell(std::uint32_t x, std::uint32_t y, std::uint32_t z) noexcept;
+
 /// The indices in the low halves of `keys` (each a code of `codeBits` ≤ 32 bits, mortonCode's
 /// 30 by default, above a 32-bit index), in ascending order of the codes, ties in index order.
 /// Sorts `keys` (a radix sort: O(n) a digit of 10 bits).

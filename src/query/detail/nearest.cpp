@@ -55,6 +55,70 @@ std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t co
   return pointKernels(isa).sieve(grid, points, count, limit, kept, inRange);
 }
 
+bool LeafCandidates::collect(const QueryMeshData& mesh, const Vec3& center, double radiusSquared) {
+  static const PointKernels& table = pointKernels(kernels::defaultIsa());
+  return pack(mesh, table.collect(mesh, center, radiusSquared, found_.data()));
+}
+
+bool LeafCandidates::collect(const QueryMeshData& mesh, const Vec3& center, double radiusSquared,
+                             kernels::Isa isa) {
+  return pack(mesh, pointKernels(isa).collect(mesh, center, radiusSquared, found_.data()));
+}
+
+bool LeafCandidates::pack(const QueryMeshData& mesh, std::size_t found) {
+  count_ = 0;
+  boxes_.clear();
+  cylinders_.clear();
+  leaves_.clear();
+  if (found > kMostCandidates) return false;
+  // Empty slots: lower > upper, infinitely far away (BoxOctet); their cylinders' centres are NaN.
+  BoxOctet empty;
+  for (std::size_t i = 0; i < kFanout; ++i) {
+    empty.lowerX[i] = empty.lowerY[i] = empty.lowerZ[i] = std::numeric_limits<float>::infinity();
+    empty.upperX[i] = empty.upperY[i] = empty.upperZ[i] = -std::numeric_limits<float>::infinity();
+  }
+  for (std::size_t k = 0; k < found; ++k) {
+    const std::size_t slot = k % kFanout;
+    if (slot == 0) {
+      boxes_.push_back(empty);
+      cylinders_.push_back({});
+      leaves_.insert(leaves_.end(), kFanout, CandidateView::kNoLeaf);
+    }
+    const std::uint32_t leaf = found_[k];
+    const BoxOctet& from = mesh.childOctets[0][leaf / kFanout];
+    const CylinderOctet& around = mesh.leafCylinders[leaf / kFanout];
+    const std::size_t i = leaf % kFanout;
+    BoxOctet& box = boxes_.back();
+    box.lowerX[slot] = from.lowerX[i];
+    box.lowerY[slot] = from.lowerY[i];
+    box.lowerZ[slot] = from.lowerZ[i];
+    box.upperX[slot] = from.upperX[i];
+    box.upperY[slot] = from.upperY[i];
+    box.upperZ[slot] = from.upperZ[i];
+    CylinderOctet& cylinder = cylinders_.back();
+    cylinder.normalX[slot] = around.normalX[i];
+    cylinder.normalY[slot] = around.normalY[i];
+    cylinder.normalZ[slot] = around.normalZ[i];
+    cylinder.low[slot] = around.low[i];
+    cylinder.high[slot] = around.high[i];
+    cylinder.radius[slot] = around.radius[i];
+    leaves_[leaves_.size() - kFanout + slot] = leaf;
+  }
+  count_ = found;
+  return true;
+}
+
+Nearest nearestAmong(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
+                     const LeafCandidates& candidates) noexcept {
+  static const PointKernels& table = pointKernels(kernels::defaultIsa());
+  return table.among(mesh, point, limitSquared, candidates.view());
+}
+
+Nearest nearestAmong(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
+                     const LeafCandidates& candidates, kernels::Isa isa) noexcept {
+  return pointKernels(isa).among(mesh, point, limitSquared, candidates.view());
+}
+
 Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
                          const Nearest& nearest) noexcept {
   // A winner whose square is positive is the least square, which no triangle underflowed to

@@ -277,6 +277,86 @@ template <typename Bounds>
   return search.best;
 }
 
+/// PointKernels::collect with the node bounds of `Bounds`: a descent with a fixed bound.
+template <typename Bounds>
+[[gnu::always_inline]] inline std::size_t collectLeaves(const QueryMeshData& mesh,
+                                                        const Vec3& center, double radiusSquared,
+                                                        std::uint32_t* leaves) noexcept {
+  const std::uint32_t rootLevel = static_cast<std::uint32_t>(mesh.levels.size() - 1);
+  // One leaf: no level-1 node holds its box and cylinder to gather (the descent visits it
+  // directly).
+  if (rootLevel == 0) return kMostCandidates + 1;
+  const double shrink = cylinderShrink(mesh, center);
+  constexpr std::size_t kCapacity = 16 * kFanout;  // depth ≤ 11 for 2³² triangles
+  std::uint64_t stack[kCapacity];
+  std::size_t top = 0, count = 0;
+  stack[top++] = nodeKey(rootLevel, 0);
+  while (top > 0) {
+    const std::uint64_t node = stack[--top];
+    const auto level = static_cast<std::uint32_t>(node >> 32);
+    const auto index = static_cast<std::uint32_t>(node);
+    const std::uint32_t first = index * static_cast<std::uint32_t>(kFanout);
+    double bounds[kFanout];
+    if (level == 1) {
+      for (unsigned rest = Bounds::leaves(mesh.childOctets[0][index], mesh.leafCylinders[index],
+                                          center, shrink, radiusSquared, bounds);
+           rest != 0; rest &= rest - 1) {
+        if (count == kMostCandidates) return kMostCandidates + 1;
+        leaves[count++] = first + static_cast<std::uint32_t>(std::countr_zero(rest));
+      }
+      continue;
+    }
+    // Pushed in descending order of index, so the leaves come out ascending.
+    const unsigned near =
+        Bounds::children(mesh.childOctets[level - 1][index], center, radiusSquared, bounds);
+    for (unsigned rest = near; rest != 0; rest &= ~(1u << (31 - std::countl_zero(rest))))
+      stack[top++] =
+          nodeKey(level - 1, first + static_cast<std::uint32_t>(31 - std::countl_zero(rest)));
+  }
+  return count;
+}
+
+/// PointKernels::among with the bounds of `Bounds`: the candidates' leaf bounds, then their
+/// leaves nearest first, each checked against the pruning bound as it tightens (descend's
+/// level-1 visits, over every candidate at once).
+template <typename Bounds>
+[[gnu::always_inline]] inline Nearest searchAmong(const QueryMeshData& mesh, const Leaves& leaves,
+                                                  const Vec3& point, double limitSquared,
+                                                  const CandidateView& candidates) noexcept {
+  Search search;
+  search.best.distanceSquared = limitSquared;
+  search.prune = limitSquared;
+  search.prefetch = true;  // a limited search
+  const double shrink = cylinderShrink(mesh, point);
+  double bound[kMostCandidates];
+  std::uint32_t leaf[kMostCandidates];
+  std::size_t pending = 0;
+  for (std::size_t octet = 0; octet < candidates.octets; ++octet) {
+    double bounds[kFanout];
+    for (unsigned rest = Bounds::leaves(candidates.boxes[octet], candidates.cylinders[octet], point,
+                                        shrink, search.prune, bounds);
+         rest != 0; rest &= rest - 1) {
+      const auto i = static_cast<std::size_t>(std::countr_zero(rest));
+      bound[pending] = bounds[i];
+      leaf[pending] = candidates.leaves[octet * kFanout + i];
+      prefetchLeaf(leaves, leaf[pending]);
+      ++pending;
+    }
+  }
+  while (pending > 0) {
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < pending; ++k)
+      if (bound[k] < bound[nearest]) nearest = k;
+    if (bound[nearest] > search.prune) break;
+    visitLeaf<Bounds>(mesh, leaves, point, leaf[nearest], search);
+    --pending;
+    bound[nearest] = bound[pending];
+    leaf[nearest] = leaf[pending];
+  }
+  settle(mesh, point, search);
+  return search.best;
+}
+
 // The table's entries. No function this ISA's flags compiled may be left out of line for
 // another object to share (ISA.NoSharedCodeBetweenInstructionSets checks every build): every
 // entry inlines all it calls ([[gnu::flatten]]) but three functions kept out of line, each this
@@ -309,6 +389,18 @@ template <typename Bounds>
   return Bounds::leaves(boxes, cylinders, point, shrink, prune, out);
 }
 
+[[gnu::flatten]] std::size_t collect(const QueryMeshData& mesh, const Vec3& center,
+                                     double radiusSquared, std::uint32_t* leaves) noexcept {
+  return collectLeaves<Bounds>(mesh, center, radiusSquared, leaves);
+}
+
+[[gnu::flatten]] Nearest among(const QueryMeshData& mesh, const Vec3& point, double limitSquared,
+                               const CandidateView& candidates) noexcept {
+  const Vec3 local = point - mesh.lanes.origin;
+  return searchAmong<Bounds>(mesh, {mesh.lanes.view(), {local.x, local.y, local.z}}, point,
+                             limitSquared, candidates);
+}
+
 [[gnu::flatten]] std::size_t sieve(const GridView& grid, const Vec3* points, std::size_t count,
                                    double limit, std::uint32_t* kept, bool& inRange) noexcept {
   return sievePoints(grid, points, count, limit, kept, inRange);
@@ -318,7 +410,10 @@ template <typename Bounds>
 
 const PointKernels& pointKernels() noexcept {
   static constexpr PointKernels kernels{
-      &nearest, kExactLanes > 0 ? &exactDistancesSquared8 : nullptr, &children, &leaves, &sieve};
+      &nearest,  kExactLanes > 0 ? &exactDistancesSquared8 : nullptr,
+      &children, &leaves,
+      &sieve,    &collect,
+      &among};
   return kernels;
 }
 
