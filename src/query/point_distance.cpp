@@ -345,9 +345,11 @@ void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& orde
                                query.epsilon, near)
                 ? &near
                 : nullptr;
+        // Among a cell's few leaves the previous answer's triangle (Hint) saves less than its
+        // exact kernel costs (W2 2-3% faster without).
         for (; k < clusterEnd; ++k)
-          answers[k - run] =
-              answer(mesh, points[k - run], query, boundOf(order[k]), &hint, screened, shared);
+          answers[k - run] = answer(mesh, points[k - run], query, boundOf(order[k]),
+                                    shared ? nullptr : &hint, screened, shared);
       }
       for (std::size_t k = run; k < runEnd; ++k)
         out[order[k]] = answers[k - run];
