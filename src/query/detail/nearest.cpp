@@ -55,6 +55,17 @@ std::size_t sieveByGrid(const GridView& grid, const Vec3* points, std::size_t co
   return pointKernels(isa).sieve(grid, points, count, limit, kept, inRange);
 }
 
+namespace {
+
+/// Slot `i` of octet `from` into slot `slot` of `to`: each of the arrays `fields`.
+template <typename Octet, typename... Fields>
+void copySlot(const Octet& from, std::size_t i, Octet& to, std::size_t slot,
+              Fields... fields) noexcept {
+  (((to.*fields)[slot] = (from.*fields)[i]), ...);
+}
+
+}  // namespace
+
 bool LeafCandidates::collect(const QueryMeshData& mesh, const Vec3& center, double radiusSquared) {
   static const PointKernels& table = pointKernels(kernels::defaultIsa());
   return pack(mesh, table.collect(mesh, center, radiusSquared, found_.data()));
@@ -88,20 +99,11 @@ bool LeafCandidates::pack(const QueryMeshData& mesh, std::size_t found) {
     const BoxOctet& from = mesh.childOctets[0][leaf / kFanout];
     const CylinderOctet& around = mesh.leafCylinders[leaf / kFanout];
     const std::size_t i = leaf % kFanout;
-    BoxOctet& box = boxes_.back();
-    box.lowerX[slot] = from.lowerX[i];
-    box.lowerY[slot] = from.lowerY[i];
-    box.lowerZ[slot] = from.lowerZ[i];
-    box.upperX[slot] = from.upperX[i];
-    box.upperY[slot] = from.upperY[i];
-    box.upperZ[slot] = from.upperZ[i];
-    CylinderOctet& cylinder = cylinders_.back();
-    cylinder.normalX[slot] = around.normalX[i];
-    cylinder.normalY[slot] = around.normalY[i];
-    cylinder.normalZ[slot] = around.normalZ[i];
-    cylinder.low[slot] = around.low[i];
-    cylinder.high[slot] = around.high[i];
-    cylinder.radius[slot] = around.radius[i];
+    copySlot(from, i, boxes_.back(), slot, &BoxOctet::lowerX, &BoxOctet::lowerY, &BoxOctet::lowerZ,
+             &BoxOctet::upperX, &BoxOctet::upperY, &BoxOctet::upperZ);
+    copySlot(around, i, cylinders_.back(), slot, &CylinderOctet::normalX, &CylinderOctet::normalY,
+             &CylinderOctet::normalZ, &CylinderOctet::low, &CylinderOctet::high,
+             &CylinderOctet::radius);
     leaves_[leaves_.size() - kFanout + slot] = leaf;
   }
   count_ = found;
