@@ -193,8 +193,8 @@ struct Survivors {
   std::vector<std::size_t> firstOfBlock;
 };
 
-/// A point a block of the sieve keeps: as given (world frame), its index, and its Morton code in
-/// the mesh's box.
+/// A point a block of the sieve keeps: as given (world frame), its index, and its order's key
+/// (the Morton code of its grid cell, or of its place in the mesh's box: Survivors).
 struct Kept {
   Vec3 point;
   std::uint32_t index;
