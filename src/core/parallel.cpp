@@ -72,12 +72,13 @@ class InsideLoop {
 ///
 /// A loop is published by storing its fields, then opening it and advancing `generation_`
 /// (release), which wakes the workers. Each participant (the caller and the workers that join)
-/// takes chunks by fetch_add on `next_` and counts each one done in `done_`. The caller takes
-/// chunks until none is left, waits until every chunk is done, closes the loop, then waits until
-/// no worker is inside it (`active_`): a worker joins only between its increment and decrement
-/// of `active_` and only while the loop is open (both sequentially consistent, as the caller's
-/// closing and reading of `active_`), so once the caller sees `active_` at zero after closing, no
-/// worker touches the loop again and the next caller may rewrite its fields.
+/// takes chunks (take: the caller from the front, workers from the back) and counts them done in
+/// `done_`. The caller takes chunks until none is left, waits until every chunk is done, closes the
+/// loop, then waits until no worker is inside it (`active_`): a worker joins only between its
+/// increment and decrement of `active_` and only while the loop is open (both sequentially
+/// consistent, as the caller's closing and reading of `active_`), so once the caller sees `active_`
+/// at zero after closing, no worker touches the loop again and the next caller may rewrite its
+/// fields.
 class Pool {
  public:
   static Pool& instance() {
@@ -100,6 +101,7 @@ class Pool {
     chunks_.store(chunks, std::memory_order_relaxed);
     call_.store(call, std::memory_order_relaxed);
     body_.store(body, std::memory_order_relaxed);
+    ends_.store(chunks < kSplitUpTo ? std::uint64_t{chunks} << 32 : 0, std::memory_order_relaxed);
     next_.store(0, std::memory_order_relaxed);
     done_.store(0, std::memory_order_relaxed);
     failed_.store(false, std::memory_order_relaxed);
@@ -140,8 +142,8 @@ class Pool {
     // the shared count a thread, not a chunk (the two threads took turns at its cache line for
     // each of a sphere step's chunks of a few microseconds).
     std::size_t ran = 0;
-    for (std::size_t chunk = next_.fetch_add(1, std::memory_order_relaxed); chunk < chunks;
-         chunk = next_.fetch_add(1, std::memory_order_relaxed)) {
+    const bool front = tThreadIndex == 0;
+    for (std::size_t chunk = take(chunks, front); chunk < chunks; chunk = take(chunks, front)) {
       if (!failed_.load(std::memory_order_relaxed)) {
         try {
           call(body, chunk);
@@ -155,6 +157,23 @@ class Pool {
     }
     if (ran > 0 && done_.fetch_add(ran, std::memory_order_acq_rel) + ran == chunks)
       done_.notify_all();
+  }
+
+  /// The next chunk for this thread, or `chunks` where none is left. The caller takes them from
+  /// the front and the workers from the back, so that on two threads each keeps to its half of
+  /// the range loop after loop, and the data a half touches stays in its core's cache (a sphere
+  /// step's loops of a few microseconds a chunk spent their time moving cache lines between the
+  /// cores); where one thread is late, the other takes its half too.
+  std::size_t take(std::size_t chunks, bool front) noexcept {
+    if (chunks >= kSplitUpTo) return next_.fetch_add(1, std::memory_order_relaxed);
+    std::uint64_t ends = ends_.load(std::memory_order_relaxed);
+    while (true) {
+      const std::uint64_t first = ends & 0xffffffffu, end = ends >> 32;
+      if (first >= end) return chunks;
+      const std::uint64_t taken = front ? ends + 1 : ends - (std::uint64_t{1} << 32);
+      if (ends_.compare_exchange_weak(ends, taken, std::memory_order_relaxed))
+        return front ? first : end - 1;
+    }
   }
 
   /// Worker `index`: sleeps until the generation moves past `seen`, then joins the loop if it is
@@ -183,6 +202,10 @@ class Pool {
   std::atomic<std::size_t> chunks_{0};
   std::atomic<void (*)(const void*, std::size_t)> call_{nullptr};
   std::atomic<const void*> body_{nullptr};
+  /// Loops of fewer chunks take them from both ends of one word (take): the first not taken in
+  /// its low half, the end of those not taken in its high half. Larger ones count up `next_`.
+  static constexpr std::size_t kSplitUpTo = std::size_t{1} << 32;
+  std::atomic<std::uint64_t> ends_{0};
   std::atomic<std::size_t> next_{0};
   std::atomic<std::size_t> done_{0};
   std::atomic<bool> failed_{false};

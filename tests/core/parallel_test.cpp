@@ -266,5 +266,30 @@ TEST(ParallelFor, ManyThreadsCallItAtOnce) {
     EXPECT_EQ(sum, 10000L * 9999 / 2);
 }
 
+TEST(ParallelFor, OnTwoThreadsEachKeepsToItsEndOfTheRange) {
+  // The caller takes chunks from the front and the worker from the back, so that loop after loop
+  // each thread touches the same half of the data: whoever ran which, the caller's chunks are a
+  // prefix of the range and the worker's the rest.
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(2);
+  constexpr std::size_t kChunks = 64;
+  std::size_t bothTook = 0;
+  for (int loop = 0; loop < 20; ++loop) {
+    std::vector<int> ranBy(kChunks, -1);
+    parallelFor(0, kChunks, 1, [&](std::size_t begin, std::size_t end) {
+      std::this_thread::sleep_for(std::chrono::microseconds(50));  // long enough to share
+      for (std::size_t c = begin; c < end; ++c)
+        ranBy[c] = loopThreadIndex();
+    });
+    const auto firstOfWorker =
+        std::find_if(ranBy.begin(), ranBy.end(), [](int thread) { return thread != 0; });
+    EXPECT_TRUE(std::all_of(firstOfWorker, ranBy.end(), [](int thread) { return thread == 1; }))
+        << "loop " << loop;
+    bothTook += firstOfWorker != ranBy.begin() && firstOfWorker != ranBy.end();
+  }
+  EXPECT_GT(bothTook, 0u);  // the worker took its part in some loop
+  omp_set_num_threads(before);
+}
+
 }  // namespace
 }  // namespace delta

@@ -78,13 +78,13 @@ std::vector<T> joined(std::span<const std::vector<T>> parts) {
 /// Threading: about the calling thread only.
 int loopThreadIndex() noexcept;
 
-/// Calls `body(begin, end)` on disjoint chunks that cover [first, last), on threadCount()
-/// threads, each taking the next chunk (of `grain` indices) when it is done with one; serially on
-/// the calling thread when the range holds at most `grain` indices, when the caller is already
-/// inside a parallel loop (Δ's, or an OpenMP region: the DEM case, an outer parallel loop over
-/// particle pairs, keeps each library call on its own thread), or chunk by chunk on the calling
-/// thread when another thread's loop holds the pool. This is the only place Δ runs threads;
-/// kernels never spawn any.
+/// Calls `body(begin, end)` on disjoint chunks that cover [first, last), on threadCount() threads,
+/// each taking another chunk (of `grain` indices) when it is done with one (the caller from the
+/// front of the range, the workers from the back); serially on the calling thread when the range
+/// holds at most `grain` indices, when the caller is already inside a parallel loop (Δ's, or an
+/// OpenMP region: the DEM case, an outer parallel loop over particle pairs, keeps each library call
+/// on its own thread), or chunk by chunk on the calling thread when another thread's loop holds the
+/// pool. This is the only place Δ runs threads; kernels never spawn any.
 ///
 /// The threads are Δ's own pool (core/parallel.cpp), started on first use and kept: the caller
 /// and threadCount() − 1 workers. Waiting is passive where it pays: a worker with nothing to do
