@@ -28,21 +28,6 @@ inline constexpr std::array<double, 256> kSquaredCellsOfCode = [] {
   return table;
 }();
 
-/// A uniform grid of cubic cells over a mesh's box that holds, per cell, a lower bound of the
-/// distance from any point of the cell to the mesh: a point farther than ε from the mesh is
-/// mostly rejected by one memory read, before any tree descent.
-///
-/// Per cell one byte (kSquaredCellsOfCode): the squared distance, in cells, from the cell's box
-/// to the nearest box of an occupied cell (one a triangle may touch), rounded down. It is the
-/// exact Euclidean distance transform of the occupancy dilated by one cell, see bound_grid.cpp.
-/// A point outside the box adds its distance to the box by Pythagoras.
-///
-/// Cost (one thread, measured on armadillo, 52k triangles, and refined_elephant, 89k, at the
-/// default 2 cells a triangle): built in 4.3 and 7.1 ms (the QueryMesh beside it: 31 and
-/// 51 ms), 2 bytes a triangle, lowerBoundSquared 5.5–6.5 ns a point.
-///
-/// Threading: built on OpenMP threads (parallelFor; the same grid on any number); immutable
-/// afterwards: any number of threads may call lowerBoundSquared at once.
 /// What a lookup in a BoundGrid reads (BoundGrid::view), for the batch sieves that run it in
 /// vector lanes (grid_sieve.h): the same arithmetic as lowerBoundSquared, which calls it.
 struct GridView {
@@ -62,12 +47,21 @@ struct GridView {
   std::array<std::uint32_t, 3> cellOf(const Vec3& point) const noexcept {
     const double coordinates[3] = {point.x, point.y, point.z};
     std::array<std::uint32_t, 3> cell{};
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      const double clamped = std::min(std::max(lower[axis], coordinates[axis]), upper[axis]);
-      cell[axis] = std::min(static_cast<std::uint32_t>((clamped - lower[axis]) * inverseCellSize),
-                            lastCell[axis]);
-    }
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      cell[axis] = indexAlong(axis, clamp(axis, coordinates[axis]));
     return cell;
+  }
+
+  /// `coordinate` clamped to the box along `axis`. This argument order sends a NaN to the
+  /// lower face (a valid cell).
+  [[gnu::always_inline]] double clamp(std::size_t axis, double coordinate) const noexcept {
+    return std::min(std::max(lower[axis], coordinate), upper[axis]);
+  }
+  /// The cell along `axis` of a clamped coordinate: in [0, dims·(1 + 2⁻⁵²)] before the
+  /// minimum, so the truncation fits 32 bits.
+  [[gnu::always_inline]] std::uint32_t indexAlong(std::size_t axis, double clamped) const noexcept {
+    return std::min(static_cast<std::uint32_t>((clamped - lower[axis]) * inverseCellSize),
+                    lastCell[axis]);
   }
 
   /// lowerBoundSquared's answer, for a grid that is not empty.
@@ -80,15 +74,10 @@ struct GridView {
     // always_inline (with the sanitizers, clang left it out of line).
     const double coordinates[3] = {point.x, point.y, point.z};
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      const double coordinate = coordinates[axis];
-      // This argument order sends a NaN to the lower face (a valid cell); the NaN stays in the
-      // gap.
-      const double clamped = std::min(std::max(lower[axis], coordinate), upper[axis]);
-      const double gap = coordinate - clamped;
+      const double clamped = clamp(axis, coordinates[axis]);
+      const double gap = coordinates[axis] - clamped;  // a NaN stays in the gap
       outsideSquared += gap * gap;
-      // In [0, dims·(1 + 2⁻⁵²)]: the truncation fits 32 bits.
-      const auto index = static_cast<std::uint32_t>((clamped - lower[axis]) * inverseCellSize);
-      cell += std::min(index, lastCell[axis]) * stride[axis];
+      cell += indexAlong(axis, clamped) * stride[axis];
     }
     return outsideSquared * shrink + kSquaredCellsOfCode[cells[cell]] * cellSquaredShrunk;
   }
@@ -97,6 +86,21 @@ struct GridView {
 /// Bytes after a grid's last cell (GridView::cells).
 inline constexpr std::size_t kCellPadding = 4;
 
+/// A uniform grid of cubic cells over a mesh's box that holds, per cell, a lower bound of the
+/// distance from any point of the cell to the mesh: a point farther than ε from the mesh is
+/// mostly rejected by one memory read, before any tree descent.
+///
+/// Per cell one byte (kSquaredCellsOfCode): the squared distance, in cells, from the cell's box
+/// to the nearest box of an occupied cell (one a triangle may touch), rounded down. It is the
+/// exact Euclidean distance transform of the occupancy dilated by one cell, see bound_grid.cpp.
+/// A point outside the box adds its distance to the box by Pythagoras.
+///
+/// Cost (one thread, measured on armadillo, 52k triangles, and refined_elephant, 89k, at the
+/// default 2 cells a triangle): built in 4.3 and 7.1 ms (the QueryMesh beside it: 31 and
+/// 51 ms), 2 bytes a triangle, lowerBoundSquared 5.5–6.5 ns a point.
+///
+/// Threading: built on OpenMP threads (parallelFor; the same grid on any number); immutable
+/// afterwards: any number of threads may call lowerBoundSquared at once.
 class BoundGrid {
  public:
   /// Cells per triangle when the caller does not say. For ε = 1% of the box diagonal, of the
