@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "delta/core/cancel.h"
 #include "delta/core/error.h"
@@ -178,27 +181,98 @@ constexpr std::size_t kSieveBlock = 16 * kGrain;
 /// not one array of Vec3).
 constexpr std::size_t kCarried = 256;
 
-/// The points of a batch that the distance-bound grid leaves in doubt (not beyond ε), gathered
-/// (as given, in the world frame) in input order with their indices, the order in which to
-/// search them (along a Morton curve of the grid's cells, or where the grid has more than 1024
-/// cells along an axis, of the mesh's box), and where each block's begin.
-struct Survivors {
-  std::vector<std::uint32_t> indices;
-  std::vector<Vec3> points;
-  std::vector<std::uint32_t> order;
-  /// Per position in `order`, the Morton code of its point's cell; empty where the order is not
-  /// by cells.
-  std::vector<std::uint32_t> cells;
-  /// The survivors of sieve block b are [firstOfBlock[b], firstOfBlock[b + 1]).
-  std::vector<std::size_t> firstOfBlock;
-};
-
 /// A point a block of the sieve keeps: as given (world frame), its index, and its order's key
 /// (the Morton code of its grid cell, or of its place in the mesh's box: Survivors).
 struct Kept {
   Vec3 point;
   std::uint32_t index;
   std::uint64_t code;
+};
+
+/// The buffers of an ε-limited batch's sieve and search, which the calling thread keeps from one
+/// batch to the next. Freed after each batch, the allocator gave them back to the system, and
+/// the fresh pages of the next batch cost a tenth of it to fault in and clear (10⁶ points around
+/// armadillo, an eighth of them in doubt, ask for 15 MB: 52 against 47 ms on one thread). Every
+/// element a batch reads it has written first.
+struct BatchScratch {
+  std::vector<std::vector<Kept>> kept;  ///< per sieve block
+  std::vector<std::uint32_t> indices, order, cells;
+  std::vector<Vec3> points;
+  std::vector<std::uint64_t> keys, buffer;
+  std::vector<PointDistance> found;
+
+  std::size_t bytes() const noexcept {
+    std::size_t total =
+        kept.capacity() * sizeof(std::vector<Kept>) +
+        (indices.capacity() + order.capacity() + cells.capacity()) * sizeof(std::uint32_t) +
+        points.capacity() * sizeof(Vec3) +
+        (keys.capacity() + buffer.capacity()) * sizeof(std::uint64_t) +
+        found.capacity() * sizeof(PointDistance);
+    for (const std::vector<Kept>& block : kept)
+      total += block.capacity() * sizeof(Kept);
+    return total;
+  }
+};
+
+/// At most this much of a thread's BatchScratch stays after a batch (about 130 bytes a point in
+/// doubt: enough for some 4·10⁶ points with an eighth of them in doubt); a larger one is freed.
+constexpr std::size_t kKeptScratchBytes = std::size_t{64} << 20;
+
+/// The first `n` elements of `buffer`, which grows to hold them: their values are the last
+/// batch's until written.
+template <typename T>
+std::span<T> firstOf(std::vector<T>& buffer, std::size_t n) {
+  if (buffer.size() < n) {
+    buffer.clear();  // nothing to copy when it grows
+    buffer.resize(n);
+  }
+  return {buffer.data(), n};
+}
+
+/// The calling thread's BatchScratch for the length of a batch, or buffers of the batch's own
+/// where the thread's are in use (a batch started from inside another one's cancellation
+/// poll); at the end, the thread's are freed if they exceed kKeptScratchBytes.
+class ScratchLease {
+ public:
+  ScratchLease() : shared_(!busy()) { busy() = true; }
+  ~ScratchLease() {
+    if (!shared_) return;
+    if (threadScratch().bytes() > kKeptScratchBytes) threadScratch() = {};
+    busy() = false;
+  }
+  ScratchLease(const ScratchLease&) = delete;
+  ScratchLease& operator=(const ScratchLease&) = delete;
+
+  BatchScratch& get() noexcept { return shared_ ? threadScratch() : own_; }
+
+ private:
+  static BatchScratch& threadScratch() {
+    thread_local BatchScratch scratch;
+    return scratch;
+  }
+  static bool& busy() {
+    thread_local bool inUse = false;
+    return inUse;
+  }
+
+  bool shared_;
+  BatchScratch own_;
+};
+
+/// The points of a batch that the distance-bound grid leaves in doubt (not beyond ε), gathered
+/// (as given, in the world frame) in input order with their indices, the order in which to
+/// search them (along a Morton curve of the grid's cells, or where the grid has more than 1024
+/// cells along an axis, of the mesh's box), and where each block's begin: views of a
+/// BatchScratch.
+struct Survivors {
+  std::span<const std::uint32_t> indices;
+  std::span<const Vec3> points;
+  std::span<const std::uint32_t> order;
+  /// Per position in `order`, the Morton code of its point's cell; empty where the order is not
+  /// by cells.
+  std::span<const std::uint32_t> cells;
+  /// The survivors of sieve block b are [firstOfBlock[b], firstOfBlock[b + 1]).
+  std::vector<std::size_t> firstOfBlock;
 };
 
 /// The seed's early "no contact" for a whole batch: streams through the points once, in
@@ -211,7 +285,7 @@ struct Kept {
 /// throws for the first point with a non-finite coordinate or one out of range.
 template <typename PointAt>
 Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
-                const Vec3* contiguous, double limit) {
+                const Vec3* contiguous, double limit, BatchScratch& scratch) {
   const detail::GridView grid = mesh.data().boundGrid.view();
   const Aabb& box = mesh.data().bounds;
   const auto local = [&mesh, &pointAt](std::size_t i) {
@@ -225,7 +299,8 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
     return detail::mortonOfCell(cell[0], cell[1], cell[2]);
   };
   const std::size_t blocks = (count + kSieveBlock - 1) / kSieveBlock;
-  std::vector<std::vector<Kept>> kept(blocks);
+  if (scratch.kept.size() < blocks) scratch.kept.resize(blocks);
+  std::vector<std::vector<Kept>>& kept = scratch.kept;
   std::vector<std::size_t> firstBad(blocks, count);
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
     std::array<std::uint32_t, kSieveBlock> inDoubt;  // offsets in the block
@@ -272,24 +347,29 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
   for (std::size_t block = 0; block < blocks; ++block)
     survivors.firstOfBlock[block + 1] = survivors.firstOfBlock[block] + kept[block].size();
   const std::size_t total = survivors.firstOfBlock[blocks];
-  survivors.indices.resize(total);
-  survivors.points.resize(total);
-  std::vector<std::uint64_t> keys(total);
+  const std::span<std::uint32_t> indices = firstOf(scratch.indices, total);
+  const std::span<Vec3> points = firstOf(scratch.points, total);
+  const std::span<std::uint64_t> keys = firstOf(scratch.keys, total);
   parallelFor(0, blocks, 1, [&](std::size_t firstBlock, std::size_t endBlock) {
     for (std::size_t block = firstBlock; block < endBlock; ++block)
       for (std::size_t at = survivors.firstOfBlock[block]; const Kept& k : kept[block]) {
-        survivors.indices[at] = k.index;
-        survivors.points[at] = k.point;
+        indices[at] = k.index;
+        points[at] = k.point;
         keys[at] = k.code << 32 | at;
         ++at;
       }
   });
-  survivors.order = detail::orderOfKeys(keys);
-  if (byCells) {
-    survivors.cells.resize(total);
-    for (std::size_t k = 0; k < total; ++k)
-      survivors.cells[k] = static_cast<std::uint32_t>(keys[k] >> 32);  // sorted with the order
-  }
+  // The cells' codes have 3 bits a level of the grid (fewer passes of the sort than 30 bits).
+  const std::uint32_t mostCells = std::max({grid.lastCell[0], grid.lastCell[1], grid.lastCell[2]});
+  const int codeBits = byCells ? 3 * std::max(static_cast<int>(std::bit_width(mostCells)), 1) : 30;
+  const std::span<std::uint32_t> order = firstOf(scratch.order, total);
+  const std::span<std::uint32_t> cells =
+      byCells ? firstOf(scratch.cells, total) : std::span<std::uint32_t>{};
+  detail::sortKeys(keys, firstOf(scratch.buffer, total), codeBits, order, cells);
+  survivors.indices = indices;
+  survivors.points = points;
+  survivors.order = order;
+  survivors.cells = cells;
   return survivors;
 }
 
@@ -318,7 +398,7 @@ bool gatherNear(const QueryMesh& mesh, std::span<const Vec3> points, double epsi
 /// batch's survivors, a few a cell, whose descents from the root passed the same nodes. Each
 /// answer is that point's alone, so neither the order nor the sharing changes a result.
 template <typename PointAt, typename BoundOf>
-void searchInOrder(const QueryMesh& mesh, const std::vector<std::uint32_t>& order,
+void searchInOrder(const QueryMesh& mesh, std::span<const std::uint32_t> order,
                    const PointAt& pointAt, const BoundOf& boundOf, const PointQuery& query,
                    bool screened, std::span<PointDistance> out,
                    std::span<const std::uint32_t> cells = {}) {
@@ -394,8 +474,9 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
     // the input); the others are, into a buffer of their own, which is then merged with the
     // rest in input order: the output is written once, in order (scattered into it, the answers
     // cost a tenth of the batch in cache misses).
-    const Survivors survivors = sieve(mesh, count, pointAt, contiguous, limit);
-    std::vector<PointDistance> found(survivors.indices.size());
+    ScratchLease lease;
+    const Survivors survivors = sieve(mesh, count, pointAt, contiguous, limit, lease.get());
+    const std::span<PointDistance> found = firstOf(lease.get().found, survivors.indices.size());
     searchInOrder(
         mesh, survivors.order, [&survivors](std::size_t k) { return survivors.points[k]; },
         [&survivors, upperBounds](std::size_t k) {

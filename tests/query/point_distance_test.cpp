@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "delta/core/cancel.h"
 #include "delta/core/error.h"
 #include "delta/io/mesh_io.h"
 #include "delta/kernels/point_triangle.h"
@@ -481,6 +482,84 @@ TEST(PointDistance, MeshContactsMarkPointsInsideBothMeshes) {
     EXPECT_EQ(open[k].overlap, openFlat[k].overlap);
 }
 
+/// Each point's answer alone (no batch: no sieve, no shared buffers), at `epsilon`.
+std::vector<PointDistance> oneByOne(const QueryMesh& mesh, const std::vector<Vec3>& points,
+                                    double epsilon) {
+  std::vector<PointDistance> answers;
+  for (const Vec3& p : points)
+    answers.push_back(distance(mesh, p, {.epsilon = epsilon}));
+  return answers;
+}
+
+void expectSameAnswers(const std::vector<PointDistance>& found,
+                       const std::vector<PointDistance>& expected, const char* what) {
+  ASSERT_EQ(found.size(), expected.size()) << what;
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    ASSERT_EQ(found[i].found(), expected[i].found()) << what << ", point " << i;
+    ASSERT_EQ(found[i].distance, expected[i].distance) << what << ", point " << i;
+    ASSERT_EQ(found[i].triangle, expected[i].triangle) << what << ", point " << i;
+    ASSERT_EQ(found[i].closest, expected[i].closest) << what << ", point " << i;
+  }
+}
+
+TEST(PointDistance, EpsilonBatchesOfEverySizeInTurnGetTheirOwnAnswers) {
+  // A thread keeps an ε-limited batch's buffers for the next batch: larger, smaller and larger
+  // batches again, on two meshes in turn (one moved), must each get every point's own answer,
+  // nothing of the batch before.
+  const Mesh fandisk = io::load(kMeshes / "fandisk.off");
+  const Mesh sphere = primitives::icosphere(3);
+  QueryMesh moved(sphere);
+  moved.transform(
+      RigidTransform::rotationAbout(Quaternion::fromAxisAngle({1, 2, -1}, 0.4), {0.3, 0.1, -2.0}));
+  const QueryMesh still(fandisk);
+  std::uint64_t seed = 11;
+  for (const std::size_t count : {6000, 1100, 9000, 1500, 6000}) {
+    for (const QueryMesh* mesh : {&still, static_cast<const QueryMesh*>(&moved)}) {
+      std::vector<Vec3> points = probes(mesh->mesh(), test::scaledCount(count), seed++);
+      for (Vec3& p : points)
+        p = mesh->pose().apply(p);
+      const double epsilon = 0.02 * mesh->mesh().bounds().diagonal();
+      expectSameAnswers(distances(*mesh, points, {.epsilon = epsilon}),
+                        oneByOne(*mesh, points, epsilon), mesh == &still ? "fandisk" : "sphere");
+    }
+  }
+}
+
+TEST(PointDistance, ABatchRunFromAnotherOnesCancellationPollKeepsBothAnswers) {
+  // The calling thread's batch buffers are the outer batch's while its poll runs: a batch run
+  // from the poll (a Python signal handler may) must use buffers of its own.
+  const Mesh fandisk = io::load(kMeshes / "fandisk.off");
+  const Mesh sphere = primitives::icosphere(3);
+  const QueryMesh outer(fandisk), inner(sphere);
+  const std::vector<Vec3> outerPoints = probes(fandisk, test::scaledCount(6000), 3);
+  const std::vector<Vec3> innerPoints = probes(sphere, test::scaledCount(3000), 4);
+  const double outerEpsilon = 0.02 * fandisk.bounds().diagonal();
+  const double innerEpsilon = 0.05 * sphere.bounds().diagonal();
+  const std::vector<PointDistance> outerExpected = oneByOne(outer, outerPoints, outerEpsilon);
+  const std::vector<PointDistance> innerExpected = oneByOne(inner, innerPoints, innerEpsilon);
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    std::vector<std::vector<PointDistance>> innerRuns;
+    bool polling = false;
+    std::vector<PointDistance> outerFound;
+    {
+      const CancelScope scope([&] {
+        if (polling || innerRuns.size() >= 3) return false;
+        polling = true;
+        innerRuns.push_back(distances(inner, innerPoints, {.epsilon = innerEpsilon}));
+        polling = false;
+        return false;
+      });
+      outerFound = distances(outer, outerPoints, {.epsilon = outerEpsilon});
+    }
+    ASSERT_FALSE(innerRuns.empty()) << threads << " threads";  // the caller polls before its chunks
+    expectSameAnswers(outerFound, outerExpected, "the outer batch");
+    for (const std::vector<PointDistance>& run : innerRuns)
+      expectSameAnswers(run, innerExpected, "an inner batch");
+  }
+  omp_set_num_threads(2);
+}
+
 TEST(PointDistance, SameAnswersForAnyThreadCountAndFromManyThreads) {
   const Mesh mesh = io::load(kMeshes / "elephant.off");
   const QueryMesh query(mesh);
@@ -497,14 +576,23 @@ TEST(PointDistance, SameAnswersForAnyThreadCountAndFromManyThreads) {
     }
   };
   same(distances(query, points, {.signedDistance = true}));
-  std::vector<std::vector<PointDistance>> answers(4);
+  // ε-limited batches too, whose buffers each calling thread keeps (one batch after another).
+  const double epsilon = 0.02 * mesh.bounds().diagonal();
+  const std::vector<PointDistance> near = oneByOne(query, points, epsilon);
+  std::vector<std::vector<PointDistance>> answers(4), nearAnswers(4);
   std::vector<std::thread> callers;
-  for (auto& answer : answers)
-    callers.emplace_back([&] { answer = distances(query, points, {.signedDistance = true}); });
+  for (std::size_t c = 0; c < answers.size(); ++c)
+    callers.emplace_back([&, c] {
+      answers[c] = distances(query, points, {.signedDistance = true});
+      nearAnswers[c] = distances(query, points, {.epsilon = epsilon});
+      nearAnswers[c] = distances(query, points, {.epsilon = epsilon});
+    });
   for (std::thread& caller : callers)
     caller.join();
   for (const auto& answer : answers)
     same(answer);
+  for (const auto& answer : nearAnswers)
+    expectSameAnswers(answer, near, "an ε-limited batch from a thread of its own");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "morton.h"
 
 #include <algorithm>
+#include <cassert>
 
 #include "delta/core/parallel.h"
 
@@ -37,24 +38,43 @@ std::uint64_t mortonOfCell(std::uint32_t x, std::uint32_t y, std::uint32_t z) no
 }
 
 std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys, int codeBits) {
-  // Passes of a 10-bit radix sort over the code (bits 32 and up), least significant digit
-  // first: stable, so equal codes keep their index order.
-  constexpr std::size_t kDigits = 1024;
   std::vector<std::uint64_t> buffer(keys.size());
-  for (int shift = 32; shift < 32 + codeBits; shift += 10) {
-    std::size_t start[kDigits + 1] = {};
-    for (const std::uint64_t key : keys)
-      ++start[(key >> shift & (kDigits - 1)) + 1];
-    for (std::size_t d = 0; d < kDigits; ++d)
-      start[d + 1] += start[d];
-    for (const std::uint64_t key : keys)
-      buffer[start[key >> shift & (kDigits - 1)]++] = key;
-    keys.swap(buffer);
-  }
   std::vector<std::uint32_t> order(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i)
-    order[i] = static_cast<std::uint32_t>(keys[i]);
+  sortKeys(keys, buffer, codeBits, order, {});
   return order;
+}
+
+void sortKeys(std::span<std::uint64_t> keys, std::span<std::uint64_t> buffer, int codeBits,
+              std::span<std::uint32_t> order, std::span<std::uint32_t> codes) {
+  // Passes of a radix sort over the code (bits 32 and up), least significant digit first:
+  // stable, so equal codes keep their index order. The last pass writes the order and the codes
+  // instead of the keys.
+  assert(codeBits > 0 && codeBits <= 32);
+  assert(buffer.size() == keys.size() && order.size() == keys.size());
+  constexpr int kMostDigitBits = 10;
+  const int passes = (codeBits + kMostDigitBits - 1) / kMostDigitBits;
+  const int digitBits = (codeBits + passes - 1) / passes;
+  const std::uint64_t mask = (std::uint64_t{1} << digitBits) - 1;
+  std::span<std::uint64_t> from = keys, to = buffer;
+  for (int pass = 0; pass < passes; ++pass) {
+    const int shift = 32 + pass * digitBits;
+    std::size_t start[(std::size_t{1} << kMostDigitBits) + 1] = {};
+    for (const std::uint64_t key : from)
+      ++start[(key >> shift & mask) + 1];
+    for (std::uint64_t d = 0; d < mask; ++d)
+      start[d + 1] += start[d];
+    if (pass + 1 < passes) {
+      for (const std::uint64_t key : from)
+        to[start[key >> shift & mask]++] = key;
+      std::swap(from, to);
+      continue;
+    }
+    for (const std::uint64_t key : from) {
+      const std::size_t at = start[key >> shift & mask]++;
+      order[at] = static_cast<std::uint32_t>(key);
+      if (!codes.empty()) codes[at] = static_cast<std::uint32_t>(key >> 32);
+    }
+  }
 }
 
 std::vector<std::uint32_t> mortonOrder(std::size_t count, Vec3 (*pointAt)(const void*, std::size_t),

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "delta/core/aabb.h"
@@ -18,8 +19,15 @@ std::uint64_t mortonOfCell(std::uint32_t x, std::uint32_t y, std::uint32_t z) no
 
 /// The indices in the low halves of `keys` (each a code of `codeBits` ≤ 32 bits, mortonCode's
 /// 30 by default, above a 32-bit index), in ascending order of the codes, ties in index order.
-/// Sorts `keys` (a radix sort: O(n) a digit of 10 bits).
+/// Overwrites `keys` (a radix sort: O(n) a digit of at most 10 bits).
 std::vector<std::uint32_t> orderOfKeys(std::vector<std::uint64_t>& keys, int codeBits = 30);
+
+/// orderOfKeys into the caller's buffers, which a batch keeps from one call to the next:
+/// order[k] is the index of the k-th key in that order and, where `codes` is not empty, codes[k]
+/// its code. `keys` and `buffer` (of the same size) are overwritten; `order` and `codes` have
+/// their size. Digits of at most 10 bits, as few as `codeBits` (0 < codeBits ≤ 32) needs.
+void sortKeys(std::span<std::uint64_t> keys, std::span<std::uint64_t> buffer, int codeBits,
+              std::span<std::uint32_t> order, std::span<std::uint32_t> codes);
 
 /// The indices [0, count) in Morton (Z-curve) order of `pointAt(i)` within the points' bounding
 /// box, 10 bits an axis; ties (repeated points) by index. Consecutive runs are spatially compact:
