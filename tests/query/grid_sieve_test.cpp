@@ -4,6 +4,7 @@
 // outside, NaN, infinite), and it flags every point out of the coordinate range.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -106,14 +107,35 @@ void expectEveryIsaLikeOneAtATime(const QueryMesh& mesh, const std::vector<Vec3>
 TEST(GridSieve, EveryIsaKeepsThePointsTheScalarBoundKeeps) {
   Mesh granulate = primitives::granulate(4, {1.0, 0.5, 0.3}, 300);
   granulate.translate({1e5, -2e5, 3e4});  // far from the origin: the box's offset rounds
-  for (const Mesh& mesh : {primitives::icosphere(3), granulate, primitives::quad(2.0, 1.0)}) {
+  // Two spheres far apart: the cells between them lie beyond 11.3 cells (codes of 128 and more,
+  // where the table's steps are no longer one cell²).
+  const Mesh sphere = primitives::icosphere(2);
+  std::vector<Vec3> vertices(sphere.vertices().begin(), sphere.vertices().end());
+  std::vector<TriangleIndices> triangles(sphere.triangles().begin(), sphere.triangles().end());
+  for (const Vec3& v : sphere.vertices())
+    vertices.push_back(v + Vec3{40.0, 3.0, 0.0});
+  const auto offset = static_cast<std::uint32_t>(sphere.vertexCount());
+  for (const TriangleIndices& t : sphere.triangles())
+    triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const Mesh apart(std::move(vertices), std::move(triangles));
+  const Mesh sphere3 = primitives::icosphere(3), quad = primitives::quad(2.0, 1.0);
+  for (const Mesh* meshPointer : {&sphere3, static_cast<const Mesh*>(&granulate), &quad, &apart}) {
+    const Mesh& mesh = *meshPointer;
     const QueryMesh query(mesh);
     ASSERT_FALSE(query.data().boundGrid.empty());
+    if (meshPointer == &apart) {  // it has the far cells it is here for
+      const BoundGrid& grid = query.data().boundGrid;
+      const std::uint8_t* cells = grid.view().cells;
+      ASSERT_GE(*std::max_element(cells, cells + grid.cellCount()), 128);
+    }
     const std::vector<Vec3> points = pointsAround(query, 2003, 11);
     const double diagonal = mesh.bounds().diagonal();
     const double cell = query.data().boundGrid.cellSize();
+    // Limits on either side of the table's turn from one cell² a code to wider steps (128).
+    const double turn = kSquaredCellsOfCode[128] * query.data().boundGrid.view().cellSquaredShrunk;
     for (const double limit : {0.0, 1e-30, cell * cell, 4 * cell * cell, 0.01 * diagonal * diagonal,
-                               diagonal * diagonal, kInfinity})
+                               kSquaredCellsOfCode[127] * cell * cell, std::nextafter(turn, 0.0),
+                               turn, diagonal * diagonal, kInfinity})
       expectEveryIsaLikeOneAtATime(query, points, limit, true);
   }
 }
