@@ -37,9 +37,25 @@ struct DistanceOptions {
   bool quiet = false;
 };
 
-/// Points per library call: small enough for a lively progress line, large enough that the
-/// library's parallel loop over them pays.
-constexpr std::size_t kBatch = std::size_t{1} << 16;
+/// Points of the first library call; each later call takes as many as the calls before answered
+/// in kBatchSeconds (the progress line redraws five times a second), at most 16 times the last
+/// call's and kMostBatch. A call is the unit the library works on: an ε-limited batch sieves
+/// its points by the bound grid and searches a grid cell's together, and each call runs a few
+/// parallel loops whose ends wait for every thread. Calls of 2¹⁶ points had a cell's few points
+/// apart and made W2 on 10⁷ points 1.6 times slower on one thread, and slower on two threads than
+/// on one (docs/performance.md).
+constexpr std::size_t kFirstBatch = std::size_t{1} << 16;
+constexpr std::size_t kMostBatch = std::size_t{1} << 21;
+constexpr double kBatchSeconds = 0.25;
+
+/// The points of the next call, after `done` points took `seconds`.
+std::size_t nextBatch(std::size_t last, std::size_t done, double seconds) {
+  const double atRate = seconds > 0.0 ? static_cast<double>(done) * (kBatchSeconds / seconds)
+                                      : static_cast<double>(kMostBatch);
+  const std::size_t most = std::min(kMostBatch, 16 * last);
+  return std::clamp(static_cast<std::size_t>(std::min(atRate, static_cast<double>(most))),
+                    kFirstBatch, most);
+}
 
 bool windingSign(const DistanceOptions& options) {
   return contactdetection::parseSign(options.sign) == contactdetection::Sign::winding;
@@ -119,11 +135,14 @@ void run(const DistanceOptions& options) {
   std::vector<contactdetection::PointDistance> answers(points.size());
   {
     Progress progress("distance", points.size(), showProgress(options.quiet || options.json));
-    for (std::size_t begin = 0; begin < points.size(); begin += kBatch) {
-      const std::size_t count = std::min(kBatch, points.size() - begin);
+    Stopwatch calls;
+    for (std::size_t begin = 0, batch = kFirstBatch; begin < points.size();) {
+      const std::size_t count = std::min(batch, points.size() - begin);
       contactdetection::distances(query, std::span(points).subspan(begin, count), request,
                                   std::span(answers).subspan(begin, count));
-      progress.update(begin + count);
+      begin += count;
+      progress.update(begin);
+      batch = nextBatch(count, begin, calls.seconds());
     }
   }
   const double querySeconds = clock.restart();

@@ -8,12 +8,17 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <random>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "delta/core/version.h"
+#include "delta/mesh/primitives.h"
+#include "delta/query/point_distance.h"
+#include "delta/query/query_mesh.h"
 
 #include "cli_run.h"
 
@@ -256,6 +261,56 @@ TEST(DeltaCli, DistanceWithEpsilonLeavesFarPointsEmpty) {
   EXPECT_NE(xml.find("<VTKFile type=\"PolyData\""), std::string::npos);
   EXPECT_NE(xml.find("NumberOfPoints=\"50\""), std::string::npos);
   EXPECT_NE(xml.find("Name=\"distance\""), std::string::npos);
+}
+
+TEST(DeltaCli, DistanceOfManyPointsInSeveralCallsGivesEachPointItsAnswer) {
+  // More points than the command's first library call takes (2¹⁶), so that it makes several
+  // calls of growing size: with and without ε, every row is the library's answer to the whole
+  // set in one call.
+  const TemporaryFile csv("many.csv");
+  const delta::Mesh mesh = delta::primitives::icosphere(3);
+  const delta::QueryMesh query(mesh);
+  constexpr std::size_t kCount = 150000;
+  // builtin:uniform:N:SEED (apps/delta/point_source.cpp): the box grown by a tenth a side.
+  std::mt19937_64 random(7);
+  const auto unit = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53; };
+  const delta::Aabb box = mesh.bounds();
+  const delta::Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;
+  std::vector<delta::Vec3> points(kCount);
+  for (delta::Vec3& p : points)
+    p = {lower.x + size.x * unit(), lower.y + size.y * unit(), lower.z + size.z * unit()};
+  for (const char* epsilon : {"", "0.05"}) {
+    const std::string withEpsilon = *epsilon ? std::string(" --eps ") + epsilon : "";
+    const CliRun run = runDelta("distance builtin:icosphere:3 --points builtin:uniform:150000:7" +
+                                withEpsilon + " --quiet --out " + csv.path);
+    ASSERT_EQ(run.exitCode, 0) << run.err;
+    const std::vector<delta::contactdetection::PointDistance> expected =
+        delta::contactdetection::distances(
+            query, points,
+            {.epsilon = *epsilon ? std::stod(epsilon) : std::numeric_limits<double>::infinity()});
+    const std::vector<std::string> rows = lines(csv.path);
+    ASSERT_EQ(rows.size(), kCount + 1);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < kCount; ++i) {
+      const std::string& row = rows[i + 1];
+      if (!expected[i].found()) {
+        ASSERT_EQ(row, std::to_string(i) + ",,,,,") << withEpsilon;
+        continue;
+      }
+      ++found;
+      unsigned index = 0, triangle = 0;
+      double distance = -1, x, y, z;
+      ASSERT_EQ(std::sscanf(row.c_str(), "%u,%lf,%lf,%lf,%lf,%u", &index, &distance, &x, &y, &z,
+                            &triangle),
+                6)
+          << row;
+      ASSERT_EQ(index, i) << row;
+      ASSERT_EQ(distance, expected[i].distance) << row;
+      ASSERT_EQ(triangle, expected[i].triangle) << row;
+      ASSERT_EQ(delta::Vec3(x, y, z), expected[i].closest) << row;
+    }
+    EXPECT_GT(found, kCount / 20) << withEpsilon;
+  }
 }
 
 TEST(DeltaCli, DistanceRejectsBadInputAndWritesNothing) {
