@@ -359,7 +359,8 @@ Survivors sieve(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt
         ++at;
       }
   });
-  // The cells' codes have 3 bits a level of the grid (fewer passes of the sort than 30 bits).
+  // A cell's Morton code has three bits for each bit of the largest cell index: a sort of that
+  // many bits takes fewer passes than one of all 30.
   const std::uint32_t mostCells = std::max({grid.lastCell[0], grid.lastCell[1], grid.lastCell[2]});
   const int codeBits = byCells ? 3 * std::max(static_cast<int>(std::bit_width(mostCells)), 1) : 30;
   const std::span<std::uint32_t> order = firstOf(scratch.order, total);

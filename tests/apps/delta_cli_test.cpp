@@ -307,7 +307,7 @@ TEST(DeltaCli, DistanceOfManyPointsInSeveralCallsGivesEachPointItsAnswer) {
       ASSERT_EQ(index, i) << row;
       ASSERT_EQ(distance, expected[i].distance) << row;
       ASSERT_EQ(triangle, expected[i].triangle) << row;
-      ASSERT_EQ(delta::Vec3(x, y, z), expected[i].closest) << row;
+      ASSERT_EQ((delta::Vec3{x, y, z}), expected[i].closest) << row;
     }
     EXPECT_GT(found, kCount / 20) << withEpsilon;
   }
