@@ -132,9 +132,12 @@ std::vector<PointDistance> distances(const QueryMesh& mesh, std::span<const doub
                                      std::span<const double> y, std::span<const double> z,
                                      const PointQuery& query = {});
 
-/// The same, written into `out` (as long as `points`) without allocating: for codes that query
-/// batch after batch (new grid vertices each refinement step). When it throws for a bad point,
-/// `out` may already hold some answers (the points are validated while the batch is screened).
+/// The same, written into `out` (as long as `points`) without allocating the answers: for codes
+/// that query batch after batch (new grid vertices each refinement step). An ε-limited batch's
+/// working buffers (about 130 bytes a point the bound grid leaves in doubt) stay with the calling
+/// thread for its next batch, up to 64 MiB, so that a code querying batch after batch does not
+/// fault fresh pages in each time. When it throws for a bad point, `out` may already hold some
+/// answers (the points are validated while the batch is screened).
 void distances(const QueryMesh& mesh, std::span<const Vec3> points, const PointQuery& query,
                std::span<PointDistance> out);
 
