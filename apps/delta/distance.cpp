@@ -41,9 +41,9 @@ struct DistanceOptions {
 /// in kBatchSeconds (the progress line redraws five times a second), at most 16 times the last
 /// call's and kMostBatch. A call is the unit the library works on: an ε-limited batch sieves
 /// its points by the bound grid and searches a grid cell's together, and each call runs a few
-/// parallel loops whose ends wait for every thread. Calls of 2¹⁶ points had a cell's few points
-/// apart and made W2 on 10⁷ points 1.6 times slower on one thread, and slower on two threads than
-/// on one (docs/performance.md).
+/// parallel loops whose ends wait for every thread. With calls of 2¹⁶ points, most cells' points
+/// fell in different calls: W2 on 10⁷ points took 688–708 ms on one thread against 614–618 ms
+/// (docs/performance.md).
 constexpr std::size_t kFirstBatch = std::size_t{1} << 16;
 constexpr std::size_t kMostBatch = std::size_t{1} << 21;
 constexpr double kBatchSeconds = 0.25;
