@@ -52,7 +52,9 @@ constexpr double kBatchSeconds = 0.25;
 std::size_t nextBatch(std::size_t last, std::size_t done, double seconds) {
   const double atRate = seconds > 0.0 ? static_cast<double>(done) * (kBatchSeconds / seconds)
                                       : static_cast<double>(kMostBatch);
-  const std::size_t most = std::min(kMostBatch, 16 * last);
+  // Never below the first call's size: after a last call of a few points, std::clamp's bounds
+  // must still be in order.
+  const std::size_t most = std::clamp(16 * last, kFirstBatch, kMostBatch);
   return std::clamp(static_cast<std::size_t>(std::min(atRate, static_cast<double>(most))),
                     kFirstBatch, most);
 }
