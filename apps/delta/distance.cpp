@@ -5,12 +5,14 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/memory.h"
 #include "delta/io/atomic_file.h"
 #include "delta/io/vtk.h"
 #include "delta/query/point_distance.h"
@@ -73,47 +75,98 @@ void validate(const DistanceOptions& options) {
     throw Error("--out '" + options.out + "': write .csv or .vtp");
 }
 
-void writeCsv(const std::vector<Vec3>& points,
-              const std::vector<contactdetection::PointDistance>& answers, bool withInside,
-              bool withAmbiguous, const std::string& path) {
-  io::AtomicFile file(path);
-  file.write(std::string(withInside ? "index,distance,closest_x,closest_y,closest_z,triangle,inside"
-                                    : "index,distance,closest_x,closest_y,closest_z,triangle") +
-             (withAmbiguous ? ",ambiguous\n" : "\n"));
-  char line[256];
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const contactdetection::PointDistance& a = answers[i];
-    const int length =
-        !a.found() ? std::snprintf(line, sizeof line, "%zu,,,,,%s\n", i, withInside ? "," : "")
-                   : std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i,
-                                   a.distance, a.closest.x, a.closest.y, a.closest.z, a.triangle,
-                                   withInside ? (a.inside ? ",1" : ",0") : "");
-    file.write(std::string_view(line, static_cast<std::size_t>(length) - 1));
-    // The winding sign's ambiguity last, after the columns of the other modes.
-    file.write(!withAmbiguous ? "\n" : !a.found() ? ",\n" : a.ambiguous ? ",1\n" : ",0\n");
-  }
-  file.commit();
-}
+/// What the summary line (or JSON) says of the answers, added up call by call.
+struct Summary {
+  std::size_t found = 0, inside = 0, ambiguous = 0;
+  double nearest = INFINITY, farthest = -INFINITY;
 
-/// The points with their distance (NaN beyond ε; negative inside with --signed), closest point
-/// and triangle (−1 beyond ε) as point data: ParaView colours the cloud by distance.
-void writeVtp(const std::vector<Vec3>& points,
-              const std::vector<contactdetection::PointDistance>& answers, bool withInside,
-              const std::string& path) {
-  io::VtkArray distance{withInside ? "signed_distance" : "distance", 1, {}};
-  io::VtkArray closest{"closest", 3, {}}, triangle{"triangle", 1, {}, io::VtkType::Int64};
-  for (const contactdetection::PointDistance& a : answers) {
-    distance.values.push_back(!a.found()   ? std::nan("")
-                              : withInside ? a.signedDistance()
-                                           : a.distance);
-    const Vec3 c = a.found() ? a.closest : Vec3{std::nan(""), std::nan(""), std::nan("")};
-    closest.values.insert(closest.values.end(), {c.x, c.y, c.z});
-    triangle.values.push_back(a.found() ? a.triangle : -1.0);
+  void add(std::span<const contactdetection::PointDistance> answers) noexcept {
+    for (const contactdetection::PointDistance& a : answers) {
+      if (!a.found()) continue;
+      ++found;
+      inside += a.inside;
+      ambiguous += a.ambiguous;
+      nearest = std::min(nearest, a.distance);
+      farthest = std::max(farthest, a.distance);
+    }
   }
-  io::VtkPolyData data = io::VtkPolyData::fromPoints(points);
-  data.pointData = {distance, closest, triangle};
-  io::writeVtp(data, path);
-}
+};
+
+/// --out FILE.csv, one row per point in input order, written call by call into an AtomicFile:
+/// the file appears whole when commit() succeeds, and not at all when the run fails or is
+/// interrupted before.
+class CsvRows {
+ public:
+  CsvRows(const std::string& path, bool withInside, bool withAmbiguous)
+      : file_(path), withInside_(withInside), withAmbiguous_(withAmbiguous) {
+    file_.write(std::string(withInside ? "index,distance,closest_x,closest_y,closest_z,triangle,"
+                                         "inside"
+                                       : "index,distance,closest_x,closest_y,closest_z,triangle") +
+                (withAmbiguous ? ",ambiguous\n" : "\n"));
+  }
+
+  /// The rows of points first, first + 1, …
+  void add(std::size_t first, std::span<const contactdetection::PointDistance> answers) {
+    char line[256];
+    for (std::size_t k = 0; k < answers.size(); ++k) {
+      const contactdetection::PointDistance& a = answers[k];
+      const std::size_t i = first + k;
+      const int length =
+          !a.found() ? std::snprintf(line, sizeof line, "%zu,,,,,%s\n", i, withInside_ ? "," : "")
+                     : std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i,
+                                     a.distance, a.closest.x, a.closest.y, a.closest.z, a.triangle,
+                                     withInside_ ? (a.inside ? ",1" : ",0") : "");
+      file_.write(std::string_view(line, static_cast<std::size_t>(length) - 1));
+      // The winding sign's ambiguity last, after the columns of the other modes.
+      file_.write(!withAmbiguous_ ? "\n" : !a.found() ? ",\n" : a.ambiguous ? ",1\n" : ",0\n");
+    }
+  }
+
+  void commit() { file_.commit(); }
+
+ private:
+  io::AtomicFile file_;
+  bool withInside_, withAmbiguous_;
+};
+
+/// --out FILE.vtp: the points with their distance (NaN beyond ε; negative inside with --signed),
+/// closest point and triangle (−1 beyond ε) as point data, gathered call by call and written
+/// at the end: ParaView colours the cloud by distance.
+class VtpColumns {
+ public:
+  VtpColumns(std::size_t count, bool withInside)
+      : distance_{withInside ? "signed_distance" : "distance", 1, {}}, withInside_(withInside) {
+    // The three columns and the writer's copy of the points.
+    requireMemory(static_cast<double>(count) * (5 * sizeof(double) + sizeof(Vec3)),
+                  "--out .vtp for " + std::to_string(count) + " points");
+    distance_.values.reserve(count);
+    closest_.values.reserve(3 * count);
+    triangle_.values.reserve(count);
+  }
+
+  void add(std::span<const contactdetection::PointDistance> answers) {
+    for (const contactdetection::PointDistance& a : answers) {
+      distance_.values.push_back(!a.found()    ? std::nan("")
+                                 : withInside_ ? a.signedDistance()
+                                               : a.distance);
+      const Vec3 c = a.found() ? a.closest : Vec3{std::nan(""), std::nan(""), std::nan("")};
+      closest_.values.insert(closest_.values.end(), {c.x, c.y, c.z});
+      triangle_.values.push_back(a.found() ? a.triangle : -1.0);
+    }
+  }
+
+  void write(const std::vector<Vec3>& points, const std::string& path) {
+    io::VtkPolyData data = io::VtkPolyData::fromPoints(points);
+    data.pointData = {std::move(distance_), std::move(closest_), std::move(triangle_)};
+    io::writeVtp(data, path);
+  }
+
+ private:
+  io::VtkArray distance_;
+  io::VtkArray closest_{"closest", 3, {}};
+  io::VtkArray triangle_{"triangle", 1, {}, io::VtkType::Int64};
+  bool withInside_;
+};
 
 void run(const DistanceOptions& options) {
   validate(options);
@@ -134,35 +187,43 @@ void run(const DistanceOptions& options) {
   if (options.epsilon) request.epsilon = *options.epsilon;
   request.signedDistance = signedDistance;
   if (windingSign(options)) request.sign = contactdetection::Sign::winding;
-  std::vector<contactdetection::PointDistance> answers(points.size());
+  std::optional<CsvRows> csv;
+  if (extensionOf(options.out) == ".csv")
+    csv.emplace(options.out, signedDistance, windingSign(options));
+  std::optional<VtpColumns> vtp;
+  if (extensionOf(options.out) == ".vtp") vtp.emplace(points.size(), signedDistance);
+  // One call's answers at a time (at most kMostBatch): the summary and the output take them
+  // as they come, so a run holds no answer per point (10⁷ of them were 400 MB, and allocating
+  // them a quarter of W2's query time).
+  std::vector<contactdetection::PointDistance> answers;
+  Summary summary;
+  double querySeconds = 0.0, writeSeconds = 0.0;
   {
     Progress progress("distance", points.size(), showProgress(options.quiet || options.json));
-    Stopwatch calls;
     for (std::size_t begin = 0, batch = kFirstBatch; begin < points.size();) {
       const std::size_t count = std::min(batch, points.size() - begin);
-      contactdetection::distances(query, std::span(points).subspan(begin, count), request,
-                                  std::span(answers).subspan(begin, count));
+      Stopwatch call;
+      if (answers.size() < count) {
+        answers.clear();  // nothing to copy when it grows
+        answers.resize(count);
+      }
+      const std::span<contactdetection::PointDistance> these = std::span(answers).first(count);
+      contactdetection::distances(query, std::span(points).subspan(begin, count), request, these);
+      summary.add(these);
+      querySeconds += call.restart();
+      if (csv) csv->add(begin, these);
+      if (vtp) vtp->add(these);
+      writeSeconds += call.restart();
       begin += count;
       progress.update(begin);
-      batch = nextBatch(count, begin, calls.seconds());
+      batch = nextBatch(count, begin, querySeconds);
     }
   }
-  const double querySeconds = clock.restart();
-
-  std::size_t found = 0, inside = 0, ambiguous = 0;
-  double nearest = INFINITY, farthest = -INFINITY;
-  for (const contactdetection::PointDistance& a : answers) {
-    if (!a.found()) continue;
-    ++found;
-    inside += a.inside;
-    ambiguous += a.ambiguous;
-    nearest = std::min(nearest, a.distance);
-    farthest = std::max(farthest, a.distance);
-  }
-  if (extensionOf(options.out) == ".csv")
-    writeCsv(points, answers, signedDistance, windingSign(options), options.out);
-  if (extensionOf(options.out) == ".vtp") writeVtp(points, answers, signedDistance, options.out);
-  const double writeSeconds = clock.restart();
+  clock.restart();
+  if (csv) csv->commit();
+  if (vtp) vtp->write(points, options.out);
+  writeSeconds += clock.restart();
+  const auto [found, inside, ambiguous, nearest, farthest] = summary;
 
   if (options.json) {
     JsonWriter json;

@@ -7,7 +7,6 @@
 #include "delta/core/error.h"
 #include "delta/core/memory.h"
 #include "delta/io/points.h"
-#include "delta/query/point_distance.h"
 
 namespace delta::cli {
 namespace {
@@ -36,10 +35,9 @@ std::vector<Vec3> loadPointSource(const std::string& source, const Aabb& box) {
       colon == std::string_view::npos ? 1 : number(rest.substr(colon + 1), source);
   if (count == 0 || count > (std::uint64_t{1} << 32))
     throw Error("points '" + source + "': N must be between 1 and 2^32 (4294967296)");
-  // The points and, in `delta distance`, an answer each: checked before either is allocated.
-  requireMemory(
-      static_cast<double>(count) * (sizeof(Vec3) + sizeof(contactdetection::PointDistance)),
-      "points '" + source + "': " + std::to_string(count) + " points");
+  // Checked before they are allocated (`delta distance` checks what its output needs itself).
+  requireMemory(static_cast<double>(count) * sizeof(Vec3),
+                "points '" + source + "': " + std::to_string(count) + " points");
   std::mt19937_64 random(seed);
   const auto unit = [&random] { return static_cast<double>(random() >> 11) * 0x1p-53; };
   const Vec3 lower = box.lower - box.extent() * 0.1, size = box.extent() * 1.2;

@@ -8,6 +8,7 @@
 
 #include "delta/core/error.h"
 #include "delta/io/regular_file.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta::io {
 namespace {
@@ -57,6 +58,12 @@ Vec3 parseLine(std::string_view line, std::size_t number) {
                 std::string(line.substr(0, 80)) + "'");
   if (!isFinite(point))
     throw Error("line " + std::to_string(number) + " has a coordinate that is not finite: '" +
+                std::string(line.substr(0, 80)) + "'");
+  // Refused here, by its line, rather than by the query that would refuse it by its index in
+  // whatever batch it came in.
+  if (!inCoordinateRange(point))
+    throw Error("line " + std::to_string(number) + " has a coordinate beyond " +
+                coordinateRangeText() + ", the range in which Δ's distances are exact: '" +
                 std::string(line.substr(0, 80)) + "'");
   return point;
 }

@@ -5,7 +5,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -21,6 +24,7 @@
 #include "delta/query/query_mesh.h"
 
 #include "cli_run.h"
+#include "io/vtk_read.h"
 
 namespace {
 
@@ -267,7 +271,7 @@ TEST(DeltaCli, DistanceOfManyPointsInSeveralCallsGivesEachPointItsAnswer) {
   // More points than the command's first library call takes (2¹⁶), so that it makes several
   // calls of growing size: with and without ε, every row is the library's answer to the whole
   // set in one call.
-  const TemporaryFile csv("many.csv");
+  const TemporaryFile csv("many.csv"), vtp("many.vtp");
   const delta::Mesh mesh = delta::primitives::icosphere(3);
   const delta::QueryMesh query(mesh);
   constexpr std::size_t kCount = 150000;
@@ -310,6 +314,64 @@ TEST(DeltaCli, DistanceOfManyPointsInSeveralCallsGivesEachPointItsAnswer) {
       ASSERT_EQ((delta::Vec3{x, y, z}), expected[i].closest) << row;
     }
     EXPECT_GT(found, kCount / 20) << withEpsilon;
+    // The same calls into ParaView's file and the summary: each column bit for bit, and the
+    // count and extremes of all the calls together.
+    const CliRun paraview =
+        runDelta("distance builtin:icosphere:3 --points builtin:uniform:150000:7" + withEpsilon +
+                 " --json --out " + vtp.path);
+    ASSERT_EQ(paraview.exitCode, 0) << paraview.err;
+    const std::string file = slurp(vtp.path);
+    const std::vector<double> distance = delta::test::readVtkArray<double>(file, "distance");
+    const std::vector<double> closest = delta::test::readVtkArray<double>(file, "closest");
+    const std::vector<std::int64_t> triangle =
+        delta::test::readVtkArray<std::int64_t>(file, "triangle");
+    ASSERT_EQ(distance.size(), kCount);
+    ASSERT_EQ(closest.size(), 3 * kCount);
+    ASSERT_EQ(triangle.size(), kCount);
+    double nearest = std::numeric_limits<double>::infinity(), farthest = -nearest;
+    for (std::size_t i = 0; i < kCount; ++i) {
+      const delta::contactdetection::PointDistance& a = expected[i];
+      if (!a.found()) {
+        ASSERT_TRUE(std::isnan(distance[i]) && std::isnan(closest[3 * i])) << i;
+        ASSERT_EQ(triangle[i], -1) << i;
+        continue;
+      }
+      nearest = std::min(nearest, a.distance);
+      farthest = std::max(farthest, a.distance);
+      ASSERT_EQ(distance[i], a.distance) << i;
+      ASSERT_EQ((delta::Vec3{closest[3 * i], closest[3 * i + 1], closest[3 * i + 2]}), a.closest)
+          << i;
+      ASSERT_EQ(triangle[i], static_cast<std::int64_t>(a.triangle)) << i;
+    }
+    const auto number = [&paraview](const std::string& key) {
+      const std::size_t at = paraview.out.find("\"" + key + "\":");
+      EXPECT_NE(at, std::string::npos) << key << paraview.out;
+      return at == std::string::npos
+                 ? std::nan("")
+                 : std::strtod(paraview.out.c_str() + at + key.size() + 3, nullptr);
+    };
+    EXPECT_EQ(number("min_distance"), nearest) << paraview.out;
+    EXPECT_EQ(number("max_distance"), farthest) << paraview.out;
+    if (*epsilon) {
+      EXPECT_EQ(number("within"), static_cast<double>(found)) << paraview.out;
+    }
+  }
+}
+
+TEST(DeltaCli, DistanceNamesAPointBeyondTheRangeByItsLine) {
+  // Past the first library call's 2¹⁶ points: the query named it by its index in the second
+  // call (point 4464); the reader names its line, and no output is written.
+  const TemporaryFile points("late.xyz"), csv("late.csv"), vtp("late.vtp");
+  std::string text;
+  for (int i = 0; i < 70000; ++i)
+    text += std::to_string(i % 7 * 0.25) + " 0.5 " + std::to_string(i % 11 * 0.1) + "\n";
+  text += "1e250 0 0\n";
+  points.write(text);
+  for (const std::string* out : {&csv.path, &vtp.path}) {
+    expectOneLineError(
+        runDelta("distance builtin:box --quiet --points " + points.path + " --out " + *out),
+        "line 70001 has a coordinate beyond ±2^200");
+    EXPECT_FALSE(std::filesystem::exists(*out)) << *out;
   }
 }
 

@@ -49,10 +49,10 @@ TEST(DeltaCliLimits, RunningOutOfMemoryAnywayIsOneLine) {
 
 TEST(DeltaCliLimits, PointCountsBeyondTheMemoryAreRefused) {
   // Ended in std::bad_alloc.
-  if (beyondThisMachine(275e9))
+  if (beyondThisMachine(103e9))
     expectOneLineError(runDelta("distance builtin:box --points builtin:uniform:4294967296"),
                        "points 'builtin:uniform:4294967296': 4294967296 points would need about "
-                       "275 GB of memory, more than the");
+                       "103 GB of memory, more than the");
   expectOneLineError(runDelta("distance builtin:box --points builtin:uniform:4294967297"),
                      "N must be between 1 and 2^32");
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "delta/core/error.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta::io {
 namespace {
@@ -72,6 +73,22 @@ TEST(Points, MalformedLinesAreNamedByNumber) {
     fs::remove(path);
     EXPECT_NE(message.find(c.expected), std::string::npos) << c.text << " → " << message;
     EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+  }
+}
+
+TEST(Points, CoordinatesBeyondTheQueriesRangeAreNamedByLine) {
+  // ±2^200 (kLargestCoordinate) is the last coordinate the queries answer exactly; the next
+  // double beyond is refused by its line, not later by a query that knows only its index.
+  const fs::path edge = writeFile("edge.xyz", "0 0 0\n-1.6069380442589903e+60 0 1\n");
+  const std::vector<Vec3> points = loadPoints(edge);
+  fs::remove(edge);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[1].x, -kLargestCoordinate);
+  for (const char* beyond : {"0 0 0\n1 -1.6069380442589907e+60 0\n", "0 0 0\n1 2 1e300\n"}) {
+    const fs::path path = writeFile("beyond.xyz", beyond);
+    const std::string message = loadError(path);
+    fs::remove(path);
+    EXPECT_NE(message.find("line 2 has a coordinate beyond ±2^200"), std::string::npos) << message;
   }
 }
 
