@@ -19,6 +19,7 @@
 #include "delta/query/minimum_distance.h"
 
 #include "commands.h"
+#include "csv.h"
 #include "files.h"
 #include "json.h"
 #include "mesh_source.h"
@@ -56,14 +57,19 @@ void validate(const ContactOptions& options) {
 void writeCsv(const std::vector<ContactPoint>& contacts, const std::string& path) {
   io::AtomicFile file(path);
   file.write("triangle_a,triangle_b,x,y,z,normal_x,normal_y,normal_z,distance,overlap,converged\n");
-  char line[512];
-  for (const ContactPoint& c : contacts) {
-    const int length =
-        std::snprintf(line, sizeof line, "%u,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d\n",
-                      c.first, c.second, c.x.x, c.x.y, c.x.z, c.normal.x, c.normal.y, c.normal.z,
-                      c.distance, c.overlap ? 1 : 0, c.converged ? 1 : 0);
-    file.write(std::string_view(line, static_cast<std::size_t>(length)));
-  }
+  writeRows(file, contacts.size(), [&contacts](std::string& text, std::size_t i) {
+    const ContactPoint& c = contacts[i];
+    appendNumber(text, std::uint64_t{c.first});
+    text += ',';
+    appendNumber(text, std::uint64_t{c.second});
+    for (const double value :
+         {c.x.x, c.x.y, c.x.z, c.normal.x, c.normal.y, c.normal.z, c.distance}) {
+      text += ',';
+      appendNumber(text, value);
+    }
+    text += c.overlap ? ",1" : ",0";
+    text += c.converged ? ",1\n" : ",0\n";
+  });
   file.commit();
 }
 

@@ -18,6 +18,7 @@
 #include "delta/query/point_distance.h"
 
 #include "commands.h"
+#include "csv.h"
 #include "files.h"
 #include "json.h"
 #include "mesh_source.h"
@@ -107,19 +108,23 @@ class CsvRows {
 
   /// The rows of points first, first + 1, …
   void add(std::size_t first, std::span<const contactdetection::PointDistance> answers) {
-    char line[256];
-    for (std::size_t k = 0; k < answers.size(); ++k) {
+    writeRows(file_, answers.size(), [&](std::string& text, std::size_t k) {
       const contactdetection::PointDistance& a = answers[k];
-      const std::size_t i = first + k;
-      const int length =
-          !a.found() ? std::snprintf(line, sizeof line, "%zu,,,,,%s\n", i, withInside_ ? "," : "")
-                     : std::snprintf(line, sizeof line, "%zu,%.17g,%.17g,%.17g,%.17g,%u%s\n", i,
-                                     a.distance, a.closest.x, a.closest.y, a.closest.z, a.triangle,
-                                     withInside_ ? (a.inside ? ",1" : ",0") : "");
-      file_.write(std::string_view(line, static_cast<std::size_t>(length) - 1));
+      appendNumber(text, std::uint64_t{first + k});
+      if (!a.found()) {
+        text += withInside_ ? ",,,,,," : ",,,,,";
+      } else {
+        for (const double value : {a.distance, a.closest.x, a.closest.y, a.closest.z}) {
+          text += ',';
+          appendNumber(text, value);
+        }
+        text += ',';
+        appendNumber(text, std::uint64_t{a.triangle});
+        if (withInside_) text += a.inside ? ",1" : ",0";
+      }
       // The winding sign's ambiguity last, after the columns of the other modes.
-      file_.write(!withAmbiguous_ ? "\n" : !a.found() ? ",\n" : a.ambiguous ? ",1\n" : ",0\n");
-    }
+      text += !withAmbiguous_ ? "\n" : !a.found() ? ",\n" : a.ambiguous ? ",1\n" : ",0\n";
+    });
   }
 
   void commit() { file_.commit(); }

@@ -170,5 +170,47 @@ TEST(DeltaCliOutput, ContactCsvCarriesThePenaltySolversConvergedFlag) {
   EXPECT_EQ(std::count(exact.begin(), exact.end(), 1), static_cast<long>(exact.size()));
 }
 
+TEST(DeltaCliOutput, ContactCsvRowsReadBackToTheLibrarysValues) {
+  // More rows than one thread formats at a time (kCsvRowsPerChunk, apps/delta/csv.h), each
+  // number in its shortest form: every one reads back to the library's bits.
+  const TemporaryFolder folder("contact_rows");
+  const std::string csv = (folder.path / "contacts.csv").string();
+  const CliRun run = runDelta(
+      "contact builtin:icosphere:4 builtin:icosphere:4 --translate-b 1.3,0.2,0.1 --eps 0.02 "
+      "--out '" +
+      csv + "'");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  Mesh a = primitives::icosphere(4), b = primitives::icosphere(4);
+  b.translate({1.3, 0.2, 0.1});
+  const std::vector<ContactPoint> expected =
+      contactdetection::contacts(QueryMesh(a), QueryMesh(b), 0.02);
+  ASSERT_GT(expected.size(), 2048u);
+  std::ifstream file(csv);
+  std::string line;
+  std::getline(file, line);
+  std::size_t rows = 0;
+  for (; std::getline(file, line); ++rows) {
+    ASSERT_LT(rows, expected.size());
+    const ContactPoint& c = expected[rows];
+    unsigned first = 0, second = 0;
+    int overlap = -1, converged = -1;
+    Vec3 x, normal;
+    double distance = -1.0;
+    ASSERT_EQ(
+        std::sscanf(line.c_str(), "%u,%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%d,%d", &first, &second, &x.x,
+                    &x.y, &x.z, &normal.x, &normal.y, &normal.z, &distance, &overlap, &converged),
+        11)
+        << line;
+    ASSERT_EQ(first, c.first) << line;
+    ASSERT_EQ(second, c.second) << line;
+    ASSERT_EQ(x, c.x) << line;
+    ASSERT_EQ(normal, c.normal) << line;
+    ASSERT_EQ(distance, c.distance) << line;
+    ASSERT_EQ(overlap, c.overlap ? 1 : 0) << line;
+    ASSERT_EQ(converged, c.converged ? 1 : 0) << line;
+  }
+  EXPECT_EQ(rows, expected.size());
+}
+
 }  // namespace
 }  // namespace delta::test
