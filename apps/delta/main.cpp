@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -15,6 +16,7 @@
 #include "delta/core/error.h"
 #include "delta/core/parallel.h"
 #include "delta/core/version.h"
+#include "delta/io/atomic_file.h"
 
 #include "commands.h"
 
@@ -128,8 +130,33 @@ int runCommand(int argc, char** argv) {
   return 0;
 }
 
+/// SIGINT, SIGTERM, SIGHUP (a batch system's time limit, a closed terminal): the temporary
+/// files being written are removed, then the signal ends the process as it would have (exit
+/// status 128 + the signal). Without this a stopped `delta distance --out` left its partial
+/// output beside the file it was to replace, as large as it had got. (A `delta dem` run sets
+/// handlers of its own while it steps: it finishes the step and writes a checkpoint.)
+extern "C" void discardAndEnd(int signal) {
+  delta::io::discardTemporaryFiles();
+  ::raise(signal);  // SA_RESETHAND: the default action now
+}
+
+/// Installs discardAndEnd for the signals that end a run, except those the process was started
+/// ignoring (a background job of a non-interactive shell ignores SIGINT, and should go on).
+void discardTemporaryFilesOnStop() {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction previous {};
+    if (::sigaction(signal, nullptr, &previous) != 0 || previous.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = discardAndEnd;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    ::sigaction(signal, &action, nullptr);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  discardTemporaryFilesOnStop();
   return checkStandardOutput(runCommand(argc, argv));
 }

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <climits>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -69,6 +70,37 @@ std::string uniqueSuffix() {
   return text;
 }
 
+/// The temporary files being written, for discardTemporaryFiles(): a slot is taken (0 → 1), its
+/// path written, then published (1 → 2); a signal handler reads only published slots.
+struct TrackedPath {
+  std::atomic<int> state{0};  ///< 0 free, 1 being filled, 2 published
+  char path[PATH_MAX];
+};
+static_assert(std::atomic<int>::is_always_lock_free, "read from signal handlers");
+TrackedPath trackedPaths[kTrackedTemporaryFiles];
+
+/// The slot that now names `path` (made absolute: the handler may run after a chdir), or −1
+/// where none is free or the path is too long.
+int track(const fs::path& path) noexcept {
+  std::error_code error;
+  const std::string text = fs::absolute(path, error).string();
+  if (error || text.size() >= PATH_MAX) return -1;
+  for (int slot = 0; slot < kTrackedTemporaryFiles; ++slot) {
+    int expected = 0;
+    TrackedPath& tracked = trackedPaths[slot];
+    if (!tracked.state.compare_exchange_strong(expected, 1, std::memory_order_acquire)) continue;
+    std::memcpy(tracked.path, text.c_str(), text.size() + 1);
+    tracked.state.store(2, std::memory_order_release);
+    return slot;
+  }
+  return -1;
+}
+
+void untrack(int& slot) noexcept {
+  if (slot >= 0) trackedPaths[slot].state.store(0, std::memory_order_release);
+  slot = -1;
+}
+
 /// fsyncs a folder so that a rename into it survives a crash; where the file system cannot
 /// (EINVAL), the rename stands as it is.
 void syncFolder(const fs::path& folder) {
@@ -112,6 +144,7 @@ AtomicFile::AtomicFile(const fs::path& path) : path_(path) {
                     "': " + systemReason(error));
       }
     }
+    tracked_ = track(temporary_);
     if (exists) {
       // The replacement keeps the file's owner (where allowed) and permissions.
       if (existing.st_uid != ::geteuid() || existing.st_gid != ::getegid())
@@ -135,6 +168,7 @@ void AtomicFile::discard() noexcept {
   if (descriptor_ >= 0) ::close(descriptor_);
   descriptor_ = -1;
   if (!temporary_.empty()) ::unlink(temporary_.c_str());
+  untrack(tracked_);  // after the unlink: a signal between them unlinks it again, harmlessly
   temporary_.clear();
   buffer_.clear();
 }
@@ -178,10 +212,16 @@ void AtomicFile::commit() {
   if (closed != 0 && errno != EINTR) fail(systemReason(errno));
   if (!temporary_.empty()) {
     if (::rename(temporary_.c_str(), target_.c_str()) != 0) fail(systemReason(errno));
+    untrack(tracked_);  // a signal before this finds nothing left to unlink
     temporary_.clear();
     syncFolder(target_.has_parent_path() ? target_.parent_path() : fs::path("."));
   }
   committed_ = true;
+}
+
+void discardTemporaryFiles() noexcept {
+  for (TrackedPath& tracked : trackedPaths)
+    if (tracked.state.load(std::memory_order_acquire) == 2) ::unlink(tracked.path);
 }
 
 void writeFileAtomically(const fs::path& path, std::string_view bytes) {

@@ -2,11 +2,13 @@
 // error rule, for every CLI test file.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -65,6 +67,28 @@ inline CliRun runDeltaUnder(const std::string& launcher, const std::string& argu
 /// Runs `delta ARGUMENTS` as runDeltaUnder does, with no launcher.
 inline CliRun runDelta(const std::string& arguments) {
   return runDeltaUnder("", arguments);
+}
+
+/// Starts `delta ARGUMENTS` (no shell) with its streams into `folder`/stdout and stderr, and
+/// SIGINT at its default action (a test run in the background may have it ignored); returns its
+/// pid, for the test to signal and wait for.
+inline pid_t startDelta(const std::vector<std::string>& arguments,
+                        const std::filesystem::path& folder) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int out = ::open((folder / "stdout").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err = ::open((folder / "stderr").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(err, 2);
+    ::signal(SIGINT, SIG_DFL);
+    std::vector<char*> argv{const_cast<char*>(DELTA_CLI)};
+    for (const std::string& argument : arguments)
+      argv.push_back(const_cast<char*>(argument.c_str()));
+    argv.push_back(nullptr);
+    ::execv(DELTA_CLI, argv.data());
+    ::_exit(127);
+  }
+  return pid;
 }
 
 /// The contract for bad input: a non-zero exit (not a crash), nothing on stdout, one line on

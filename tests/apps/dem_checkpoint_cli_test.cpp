@@ -25,6 +25,7 @@ using delta::test::jsonNumber;
 using delta::test::runDelta;
 using delta::test::seriesFiles;
 using delta::test::slurp;
+using delta::test::startDelta;
 using delta::test::TemporaryFolder;
 
 /// The string after "key":" in a JSON line ("" when missing).
@@ -114,24 +115,6 @@ TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
   { std::ofstream(folder.path / "cut.delta", std::ios::binary) << cut; }
   expectOneLineError(runDelta("dem --restart '" + (folder.path / "cut.delta").string() + "'"),
                      "truncated");
-}
-
-/// Starts `delta dem ...` (no shell) with its streams into `folder`; returns its pid.
-pid_t startDelta(const std::vector<std::string>& arguments, const std::filesystem::path& folder) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int out = ::open((folder / "stdout").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err = ::open((folder / "stderr").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out, 1);
-    ::dup2(err, 2);
-    std::vector<char*> argv{const_cast<char*>(DELTA_CLI)};
-    for (const std::string& argument : arguments)
-      argv.push_back(const_cast<char*>(argument.c_str()));
-    argv.push_back(nullptr);
-    ::execv(DELTA_CLI, argv.data());
-    ::_exit(127);
-  }
-  return pid;
 }
 
 /// Stops a long run with `signal` once it has logged some steps; checks its exit code, the

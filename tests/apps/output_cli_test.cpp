@@ -1,12 +1,17 @@
 // What `delta` writes is complete or reported: standard output checked before exit, every file
 // written whole or not at all (io/atomic_file.h), a symlink at --out kept.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "delta/core/contact_point.h"
@@ -210,6 +215,38 @@ TEST(DeltaCliOutput, ContactCsvRowsReadBackToTheLibrarysValues) {
     ASSERT_EQ(converged, c.converged ? 1 : 0) << line;
   }
   EXPECT_EQ(rows, expected.size());
+}
+
+TEST(DeltaCliOutput, AStoppedRunLeavesThePreviousFileAndNoTemporaryOne) {
+  // Stopped by SIGTERM (a batch system's time limit), SIGINT or SIGHUP while `delta distance`
+  // writes its rows, the run ends by the signal as before, but its temporary file goes with it
+  // (it was left behind, as large as it had got).
+  for (const int signal : {SIGTERM, SIGINT, SIGHUP}) {
+    const TemporaryFolder folder("stopped_" + std::to_string(signal));
+    const fs::path csv = folder.path / "d.csv";
+    { std::ofstream(csv) << "previous\n"; }
+    const pid_t pid =
+        startDelta({"distance", "builtin:icosphere:4", "--points", "builtin:uniform:4000000",
+                    "--quiet", "--threads", "1", "--out", csv.string()},
+                   folder.path);
+    ASSERT_GT(pid, 0);
+    const auto temporary = [&folder] {
+      for (const auto& entry : fs::directory_iterator(folder.path))
+        if (entry.path().filename().string().starts_with(".d.csv.delta-")) return true;
+      return false;
+    };
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!temporary() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    ASSERT_TRUE(temporary()) << "the run made no temporary file";
+    ::kill(pid, signal);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "not stopped by the signal: exit " << WEXITSTATUS(status);
+    EXPECT_EQ(WTERMSIG(status), signal);
+    EXPECT_FALSE(temporary()) << "signal " << signal;
+    EXPECT_EQ(slurp(csv), "previous\n");
+  }
 }
 
 }  // namespace

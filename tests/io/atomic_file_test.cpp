@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -78,6 +79,35 @@ TEST(AtomicFile, WritesTheFileWholeAndLeavesNoTemporaryFile) {
   file.commit();
   EXPECT_EQ(contentOf(path), "a,b\n" + rows + "end\n");
   EXPECT_EQ(namesIn(folder.path), std::vector<std::string>{"out.csv"});
+}
+
+TEST(AtomicFile, TemporaryFilesBeingWrittenAreDiscardedForASignal) {
+  // What a SIGINT/SIGTERM handler calls before the process ends (the `delta` tool's): every
+  // temporary file still being written goes, committed files and earlier ones stay. More files
+  // than it tracks at once: those beyond are left to their destructors.
+  Folder folder("signal");
+  const fs::path kept = folder.path / "kept.csv";
+  put(folder.path / "previous.csv", "old");
+  writeFileAtomically(kept, "done");
+  {
+    std::vector<std::unique_ptr<AtomicFile>> open;
+    for (int i = 0; i < kTrackedTemporaryFiles + 3; ++i) {
+      open.push_back(std::make_unique<AtomicFile>(folder.path / ("f" + std::to_string(i))));
+      open.back()->write("part");
+    }
+    ASSERT_EQ(namesIn(folder.path).size(), 2u + kTrackedTemporaryFiles + 3);
+    open.erase(open.begin(), open.begin() + 3);         // their slots are free again
+    AtomicFile previous(folder.path / "previous.csv");  // takes one of them
+    previous.write("new");
+    discardTemporaryFiles();
+    // The 61 tracked ones left and `previous`'s went; the three made while every slot was
+    // taken are left to their destructors.
+    EXPECT_EQ(namesIn(folder.path).size(), 2u + 3u);
+    expectError([&previous] { previous.commit(); }, {"previous.csv"});
+    EXPECT_EQ(contentOf(folder.path / "previous.csv"), "old");
+  }
+  EXPECT_EQ(namesIn(folder.path), (std::vector<std::string>{"kept.csv", "previous.csv"}));
+  EXPECT_EQ(contentOf(kept), "done");
 }
 
 TEST(AtomicFile, ReplacesAFileAndKeepsItsPermissions) {

@@ -62,7 +62,22 @@ class AtomicFile {
   int descriptor_ = -1;
   std::string buffer_;
   bool committed_ = false;
+  int tracked_ = -1;  ///< the temporary file's slot for discardTemporaryFiles(), or −1
 };
+
+/// Removes the temporary file of every AtomicFile of this process that is being written (made,
+/// neither committed nor discarded yet), without closing or unregistering anything: for a
+/// program's SIGINT or SIGTERM handler that then ends the process, so that a run stopped while
+/// it writes leaves the previous files and no temporary one (the `delta` tool does this).
+/// Async-signal-safe (atomic loads and unlink(2) only). Up to kTrackedTemporaryFiles files at
+/// once are known to it; those beyond are removed only by their destructors.
+///
+/// Threading: may be called from a signal handler on any thread while AtomicFiles are made and
+/// committed on others.
+void discardTemporaryFiles() noexcept;
+
+/// How many temporary files discardTemporaryFiles() knows of at once.
+inline constexpr int kTrackedTemporaryFiles = 64;
 
 /// Writes `bytes` to `path` through an AtomicFile: the whole of it replaces the file, or nothing
 /// changes and delta::Error names the path and the reason. Threading: as AtomicFile.
