@@ -80,11 +80,17 @@ static_assert(std::atomic<int>::is_always_lock_free, "read from signal handlers"
 TrackedPath trackedPaths[kTrackedTemporaryFiles];
 
 /// The slot that now names `path` (made absolute: the handler may run after a chdir), or −1
-/// where none is free or the path is too long.
+/// where none is free, the path is too long or it cannot be made absolute.
 int track(const fs::path& path) noexcept {
-  std::error_code error;
-  const std::string text = fs::absolute(path, error).string();
-  if (error || text.size() >= PATH_MAX) return -1;
+  std::string text;
+  try {
+    std::error_code error;
+    text = fs::absolute(path, error).string();
+    if (error) return -1;
+  } catch (...) {  // out of memory: the file is then left to its destructor
+    return -1;
+  }
+  if (text.size() >= PATH_MAX) return -1;
   for (int slot = 0; slot < kTrackedTemporaryFiles; ++slot) {
     int expected = 0;
     TrackedPath& tracked = trackedPaths[slot];
