@@ -141,9 +141,11 @@ class VtpColumns {
  public:
   VtpColumns(std::size_t count, bool withInside)
       : distance_{withInside ? "signed_distance" : "distance", 1, {}}, withInside_(withInside) {
-    // The three columns.
-    requireMemory(static_cast<double>(count) * 5 * sizeof(double),
-                  "--out .vtp for " + std::to_string(count) + " points");
+    // The three columns, beside the points already held (requireMemory weighs a total against
+    // the machine's memory, not what is free).
+    requireMemory(
+        static_cast<double>(count) * (5 * sizeof(double) + sizeof(Vec3)),
+        "the points and their --out .vtp columns for " + std::to_string(count) + " points");
     distance_.values.reserve(count);
     closest_.values.reserve(3 * count);
     triangle_.values.reserve(count);
