@@ -142,15 +142,19 @@ AtomicFile::AtomicFile(const fs::path& path) : path_(path) {
     stem.append(".delta-");
     for (int attempt = 0; descriptor_ < 0; ++attempt) {
       temporary_ = folder / (stem + uniqueSuffix());
+      // Listed before it exists: a signal between the open and the listing would leave it.
+      tracked_ = track(temporary_);
       descriptor_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-      if (descriptor_ < 0 && (errno != EEXIST || attempt == 100)) {
+      if (descriptor_ < 0) {
         const int error = errno;
-        temporary_.clear();
-        throw Error("cannot make a temporary file in '" + folder.string() +
-                    "': " + systemReason(error));
+        untrack(tracked_);  // the name is not this object's (EEXIST: another file's)
+        if (error != EEXIST || attempt == 100) {
+          temporary_.clear();
+          throw Error("cannot make a temporary file in '" + folder.string() +
+                      "': " + systemReason(error));
+        }
       }
     }
-    tracked_ = track(temporary_);
     if (exists) {
       // The replacement keeps the file's owner (where allowed) and permissions.
       if (existing.st_uid != ::geteuid() || existing.st_gid != ::getegid())
