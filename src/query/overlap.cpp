@@ -872,7 +872,12 @@ class FaceBuilder {
         addWhole(p);
         continue;
       }
-      collectElements(p);
+      if (oneCycle(p)) {
+        collectElements(p, false);
+        handOverOneFace(p);
+        continue;
+      }
+      collectElements(p, true);
       facesOfCycles(p);
       if (local_.size() > 1) joinHoles(p);
       handOver(p);
@@ -933,6 +938,16 @@ class FaceBuilder {
     faces_.push_back(whole);
   }
 
+  /// Whether piece `p`'s chain is one cycle, known before it is built: one segment, and two
+  /// crossings of its edges. (Both ends of a piece's only segment lie on its edges: an end where
+  /// an edge of the other mesh passes through it would continue along another of its segments.
+  /// The chain is then the segment and the edges' parts along one side of it.) Most crossed
+  /// triangles of a DEM overlap are such a piece.
+  bool oneCycle(std::size_t p) const noexcept {
+    return segmentStart_[p + 1] - segmentStart_[p] == 1 &&
+           crossingStart_[p + 1] - crossingStart_[p] == 2;
+  }
+
   /// The node of `key` in the piece's chain (added where new).
   std::size_t node(const EndKey& key) {
     for (std::size_t n = 0; n < nodes_.size(); ++n)
@@ -943,19 +958,21 @@ class FaceBuilder {
 
   /// Phase 2: the elements of piece `p`'s chain: its segments (oriented as the piece's side
   /// sees them), then along each edge in order the parts inside, between the corners inside and
-  /// the crossings.
-  void collectElements(std::size_t p) {
+  /// the crossings. With `nodes` false (a chain known to be one cycle), their nodes are not
+  /// looked up (left 0).
+  void collectElements(std::size_t p, bool nodes) {
     const std::uint32_t sorted = pieces_[p].sorted;
     const PlacedTriangle& t = side_.triangle(sorted);
     nodes_.clear();
     elements_.clear();
+    const auto nodeOf = [&](const EndKey& key) { return nodes ? node(key) : 0; };
     for (std::uint32_t k = segmentStart_[p]; k < segmentStart_[p + 1]; ++k) {
       const Segment& segment = query_.segments[segmentOrder_[k]];
       if (ofA_)
-        elements_.push_back({node(segment.startKey), node(segment.endKey), segment.start,
+        elements_.push_back({nodeOf(segment.startKey), nodeOf(segment.endKey), segment.start,
                              segment.end, segmentOrder_[k]});
       else
-        elements_.push_back({node(segment.endKey), node(segment.startKey), segment.end,
+        elements_.push_back({nodeOf(segment.endKey), nodeOf(segment.startKey), segment.end,
                              segment.start, segmentOrder_[k]});
     }
     for (std::size_t i = 0; i < 3; ++i) {
@@ -967,14 +984,14 @@ class FaceBuilder {
       for (const EdgeCrossing* c : along_) {
         if (inside == 1)
           elements_.push_back(
-              {node(previous), node(c->key), previousPoint, c->point, kNoSegment, i});
+              {nodeOf(previous), nodeOf(c->key), previousPoint, c->point, kNoSegment, i});
         inside += c->sigma;
         previous = c->key;
         previousPoint = c->point;
       }
       if (inside != side_.state(t.slots[i1]).inside) inconsistent();
       if (inside == 1)
-        elements_.push_back({node(previous), node(vertexKey(side_.corner(sorted, i1))),
+        elements_.push_back({nodeOf(previous), nodeOf(vertexKey(side_.corner(sorted, i1))),
                              previousPoint, t.local[i1], kNoSegment, i});
     }
   }
@@ -1093,6 +1110,31 @@ class FaceBuilder {
       while (edge < element.edge)  // the edges' parts come in order of edges, each along it
         intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
       intervalFaces_.push_back(face);
+    }
+    while (edge < 2)
+      intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
+  }
+
+  /// Phases 3–5 for a chain of one cycle (oneCycle): one face, summed as facesOfCycles sums it
+  /// (element by element, in order), handed over as handOver hands it.
+  void handOverOneFace(std::size_t p) {
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    Face face{{}, ofA_};
+    for (const Element& element : elements_)
+      face.integrals.add(t.local[0], element.p, element.q);
+    const std::size_t index = faces_.size();
+    faces_.push_back(face);
+    std::size_t edge = 0;
+    intervalStart_[3 * p] = static_cast<std::uint32_t>(intervalFaces_.size());
+    for (const Element& element : elements_) {
+      if (element.segment != kNoSegment) {
+        Segment& segment = query_.segments[element.segment];
+        (ofA_ ? segment.faceA : segment.faceB) = index;
+        continue;
+      }
+      while (edge < element.edge)
+        intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
+      intervalFaces_.push_back(index);
     }
     while (edge < 2)
       intervalStart_[3 * p + ++edge] = static_cast<std::uint32_t>(intervalFaces_.size());
