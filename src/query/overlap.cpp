@@ -450,7 +450,8 @@ void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
   struct Entry {
     std::size_t level, index;
   };
-  std::vector<Entry> stack{{data.levels.size() - 1, 0}};
+  std::vector<Entry>& stack = recycled<Entry, 0>();  // its capacity kept: no allocation a call
+  stack.assign(1, {data.levels.size() - 1, 0});
   while (!stack.empty()) {
     const Entry entry = stack.back();
     stack.pop_back();
@@ -842,9 +843,11 @@ struct Element {
   std::size_t edge = 3;              ///< the triangle's edge it is a part of (3: a segment)
 };
 
-/// Union–find over small index sets.
+/// Union–find over small index sets, in a buffer of the caller's (recycled: allocated for each
+/// query, the sets cost a malloc and a free each).
 class UnionFind {
  public:
+  explicit UnionFind(std::vector<std::size_t>& parent) noexcept : parent_(parent) {}
   void reset(std::size_t count) {
     parent_.resize(count);
     std::iota(parent_.begin(), parent_.end(), std::size_t{0});
@@ -857,7 +860,7 @@ class UnionFind {
   void join(std::size_t i, std::size_t j) noexcept { parent_[find(i)] = find(j); }
 
  private:
-  std::vector<std::size_t> parent_;
+  std::vector<std::size_t>& parent_;
 };
 
 /// Whether the point `point` lies inside the closed chain of `elements` (those of face `face`
@@ -1228,7 +1231,7 @@ class FaceBuilder {
   std::vector<std::size_t>& faceOf_ = recycled<std::size_t, 2>();
   std::vector<Face>& local_ = recycled<Face, 1>();
   std::vector<char>& touchesEdge_ = recycled<char, 0>();
-  UnionFind cycles_;
+  UnionFind cycles_{recycled<std::size_t, 20>()};
 };
 
 void buildFaces(Side& side, Query& query, std::vector<Face>& faces,
@@ -1634,7 +1637,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   classify(a, b);
   classify(b, a);
   std::vector<Face>& faces = recycled<Face, 0>();
-  UnionFind regions;
+  UnionFind regions(recycled<std::size_t, 21>());
   joinRegions(query, faces, regions);
   const std::vector<Sums>& byRoot = sumRegions(query, faces, regions);
   const std::vector<std::size_t>& regionOfRoot = reportRegions(query, byRoot, result);
