@@ -405,7 +405,7 @@ const TriangleSoA& QueryMeshData::meshOrder() const {
   return meshOrder_;
 }
 
-const Pseudonormals& QueryMeshData::pseudonormals() const {
+const Pseudonormals& QueryMeshData::makePseudonormals() const {
   std::call_once(pseudonormalsOnce_, [this] {
     pseudonormals_ = delta::pseudonormals(*this);
     pseudonormalsMade_.store(true, std::memory_order_release);

@@ -250,7 +250,13 @@ struct QueryMeshData {
   bool pseudonormalsMade() const noexcept {
     return pseudonormalsMade_.load(std::memory_order_acquire);
   }
-  const Pseudonormals& pseudonormals() const;
+  /// The pseudonormals and the triangles across each edge, made on the first call (inline once
+  /// made: the overlap query walks across edges a few hundred times a DEM pair).
+  const Pseudonormals& pseudonormals() const {
+    if (pseudonormalsMade()) [[likely]]
+      return pseudonormals_;
+    return makePseudonormals();
+  }
 
   /// The mesh's self-intersections (query/self_intersections.h), found on the first call and
   /// kept. Thread-safe.
@@ -266,6 +272,8 @@ struct QueryMeshData {
   bool windingTreeMade() const noexcept { return windingTreeMade_.load(std::memory_order_acquire); }
 
  private:
+  const Pseudonormals& makePseudonormals() const;
+
   mutable std::once_flag meshOrderOnce_;
   mutable TriangleSoA meshOrder_;
   mutable std::atomic<bool> meshOrderMade_{false};
