@@ -501,35 +501,24 @@ struct End {
 };
 
 /// detail::edgeSign(a[i], a[i + 1], b[j], b[j + 1]) into out[i][j] for the nine pairs of edges
-/// of two triangles, each of which crosses the other's plane: the filter of orientSign on all
-/// nine in straight-line code (the differences from each corner of `a` shared), the exact
-/// evaluation only where it cannot decide. (Called one at a time, the predicate was a seventh
-/// of a volume-law DEM step.)
+/// of two triangles, each of which crosses the other's plane: orientSign's filter on all nine in
+/// straight-line code (the differences from each corner of `a` shared), the exact evaluation
+/// only where it cannot decide. (Called one at a time, the predicate was a seventh of a
+/// volume-law DEM step.)
 void edgeSigns(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b, int (&out)[3][3]) {
-  constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;
-  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
-  double det[3][3], bound[3][3];
+  int filtered[3][3];
   for (std::size_t i = 0; i < 3; ++i) {
     const Vec3& p = a[i];
     const Vec3 u = a[(i + 1) % 3] - p;
     const Vec3 d[3] = {b[0] - p, b[1] - p, b[2] - p};
-    for (std::size_t j = 0; j < 3; ++j) {
-      const Vec3 &v = d[j], &w = d[(j + 1) % 3];
-      // orientSign(p, p + u, p + v, p + w)'s operations, in its order.
-      const double pa = v.y * w.z, pb = v.z * w.y, pc = v.z * w.x, pd = v.x * w.z, pe = v.x * w.y,
-                   pf = v.y * w.x;
-      det[i][j] = u.x * (pa - pb) + u.y * (pc - pd) + u.z * (pe - pf);
-      bound[i][j] = kBound * (std::abs(u.x) * (std::abs(pa) + std::abs(pb)) +
-                              std::abs(u.y) * (std::abs(pc) + std::abs(pd)) +
-                              std::abs(u.z) * (std::abs(pe) + std::abs(pf)));
-    }
+    for (std::size_t j = 0; j < 3; ++j)
+      filtered[i][j] = detail::filteredOrientSign(u, d[j], d[(j + 1) % 3]);
   }
   for (std::size_t i = 0; i < 3; ++i)
-    for (std::size_t j = 0; j < 3; ++j) {
-      const int sign =
-          static_cast<int>(det[i][j] > bound[i][j]) - static_cast<int>(-det[i][j] > bound[i][j]);
-      out[i][j] = sign != 0 ? sign : detail::edgeSign(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
-    }
+    for (std::size_t j = 0; j < 3; ++j)
+      out[i][j] = filtered[i][j] != 0
+                      ? filtered[i][j]
+                      : detail::edgeSign(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
 }
 
 /// The crossing of triangle ta of A with triangle tb of B: at most one segment, and the crossings

@@ -34,22 +34,28 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 /// (0 where the cross product is the zero vector).
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
-/// The sign of orient(p, q, r, s) (−1, 0, +1): filtered, exact where the filter fails.
-inline int orientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
-  const double ux = q.x - p.x, uy = q.y - p.y, uz = q.z - p.z;
-  const double vx = r.x - p.x, vy = r.y - p.y, vz = r.z - p.z;
-  const double wx = s.x - p.x, wy = s.y - p.y, wz = s.z - p.z;
-  const double a = vy * wz, b = vz * wy, c = vz * wx, d = vx * wz, e = vx * wy, f = vy * wx;
-  const double det = ux * (a - b) + uy * (c - d) + uz * (e - f);
-  const double permanent = std::abs(ux) * (std::abs(a) + std::abs(b)) +
-                           std::abs(uy) * (std::abs(c) + std::abs(d)) +
-                           std::abs(uz) * (std::abs(e) + std::abs(f));
+/// The filter's sign of orient(p, q, r, s) from the differences u = q − p, v = r − p,
+/// w = s − p (rounded): the determinant u·(v × w) in floating point, decided where it exceeds
+/// Shewchuk's bound on its rounding; 0 where it cannot decide.
+[[gnu::always_inline]] inline int filteredOrientSign(const Vec3& u, const Vec3& v,
+                                                     const Vec3& w) noexcept {
+  const double a = v.y * w.z, b = v.z * w.y, c = v.z * w.x, d = v.x * w.z, e = v.x * w.y,
+               f = v.y * w.x;
+  const double det = u.x * (a - b) + u.y * (c - d) + u.z * (e - f);
+  const double permanent = std::abs(u.x) * (std::abs(a) + std::abs(b)) +
+                           std::abs(u.y) * (std::abs(c) + std::abs(d)) +
+                           std::abs(u.z) * (std::abs(e) + std::abs(f));
   constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;  // 2⁻⁵³
   constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
   const double bound = kBound * permanent;
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return exactOrientSign(p, q, r, s);
+  // Without branches: the callers' signs are a coin toss to the predictor.
+  return static_cast<int>(det > bound) - static_cast<int>(-det > bound);
+}
+
+/// The sign of orient(p, q, r, s) (−1, 0, +1): filtered, exact where the filter fails.
+inline int orientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const int sign = filteredOrientSign(q - p, r - p, s - p);
+  return sign != 0 ? sign : exactOrientSign(p, q, r, s);
 }
 
 /// The side of triangle (p, q, r) of A on which vertex s of B lies, B perturbed (never 0 unless
