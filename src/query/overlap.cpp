@@ -158,9 +158,7 @@ inline int filteredSide(const PlacedTriangle& t, const Vec3& s) noexcept {
   const double det = dot(w, t.minors);
   const double permanent =
       std::abs(w.x) * t.permanent.x + std::abs(w.y) * t.permanent.y + std::abs(w.z) * t.permanent.z;
-  constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;
-  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
-  const double bound = kBound * permanent;
+  const double bound = detail::kOrientErrorBound * permanent;
   // Without branches: the signs of a triangle pair's corners are a coin toss to the predictor.
   return static_cast<int>(det > bound) - static_cast<int>(-det > bound);
 }
@@ -540,7 +538,9 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
   if (flatA && flatB) return;
   if (!flatA && sideB[0] == sideB[1] && sideB[1] == sideB[2]) return;
 
-  int edge[3][3] = {};  // edgeSign(A edge i, B edge j), 0 until computed
+  // edgeSign(A edge i, B edge j): all nine at once where neither triangle is flat, else each
+  // when first asked (0 until then).
+  int edge[3][3] = {};
   if (!flatA && !flatB) edgeSigns(a, b, edge);
   // Inlined: out of line, the call cost 1% of a volume-law DEM step.
   const auto edgeSign = [&](std::size_t i, std::size_t j) __attribute__((always_inline)) {

@@ -21,7 +21,6 @@
 // to an edge of a triangle is parallel to its plane and cannot cross it).
 
 #include <cmath>
-#include <limits>
 
 #include "delta/core/vec3.h"
 
@@ -34,6 +33,10 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 /// (0 where the cross product is the zero vector).
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
+/// Shewchuk's bound on the rounding of orient's determinant of differences, relative to its
+/// permanent (the sum of the absolute values of its products): (7 + 56ε)ε, ε = 2⁻⁵³.
+inline constexpr double kOrientErrorBound = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
+
 /// The filter's sign of orient(p, q, r, s) from the differences u = q − p, v = r − p,
 /// w = s − p (rounded): the determinant u·(v × w) in floating point, decided where it exceeds
 /// Shewchuk's bound on its rounding; 0 where it cannot decide.
@@ -45,9 +48,7 @@ int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec
   const double permanent = std::abs(u.x) * (std::abs(a) + std::abs(b)) +
                            std::abs(u.y) * (std::abs(c) + std::abs(d)) +
                            std::abs(u.z) * (std::abs(e) + std::abs(f));
-  constexpr double kEps = std::numeric_limits<double>::epsilon() * 0.5;  // 2⁻⁵³
-  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
-  const double bound = kBound * permanent;
+  const double bound = kOrientErrorBound * permanent;
   // Without branches: the callers' signs are a coin toss to the predictor.
   return static_cast<int>(det > bound) - static_cast<int>(-det > bound);
 }
