@@ -371,7 +371,7 @@ class Side {
       lower[axis] = floatBelow(otherBox_.lower[axis] - reference_[axis]);
       upper[axis] = floatAbove(otherBox_.upper[axis] - reference_[axis]);
     }
-    made.nearOther = detail::lanesMeeting(made.boxes, lower, upper);
+    made.nearOther = detail::lanesMeeting(made.boxes, lower, upper) & ((1u << count) - 1);
     return made;
   }
 

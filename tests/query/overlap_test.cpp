@@ -70,6 +70,25 @@ TEST(Overlap, NestedMeshesShareTheSmallerOne) {
   }
 }
 
+TEST(Overlap, AMeshBeyondSinglePrecisionsRangeAroundAnother) {
+  // Beyond 2¹⁰⁰ the leaves' single-precision boxes have no bounds (−∞, +∞), and the other
+  // mesh's box none either beyond 3.4e38; the empty lanes past a leaf's last triangle (a box's
+  // 12 triangles fill one and a half leaves) were taken to meet them, and triangles past the
+  // mesh's end were read (found by fuzzing DEM checkpoints).
+  for (const double size : {1e30, 1e39, 1e50, 1e59}) {
+    const QueryMesh big(primitives::box({size, size, size}));
+    const QueryMesh small = placed(primitives::box({1, 2, 3}),
+                                   {Quaternion::fromAxisAngle({1, 1, 0}, 0.3), {0.5, 0, 0}});
+    OverlapCache cache(0.1);
+    for (const Overlap& o :
+         {overlap(big, small), overlap(small, big), overlap(big, small, {}, cache)}) {
+      ASSERT_EQ(o.regions.size(), 1u) << size;
+      EXPECT_NEAR(o.total.volume, 6.0, 6.0 * 1e-15) << size;
+      EXPECT_NEAR(length(o.total.centroid - Vec3{0.5, 0, 0}), 0.0, 1e-15) << size;
+    }
+  }
+}
+
 TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {
   const QueryMesh a(primitives::box({1, 1, 1}));
   for (const Vec3& offset : {Vec3{3, 0, 0}, Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0},

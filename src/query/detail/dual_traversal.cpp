@@ -148,7 +148,10 @@ FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::si
 
 std::uint32_t lanesMeeting(const FloatOctet& boxes, const float lower[3],
                            const float upper[3]) noexcept {
-  // Without branches, so that it vectorises (a branch a lane would be a coin toss).
+  // Without branches, so that it vectorises (a branch a lane would be a coin toss). An empty
+  // lane (+∞, −∞) is tested as such: against a box without bounds (−∞, +∞: a mesh beyond single
+  // precision's range) the two closed comparisons alone hold for it, and the overlap query then
+  // placed triangles past the leaf's last, reading outside the mesh.
   std::int32_t meets[kFanout];
   for (std::size_t i = 0; i < kFanout; ++i)
     meets[i] = 1;
@@ -156,7 +159,8 @@ std::uint32_t lanesMeeting(const FloatOctet& boxes, const float lower[3],
 #pragma GCC unroll 1  // left whole, GCC vectorises the loop; unrolled first, it did not
     for (std::size_t i = 0; i < kFanout; ++i)
       meets[i] &= static_cast<std::int32_t>(lower[axis] <= boxes.upper[axis][i]) &
-                  static_cast<std::int32_t>(boxes.lower[axis][i] <= upper[axis]);
+                  static_cast<std::int32_t>(boxes.lower[axis][i] <= upper[axis]) &
+                  static_cast<std::int32_t>(boxes.lower[axis][i] <= boxes.upper[axis][i]);
   std::uint32_t mask = 0;
   for (std::size_t i = 0; i < kFanout; ++i)
     mask |= static_cast<std::uint32_t>(meets[i]) << i;

@@ -75,7 +75,7 @@ FloatOctet movedLeafBoxes(const FloatTriangles& lanes, std::size_t leaf, std::si
                           const MatrixMotion* motion, const Vec3& reference) noexcept;
 
 /// The lanes of `boxes` (bit i: lane i) that meet the box [lower, upper] (closed boxes; an empty
-/// lane meets nothing), all eight at once.
+/// lane meets nothing, not even a box without bounds), all eight at once.
 std::uint32_t lanesMeeting(const FloatOctet& boxes, const float lower[3],
                            const float upper[3]) noexcept;
 
