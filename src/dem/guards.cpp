@@ -30,11 +30,35 @@ double reachFrom(const Aabb& box, const Vec3& pivot) noexcept {
   return farthest;
 }
 
-/// The least distance from the origin to the segment from `a` to `a + d`.
+/// The power of two that brings `largest` (finite, positive) near 1: a scaling that rounds
+/// nothing, so that squares of finite values beyond 1e154 do not overflow.
+double unitScale(double largest) noexcept {
+  return std::ldexp(1.0, -std::ilogb(largest));
+}
+
+/// |v|, also where |v|² would overflow (a velocity beyond 1e154 is finite, and must not be
+/// taken for one that is not: the guard would leave its particle out); NaN or +∞ for a vector
+/// that is not finite.
+double magnitude(const Vec3& v) noexcept {
+  const double largest = maxAbs(v);
+  if (!isFinite(v) || largest == 0.0) return length(v);
+  const double scale = unitScale(largest);
+  return length(v * scale) / scale;
+}
+
+/// The least distance from the origin to the segment from `a` to `a + d`, scaled so that no
+/// square overflows: the fraction t of the way from `a` and `d` brought near 1 together, the
+/// distance by magnitude(). (From +∞ in dot(d, d), t was 0 and the distance |a|: a pass-through
+/// unseen. Scaled together, a's squares may underflow against a large d, and its distance is
+/// its own.)
 double closestApproach(const Vec3& a, const Vec3& d) noexcept {
-  const double dd = dot(d, d);
-  const double t = dd > 0.0 ? std::clamp(-dot(a, d) / dd, 0.0, 1.0) : 0.0;
-  return length(a + d * t);
+  const double largest = std::max(maxAbs(a), maxAbs(d));
+  if (!(largest > 0.0) || !std::isfinite(largest)) return magnitude(a);
+  const double scale = unitScale(largest);
+  const Vec3 as = a * scale, ds = d * scale;
+  const double dd = dot(ds, ds);
+  const double t = dd > 0.0 ? std::clamp(-dot(as, ds) / dd, 0.0, 1.0) : 0.0;
+  return magnitude(a + d * t);
 }
 
 /// The box of `box`'s corners carried by `pose`.
@@ -103,8 +127,8 @@ void World::requireCatchableMotion() const {
     const Particle& particle = particles_[i];
     const ParticleShape& shape = shapes_[particle.shape];
     return Motion{particle.velocity + (particle.force / shape.mass() + parameters_.gravity) * half,
-                  length(angularVelocityOf(particle, particle.orientation,
-                                           particle.angularMomentum + particle.torque * half))};
+                  magnitude(angularVelocityOf(particle, particle.orientation,
+                                              particle.angularMomentum + particle.torque * half))};
   };
   const auto radius = [&](std::size_t i) { return shapes_[particles_[i].shape].boundingRadius(); };
   // 1. Each particle's speed bound, |v| + |ω|·r.
@@ -112,7 +136,7 @@ void World::requireCatchableMotion() const {
   parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const Motion motion = motionOf(i);
-      speeds[i] = length(motion.velocity) + motion.angular * radius(i);
+      speeds[i] = magnitude(motion.velocity) + motion.angular * radius(i);
     }
   });
   // 2. Each obstacle's box and speed.
@@ -134,8 +158,8 @@ void World::requireCatchableMotion() const {
     const Particle& particle = particles_[i];
     const double safe = shell / (speeds[i] + otherSpeed);
     throw Error("dem: particle " + std::to_string(ids_[i]) + " (speed " +
-                toString(length(particle.velocity)) + ", angular speed " +
-                toString(length(particle.angularVelocity)) + ") would move " +
+                toString(magnitude(particle.velocity)) + ", angular speed " +
+                toString(magnitude(particle.angularVelocity)) + ") would move " +
                 toString(speeds[i] * dt) + " in step " + std::to_string(stepCount_ + 1) +
                 " within reach of " + other + ": together they could approach by " +
                 toString((speeds[i] + otherSpeed) * dt) +
