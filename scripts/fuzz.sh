@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Fuzzes every reader Δ owns (fuzz/: OFF, PLY, OBJ, STL meshes, query points, the DEM config)
-# with libFuzzer under AddressSanitizer + UndefinedBehaviorSanitizer: builds the targets with
-# clang (in BUILD, default build-fuzz/), replays every regression input in tests/fuzz/TARGET/,
-# then fuzzes each target for SECONDS (default 20) from seeds: those regression inputs, assimp's
-# test models and CGAL's meshes of the target's format, and the corpus earlier runs grew in
-# BUILD/corpus/. Fails on the first crash, leak, hang (10 s an input) or sanitizer report,
-# leaving the input in BUILD/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a
-# regression.
+# Fuzzes every reader Δ owns (fuzz/: OFF, PLY, OBJ, STL meshes, query points, the DEM config,
+# DEM checkpoints), and the queries on the meshes they give, with libFuzzer under
+# AddressSanitizer + UndefinedBehaviorSanitizer: builds the targets with clang (in BUILD,
+# default build-fuzz/), replays every regression input in tests/fuzz/TARGET/, then fuzzes each
+# target for SECONDS (default 20) from seeds: those regression inputs, assimp's test models and
+# CGAL's meshes of the target's format, and the corpus earlier runs grew in BUILD/corpus/. Fails
+# on the first crash, leak, hang (10 s an input) or sanitizer report, leaving the input in
+# BUILD/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a regression.
 #   scripts/fuzz.sh [SECONDS [BUILD]]
 # BUILD, when given, is a sanitized clang build already configured with -DDELTA_BUILD_FUZZERS=ON
 # (scripts/test.sh passes its ASan build, so that the library is compiled once); otherwise
@@ -25,13 +25,13 @@ else
   grep -q '^DELTA_BUILD_FUZZERS:BOOL=ON' "$build/CMakeCache.txt" ||
     { echo "fuzz.sh: $build is not configured with -DDELTA_BUILD_FUZZERS=ON" >&2; exit 1; }
   cmake --build "$build" --target fuzz_load_off fuzz_load_ply fuzz_load_obj fuzz_load_stl \
-    fuzz_points fuzz_dem_config
+    fuzz_points fuzz_dem_config fuzz_checkpoint fuzz_queries
 fi
 
 # Seeds a target starts from, beside its regression inputs: files of its format under 64 KiB.
 seeds() {
   case $1 in
-    load_off) find data/assimp/OFF data/meshes -maxdepth 2 -name '*.off' -size -64k ;;
+    load_off | queries) find data/assimp/OFF data/meshes -maxdepth 2 -name '*.off' -size -64k ;;
     load_ply) find data/assimp/PLY -name '*.ply' -size -64k ;;
     load_obj) find data/assimp/OBJ -name '*.obj' -size -64k ;;
     load_stl) find data/assimp/STL -iname '*.stl' -size -64k ;;
@@ -39,7 +39,7 @@ seeds() {
 }
 
 total=0
-for target in load_off load_ply load_obj load_stl points dem_config; do
+for target in load_off load_ply load_obj load_stl points dem_config checkpoint queries; do
   fuzzer=$build/fuzz/fuzz_$target
   regressions=tests/fuzz/$target
   corpus=$build/corpus/$target

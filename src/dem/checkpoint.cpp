@@ -193,6 +193,24 @@ class Reader {
   std::size_t position_ = 0;
 };
 
+/// Whether `q` is an orientation as a World holds one: finite and of unit norm up to rounding
+/// (every orientation a World makes is renormalised; Quaternion's product, World::addParticle).
+/// Anything else would turn a body by a rotation the file does not say.
+bool unitQuaternion(const Quaternion& q) noexcept {
+  const double norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  return std::abs(norm2 - 1.0) <= 1e-9;  // false for NaN and ±∞
+}
+
+/// The ids of pair key `key` (lower id, then the other particle's id or the obstacle's index:
+/// World's neighbour list) name a particle and a particle after it, or a particle and an
+/// obstacle.
+bool pairKeyInRange(std::uint64_t key, bool withObstacle, std::size_t particles,
+                    std::size_t obstacles) noexcept {
+  const std::uint64_t first = key >> 32, second = key & 0xffffffffu;
+  return first < particles &&
+         (withObstacle ? second < obstacles : first < second && second < particles);
+}
+
 /// FNV-1a over the bytes, then a SplitMix64 finaliser so that every bit depends on every byte.
 std::uint64_t hash64(std::string_view bytes) noexcept {
   std::uint64_t hash = 0xcbf29ce484222325ull;
@@ -358,6 +376,8 @@ class CheckpointCodec {
                           isFinite(particle.torque) && std::isfinite(q.w) && std::isfinite(q.x) &&
                           std::isfinite(q.y) && std::isfinite(q.z);
       if (!finite) in.fail("particle " + std::to_string(i) + " has a value that is not finite");
+      if (!unitQuaternion(q))
+        in.fail("particle " + std::to_string(i) + "'s orientation is not a unit quaternion");
       world.ids_[i] = static_cast<std::uint32_t>(i);
     }
     world.owned_ = particles;
@@ -365,8 +385,11 @@ class CheckpointCodec {
     in.tag("SPRG");
     for (auto* springs : {&world.particleSprings_, &world.obstacleSprings_}) {
       springs->resize(in.count(8 * 5, "spring"));
-      for (auto& entry : *springs)
+      for (auto& entry : *springs) {
         entry = in.spring();
+        if (!isFinite(entry.second.displacement) || !std::isfinite(entry.second.twist))
+          in.fail("a spring has a value that is not finite");
+      }
       for (std::size_t s = 1; s < springs->size(); ++s)
         if (!((*springs)[s - 1].first < (*springs)[s].first)) in.fail("springs out of order");
     }
@@ -383,6 +406,8 @@ class CheckpointCodec {
       motion.velocity = in.vec();
       motion.angularVelocity = in.vec();
       motion.pivot = in.vec();
+      if (!unitQuaternion(pose.rotation) || !isFinite(pose.translation))
+        in.fail(what + "'s pose is not a rotation and a finite translation");
       try {
         world.addObstacle(mesh, motion);
       } catch (const Error& error) {
@@ -390,6 +415,13 @@ class CheckpointCodec {
       }
       world.obstacles_.back().pose = pose;
     }
+    // The springs' keys, now that the obstacles are known: a spring of no pair could never be
+    // found, and one is a sign of a file that no World wrote.
+    for (const bool withObstacle : {false, true})
+      for (const auto& entry : withObstacle ? world.obstacleSprings_ : world.particleSprings_)
+        if (!pairKeyInRange(entry.first, withObstacle, particles, obstacles))
+          in.fail("a spring's pair key names no pair of the file's " + std::to_string(particles) +
+                  " particles and " + std::to_string(obstacles) + " obstacles");
 
     in.tag("CONT");
     world.contactsPending_ = false;
@@ -412,6 +444,7 @@ class CheckpointCodec {
         contact.couple = in.vec();
         contact.volume = in.f64();
       }
+      checkContact(in, world, contact);
     }
 
     in.tag("NOTE");
@@ -419,6 +452,30 @@ class CheckpointCodec {
     if (!in.atEnd()) in.fail("bytes after the last section");
     world.forcesCurrent_ = forcesCurrent;  // addObstacle cleared it
     return checkpoint;
+  }
+
+  /// A contact read back names a pair of the world and triangles of its meshes, and its
+  /// numbers are finite, as every contact a World reports (they are handed on as they are: to
+  /// Python's arrays, the contact files).
+  static void checkContact(Reader& in, const World& world, const Contact& contact) {
+    const std::size_t c = static_cast<std::size_t>(&contact - world.contacts_.data());
+    const std::string what = "contact " + std::to_string(c);
+    const ContactPoint& point = contact.point;
+    if (!isFinite(point.x) || !isFinite(point.normal) || !isFinite(point.direction) ||
+        !std::isfinite(point.distance) || !std::isfinite(contact.depth) ||
+        !isFinite(contact.force) || !isFinite(contact.couple) || !std::isfinite(contact.volume))
+      in.fail(what + " has a value that is not finite");
+    const std::uint64_t key = std::uint64_t{contact.first} << 32 | contact.second;
+    if (!pairKeyInRange(key, contact.withObstacle, world.owned_, world.obstacles_.size()))
+      in.fail(what + " names no pair of the file's " + std::to_string(world.owned_) +
+              " particles and " + std::to_string(world.obstacles_.size()) + " obstacles");
+    const Mesh& second = contact.withObstacle
+                             ? world.obstacles_[contact.second].mesh
+                             : world.shapes_[world.particles_[contact.second].shape].mesh();
+    if (point.first >=
+            world.shapes_[world.particles_[contact.first].shape].mesh().triangleCount() ||
+        point.second >= second.triangleCount())
+      in.fail(what + " names a triangle its meshes do not have");
   }
 
   static std::string canonicalState(const World& world) {

@@ -97,6 +97,52 @@ ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
 
 namespace delta {
 
+namespace {
+
+/// Whether `stored` is `derived` up to the rounding of deriving it again (2⁻³⁰ of the larger).
+bool agrees(double stored, double derived) noexcept {
+  return std::abs(stored - derived) <= 0x1p-30 * std::max(std::abs(stored), std::abs(derived));
+}
+
+/// Throws unless `properties` are what `body` (a sphere of `sphereRadius` > 0, or the mesh at
+/// its centre of mass) and `density` give, up to rounding: a shape whose stored numbers do not
+/// match its mesh would move as some other body.
+void requireMatchingProperties(const Mesh& body, double density, const MassProperties& properties,
+                               double sphereRadius) {
+  MassProperties derived;
+  if (sphereRadius > 0.0) {
+    const dem::ParticleShape sphere = dem::ParticleShape::sphere(sphereRadius, density, 0);
+    derived.volume = sphere.volume();
+    derived.mass = sphere.mass();
+    derived.inertia = sphere.inertia();
+  } else {
+    const Topology topology = analyzeTopology(body);
+    if (!topology.closed || !topology.consistentlyOriented)
+      throw Error("particle shape: the mesh must be closed and consistently oriented (" +
+                  describeDefects(topology) + ")");
+    derived = massProperties(body, density);
+    // The body is at its centre of mass: its centroid is 0 up to rounding of its size.
+    const double size = std::max(maxAbs(body.bounds().lower), maxAbs(body.bounds().upper));
+    if (!(maxAbs(derived.centroid) <= 0x1p-30 * size))
+      throw Error("particle shape: the mesh's centre of mass " + toString(derived.centroid) +
+                  " is not at its origin");
+  }
+  bool matches = agrees(properties.volume, derived.volume) && agrees(properties.mass, derived.mass);
+  double largest = 0.0;
+  for (const double entry : derived.inertia.entries)
+    largest = std::max(largest, std::abs(entry));
+  for (std::size_t k = 0; k < 9; ++k)
+    matches = matches && std::abs(properties.inertia.entries[k] - derived.inertia.entries[k]) <=
+                             0x1p-30 * largest;
+  if (!matches)
+    throw Error("particle shape: the stored volume " + toString(properties.volume) + ", mass " +
+                toString(properties.mass) +
+                " and inertia do not match the mesh and density (volume " +
+                toString(derived.volume) + ", mass " + toString(derived.mass) + ")");
+}
+
+}  // namespace
+
 dem::ParticleShape detail::restoredShape(const Mesh& body, double density,
                                          const MassProperties& properties, double sphereRadius) {
   dem::requireDensity(density);
@@ -107,6 +153,9 @@ dem::ParticleShape detail::restoredShape(const Mesh& body, double density,
   if (!std::isfinite(sphereRadius) || sphereRadius < 0.0)
     throw Error("particle shape: sphere radius = " + toString(sphereRadius) +
                 " must be finite and non-negative");
+  if (!isFinite(properties.centroid))
+    throw Error("particle shape: centroid " + toString(properties.centroid) + " is not finite");
+  requireMatchingProperties(body, density, properties, sphereRadius);
   return dem::ParticleShape(PreparedShape{body, properties, density, sphereRadius});
 }
 

@@ -1127,19 +1127,37 @@ void World::step() {
 }
 
 void World::requireFiniteParticles(Exchange* exchange) const {
-  std::uint32_t failed = std::numeric_limits<std::uint32_t>::max();
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::uint32_t particle = kNone, spring = kNone;
+  // Every field a checkpoint holds (and its reader checks): a World that stepped into a value
+  // that is not finite anywhere would write a checkpoint that cannot be read back.
   for (std::size_t i = 0; i < owned_; ++i) {
-    const Particle& particle = particles_[i];
-    if (!isFinite(particle.position) || !isFinite(particle.velocity) ||
-        !isFinite(particle.angularMomentum))
-      failed = std::min(failed, ids_[i]);
+    const Particle& p = particles_[i];
+    const Quaternion& q = p.orientation;
+    if (!isFinite(p.position) || !isFinite(p.velocity) || !isFinite(p.angularMomentum) ||
+        !isFinite(p.angularVelocity) || !isFinite(p.force) || !isFinite(p.torque) ||
+        !std::isfinite(q.w + q.x + q.y + q.z))
+      particle = std::min(particle, ids_[i]);
   }
+  // And the friction springs, by their pair's lower id (a spring kept from a checkpoint longer
+  // than its contact's forces could have made it turned into NaN at the Coulomb limit).
+  for (const auto* springs : {&particleSprings_, &obstacleSprings_})
+    for (const auto& [key, kept] : *springs)
+      if (!isFinite(kept.displacement) || !std::isfinite(kept.twist))
+        spring = std::min(spring, static_cast<std::uint32_t>(key >> 32));
+  std::uint64_t failed = std::uint64_t{particle} << 32 | spring;
   if (exchange) failed = exchange->firstNonFinite(failed);
-  if (failed != std::numeric_limits<std::uint32_t>::max())
-    throw Error("dem: particle " + std::to_string(failed) + " is no longer finite at step " +
-                std::to_string(stepCount_ + 1) + " (time step " + toString(parameters_.timeStep) +
-                " too large for stiffness " + toString(parameters_.stiffness) +
-                "? the suggested one is " + toString(suggestedTimeStep()) + ")");
+  particle = static_cast<std::uint32_t>(failed >> 32);
+  spring = static_cast<std::uint32_t>(failed);
+  if (particle == kNone && spring == kNone) return;
+  throw Error("dem: " +
+              (particle != kNone
+                   ? "particle " + std::to_string(particle)
+                   : "the friction spring of a contact of particle " + std::to_string(spring)) +
+              " is no longer finite at step " + std::to_string(stepCount_ + 1) + " (time step " +
+              toString(parameters_.timeStep) + " too large for stiffness " +
+              toString(parameters_.stiffness) + "? the suggested one is " +
+              toString(suggestedTimeStep()) + ")");
 }
 
 void World::advance(Exchange* exchange) {

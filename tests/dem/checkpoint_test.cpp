@@ -4,15 +4,19 @@
 #include <omp.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <string_view>
 
 #include "delta/core/error.h"
 #include "delta/dem/scenarios.h"
+#include "delta/mesh/primitives.h"
 
+#include "centimetre_parameters.h"
 #include "io/test_files.h"
 
 namespace delta::dem {
@@ -287,6 +291,158 @@ TEST(CheckpointErrors, ForeignTruncatedCorruptAndOtherVersions) {
   const std::string message = errorOf([&] { World::load(cut); });
   EXPECT_NE(message.find("cut.ckpt"), std::string::npos) << message;
   EXPECT_NE(message.find("truncated"), std::string::npos) << message;
+}
+
+/// Two icospheres side by side on a floor, sliding with friction: contacts and springs of both
+/// kinds, with an obstacle.
+World slidingPair() {
+  World world(test::centimetreParameters(0.01, 1.0, 0.5, 0.5, {0, 0, -9.81}));
+  world.addShape(primitives::icosphere(2, 0.01), 2500.0);
+  world.addObstacle(primitives::quad(1.0, 1.0));
+  world.addParticle(0, {{-0.0099, 0, 0.0099}, {}, {0.2, 0.1, 0}, {}});
+  world.addParticle(0, {{0.0099, 0, 0.0099}, {}, {0.1, -0.1, 0}, {}});
+  world.run(20);
+  return world;
+}
+
+/// A checkpoint's bytes with a field changed and the header's size and CRC made to match, as a
+/// file made by hand (or by a program that is not Δ) would have them.
+class Forged {
+ public:
+  explicit Forged(const std::string& bytes) : bytes_(bytes) {}
+  /// Where the first `tag` after `from` starts.
+  std::size_t section(const char* tag, std::size_t from = 24) const {
+    const std::size_t at = bytes_.find(tag, from);
+    EXPECT_NE(at, std::string::npos) << tag;
+    return at;
+  }
+  std::uint64_t u64(std::size_t at) const {
+    std::uint64_t value = 0;
+    for (int b = 0; b < 8; ++b)
+      value |= std::uint64_t{static_cast<unsigned char>(bytes_[at + b])} << (8 * b);
+    return value;
+  }
+  Forged& u64(std::size_t at, std::uint64_t value) {
+    for (int b = 0; b < 8; ++b)
+      bytes_[at + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
+    return *this;
+  }
+  Forged& u32(std::size_t at, std::uint32_t value) {
+    for (int b = 0; b < 4; ++b)
+      bytes_[at + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
+    return *this;
+  }
+  Forged& f64(std::size_t at, double value) { return u64(at, std::bit_cast<std::uint64_t>(value)); }
+  /// The forged file: its bytes with the CRC made to match.
+  std::string forged() const {
+    std::string bytes = bytes_;
+    const std::uint32_t crc = crc32Of(std::string_view(bytes).substr(24));
+    for (int b = 0; b < 4; ++b)
+      bytes[20 + b] = static_cast<char>((crc >> (8 * b)) & 0xffu);
+    return bytes;
+  }
+  /// The load error of the forged file ("" when it loads).
+  std::string error() const { return loadError(forged()); }
+
+ private:
+  std::string bytes_;
+};
+
+TEST(CheckpointErrors, ValuesNoWorldHoldsAreRefusedThoughTheChecksumMatches) {
+  const World world = slidingPair();
+  ASSERT_EQ(world.contacts().size(), 3u);
+  const Forged good(checkpointBytes(world));
+  EXPECT_EQ(good.error(), "");  // the forging itself changes nothing
+  const std::size_t springs = good.section("SPRG");
+  ASSERT_EQ(good.u64(springs + 4), 1u);        // the particles' springs
+  ASSERT_EQ(good.u64(springs + 12 + 40), 2u);  // the obstacles'
+
+  // SHAP: a count, then per shape its density, volume, mass, centroid (24 bytes), inertia (72),
+  // sphere radius and mesh: the numbers must be the mesh's (up to the rounding of deriving them
+  // again), or the body would move as another.
+  const std::size_t shape0 = good.section("SHAP") + 12;
+  const double volume = std::bit_cast<double>(good.u64(shape0 + 8));
+  EXPECT_EQ(Forged(good).f64(shape0 + 8, volume * (1.0 + 0x1p-40)).error(), "");
+  EXPECT_NE(Forged(good).f64(shape0 + 8, volume * 1.001).error().find("do not match the mesh"),
+            std::string::npos);
+  const double ixx = std::bit_cast<double>(good.u64(shape0 + 48));
+  EXPECT_NE(Forged(good).f64(shape0 + 48, ixx * 1.001).error().find("do not match the mesh"),
+            std::string::npos);
+  EXPECT_NE(Forged(good).f64(shape0 + 48, 0.0).error().find("do not match the mesh"),
+            std::string::npos);  // a singular inertia (its inverse not finite)
+  // A sphere shape's numbers are the sphere's.
+  Scenario spheres = settle(2, 1, ParticleKind::Sphere);
+  const Forged sphere(checkpointBytes(spheres.world));
+  const std::size_t sphere0 = sphere.section("SHAP") + 12;
+  EXPECT_EQ(sphere.error(), "");
+  EXPECT_NE(Forged(sphere)
+                .f64(sphere0 + 120, 1.01 * std::bit_cast<double>(sphere.u64(sphere0 + 120)))
+                .error()
+                .find("do not match"),
+            std::string::npos);  // the radius
+
+  // PART: a count, then per particle its shape (4 bytes), position (24), orientation (32), ...
+  const std::size_t particle0 = good.section("PART") + 12;
+  const std::size_t orientation = particle0 + 4 + 24;
+  for (const double w : {0.0, 2.0, 1.0 + 1e-6}) {
+    const std::string message = Forged(good).f64(orientation, w).error();
+    EXPECT_NE(message.find("corrupt DEM checkpoint: particle 0's orientation is not a unit"),
+              std::string::npos)
+        << w << ": " << message;
+  }
+  Forged rounded(good);  // every component 2⁻⁴⁰ larger: within rounding of a unit quaternion
+  for (std::size_t k = 0; k < 4; ++k)
+    rounded.f64(orientation + 8 * k,
+                std::bit_cast<double>(good.u64(orientation + 8 * k)) * (1.0 + 0x1p-40));
+  EXPECT_EQ(rounded.error(), "");
+
+  // SPRG: the particles' springs (a count, then per spring its key, displacement and twist),
+  // then the obstacles'.
+  EXPECT_NE(Forged(good).f64(springs + 12 + 8, std::nan("")).error().find("not finite"),
+            std::string::npos);
+  for (const std::uint64_t key :
+       {std::uint64_t{1} << 32 | 0, std::uint64_t{0} << 32 | 0, std::uint64_t{0} << 32 | 2})
+    EXPECT_NE(Forged(good).u64(springs + 12, key).error().find("a spring's pair key names no pair"),
+              std::string::npos)
+        << std::hex << key;
+  // A spring far longer than its contact's forces could have made it (particle 0's on the
+  // floor, along x) is finite, and reads; the Coulomb limit then makes it NaN (and its force),
+  // which the step refuses to end with (a checkpoint of it would not read back).
+  World stretched = readCheckpoint(Forged(good).f64(springs + 12 + 40 + 16, 1e306).forged()).world;
+  const std::string message = errorOf([&] { stretched.run(5); });
+  EXPECT_NE(message.find("particle 0 is no longer finite at step 21"), std::string::npos)
+      << message;
+  const std::size_t obstacleSprings = springs + 12 + 40;
+  EXPECT_NE(Forged(good)
+                .u64(obstacleSprings + 8, std::uint64_t{0} << 32 | 1)  // obstacle 1 of 1
+                .error()
+                .find("a spring's pair key names no pair"),
+            std::string::npos);
+
+  // OBST: the mesh (vertex count, vertices, triangle count, triangles), then the pose.
+  const std::size_t obstacle = good.section("OBST") + 12;
+  const std::size_t vertices = good.u64(obstacle);
+  const std::size_t triangles = good.u64(obstacle + 8 + 24 * vertices);
+  const std::size_t pose = obstacle + 8 + 24 * vertices + 8 + 12 * triangles;
+  for (const double w : {0.0, 3.0, std::nan("")})
+    EXPECT_NE(Forged(good).f64(pose, w).error().find("obstacle 0's pose is not a rotation"),
+              std::string::npos)
+        << w;
+  EXPECT_NE(Forged(good).f64(pose + 32, std::nan("")).error().find("obstacle 0's pose is not a"),
+            std::string::npos);  // the translation
+
+  // CONT: per contact its point (x, normal, direction, distance, two flags, two triangles),
+  // then the pair (two ids, a flag), the depth, force, couple and volume.
+  const std::size_t contact0 = good.section("CONT") + 12;
+  const std::size_t ids = contact0 + 3 * 24 + 8 + 2 + 8;
+  EXPECT_NE(Forged(good).f64(contact0 + 24, std::nan("")).error().find("contact 0 has a value"),
+            std::string::npos);
+  EXPECT_NE(Forged(good).u32(ids, 7).error().find("contact 0 names no pair"), std::string::npos);
+  EXPECT_NE(Forged(good).u32(ids + 4, 9).error().find("contact 0 names no pair"),
+            std::string::npos);
+  EXPECT_EQ(Forged(good).u32(ids - 8, 319).error(), "");  // an icosphere of 2 subdivisions
+  EXPECT_NE(Forged(good).u32(ids - 8, 320).error().find("contact 0 names a triangle"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Every input the fuzzers (fuzz/, scripts/fuzz.sh) keep as a regression, read through the public
-// API in the ordinary test builds too (the sanitized one included): each gives a mesh or points,
-// or a delta::Error, never a crash.
+// API in the ordinary test builds too (the sanitized one included): each gives a mesh, points or
+// a DEM World, or a delta::Error, never a crash.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -12,6 +12,8 @@
 #include "delta/io/mesh_io.h"
 #include "delta/io/points.h"
 #include "delta/mesh/coordinate_range.h"
+
+#include "promises.h"
 
 namespace delta::io {
 namespace {
@@ -80,6 +82,36 @@ TEST(FuzzRegressions, EveryPointsInputLoadsOrIsRefused) {
     try {
       for (const Vec3& point : loadPoints(input))
         EXPECT_TRUE(inCoordinateRange(point));
+    } catch (const Error&) {
+    }
+  }
+}
+
+/// Fails the test for each promise (fuzz/promises.h) an input breaks.
+const auto failed = [](const char* promise) { ADD_FAILURE() << "broken: " << promise; };
+
+TEST(FuzzRegressions, EveryCheckpointInputLoadsOrIsRefused) {
+  const std::vector<fs::path> inputs = regressionInputs("checkpoint");
+  ASSERT_FALSE(inputs.empty());  // the seeds at least
+  for (const fs::path& input : inputs) {
+    SCOPED_TRACE(input.string());
+    try {
+      dem::World world = dem::World::load(input);
+      fuzz::worldPromises(world, failed);
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find("checkpoint"), std::string::npos) << error.what();
+    }
+  }
+}
+
+TEST(FuzzRegressions, EveryQueriesInputIsAnsweredOrRefused) {
+  const std::vector<fs::path> inputs = regressionInputs("queries");
+  ASSERT_FALSE(inputs.empty());
+  for (const fs::path& input : inputs) {
+    SCOPED_TRACE(input.string());
+    const Renamed file(input, ".off");
+    try {
+      fuzz::queryPromises(load(file.path()), failed);
     } catch (const Error&) {
     }
   }

@@ -40,7 +40,11 @@
 /// Reading throws delta::Error naming the origin (the file) for: a file that is not a
 /// checkpoint ("not a Δ DEM checkpoint"), another format version, a file cut short
 /// ("truncated": fewer bytes than its header announces), a checksum that does not match or a
-/// payload that does not parse ("corrupt"), and values a World refuses (as World's builders).
+/// payload that does not parse ("corrupt"), values a World refuses (as World's builders), and
+/// values no World holds though the checksum matches ("corrupt": an orientation or an obstacle's
+/// rotation that is not a unit quaternion, a number that is not finite, a friction spring or a
+/// contact whose pair key names no pair of the file's particles and obstacles, a contact's
+/// triangle its mesh lacks).
 ///
 /// Threading: the functions below read the World they are given (const) and build new ones;
 /// they may run concurrently with other const use of the same World, never with a step.

@@ -438,9 +438,10 @@ class World {
     /// Sends the forces found here on other processes' particles; returns the forces they found
     /// on this process's.
     virtual std::vector<GhostForce> swapGhostForces(std::vector<GhostForce> found) = 0;
-    /// The smallest id of a particle that is no longer finite on any process (or `none`), given
-    /// this process's.
-    virtual std::uint32_t firstNonFinite(std::uint32_t local) = 0;
+    /// The least of `local` over every process: a particle id that is no longer finite in the
+    /// high half, a friction spring's pair's lower id in the low half (all ones: none), so that
+    /// every process names the same.
+    virtual std::uint64_t firstNonFinite(std::uint64_t local) = 0;
   };
 
   /// One step (step()), with `exchange` between the phases when not null.
@@ -493,7 +494,7 @@ class World {
   std::span<const PointForce> pointForces(std::size_t p,
                                           std::span<const PairOutcome> outcomes) const;
   /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
-  /// finite.
+  /// finite in any field a checkpoint holds, or else of one whose friction spring is not.
   void requireFiniteParticles(Exchange* exchange) const;
   /// Throws delta::Error when the coming drift could carry two surfaces through each other
   /// unseen (the class comment: "No pass-through"); reads the state only (src/dem/guards.cpp).

@@ -190,9 +190,9 @@ class DistributedWorld::Exchange final : public World::Exchange {
     return sendToRanks(owner_.communicator_, outgoing, &owner_.neighbours_).items;
   }
 
-  std::uint32_t firstNonFinite(std::uint32_t local) override {
-    std::uint32_t first = local;
-    check(MPI_Allreduce(&local, &first, 1, MPI_UINT32_T, MPI_MIN, owner_.communicator_),
+  std::uint64_t firstNonFinite(std::uint64_t local) override {
+    std::uint64_t first = local;
+    check(MPI_Allreduce(&local, &first, 1, MPI_UINT64_T, MPI_MIN, owner_.communicator_),
           "MPI_Allreduce");
     return first;
   }
