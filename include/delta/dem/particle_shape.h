@@ -17,7 +17,11 @@ struct PreparedShape;
 /// A shape exactly as it was saved (dem/checkpoint.h): `body` already in the body frame and the
 /// mass properties as stored, not derived again (moving a mesh to its centre of mass a second
 /// time would change the last bits). `sphereRadius` > 0 makes a sphere shape shown as `body`.
-/// Throws delta::Error for a density, volume, mass or radius that is not finite and positive.
+/// Throws delta::Error for a density, volume, mass or radius that is not finite and positive, a
+/// centroid that is not finite, and properties that are not `body`'s (derived again: a closed,
+/// consistently oriented mesh at its centre of mass, within 2⁻³⁰ of the volume, mass and
+/// largest inertia entry) or the sphere's: a checkpoint made by hand must not give a body that
+/// moves as another.
 dem::ParticleShape restoredShape(const Mesh& body, double density, const MassProperties& properties,
                                  double sphereRadius);
 }  // namespace delta::detail
