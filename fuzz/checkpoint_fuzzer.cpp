@@ -15,51 +15,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
-#include <string_view>
 
 #include "delta/core/error.h"
 #include "delta/dem/checkpoint.h"
 
+#include "forged_checkpoint.h"
 #include "fuzz_file.h"
 #include "promises.h"
-
-namespace {
-
-constexpr std::string_view kMagic = "DELTADEM";
-constexpr std::size_t kHeaderBytes = 24;
-
-std::uint32_t crc32Of(std::string_view bytes) {
-  std::uint32_t crc = 0xffffffffu;
-  for (const char c : bytes) {
-    crc ^= static_cast<unsigned char>(c);
-    for (int bit = 0; bit < 8; ++bit)
-      crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
-}
-
-void put(std::string& bytes, std::size_t at, std::uint64_t value, int width) {
-  for (int b = 0; b < width; ++b)
-    bytes[at + static_cast<std::size_t>(b)] = static_cast<char>((value >> (8 * b)) & 0xffu);
-}
-
-/// `bytes` with a header whose size and checksum match its payload.
-std::string withMatchingHeader(std::string_view bytes) {
-  std::string file;
-  if (bytes.size() >= kHeaderBytes && bytes.substr(0, kMagic.size()) == kMagic) {
-    file = bytes;
-  } else {
-    file = std::string(kMagic) + std::string(kHeaderBytes - kMagic.size(), '\0');
-    put(file, 8, delta::dem::kCheckpointVersion, 4);
-    file += bytes;
-  }
-  const std::string_view payload = std::string_view(file).substr(kHeaderBytes);
-  put(file, 12, payload.size(), 8);
-  put(file, 20, crc32Of(payload), 4);
-  return file;
-}
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static FuzzFile file(".delta");
@@ -68,7 +30,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     delta::fuzz::worldPromises(world, delta::fuzz::finding);
   } catch (const delta::Error&) {
   }
-  const std::string forged = withMatchingHeader({reinterpret_cast<const char*>(data), size});
+  const std::string forged =
+      delta::fuzz::withMatchingHeader({reinterpret_cast<const char*>(data), size});
   try {
     delta::dem::Checkpoint checkpoint = delta::dem::readCheckpoint(forged, "fuzz");
     delta::fuzz::worldPromises(checkpoint.world, delta::fuzz::finding);

@@ -17,6 +17,7 @@
 #include "delta/mesh/primitives.h"
 
 #include "centimetre_parameters.h"
+#include "forged_checkpoint.h"
 #include "io/test_files.h"
 
 namespace delta::dem {
@@ -179,17 +180,6 @@ TEST(Checkpoint, VolumeLawDigestIsTheSameOnOneAndTwoThreads) {
   EXPECT_EQ(one, two);
 }
 
-/// The CRC-32 (zlib's polynomial) of `bytes`, to forge a checkpoint of the older format.
-std::uint32_t crc32Of(std::string_view bytes) {
-  std::uint32_t crc = 0xffffffffu;
-  for (const char c : bytes) {
-    crc ^= static_cast<unsigned char>(c);
-    for (int bit = 0; bit < 8; ++bit)
-      crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
-}
-
 TEST(Checkpoint, AVersion1CheckpointLoadsAsAPointLawWorld) {
   // Version 1 had no contact model byte (after the gravity in PARM) and no couples or volumes
   // in CONT. A world that has not stepped has no contacts: its version 1 file is the version 2
@@ -200,14 +190,9 @@ TEST(Checkpoint, AVersion1CheckpointLoadsAsAPointLawWorld) {
   ASSERT_EQ(bytes[kModelByte], 0);  // the point law
   std::string payload = bytes.substr(kHeader);
   payload.erase(kModelByte - kHeader, 1);
-  std::string old = bytes.substr(0, kHeader);
-  old[8] = 1;  // the version, then the payload size and its CRC, little-endian
-  for (int b = 0; b < 8; ++b)
-    old[12 + b] = static_cast<char>((std::uint64_t{payload.size()} >> (8 * b)) & 0xffu);
-  const std::uint32_t crc = crc32Of(payload);
-  for (int b = 0; b < 4; ++b)
-    old[20 + b] = static_cast<char>((crc >> (8 * b)) & 0xffu);
-  old += payload;
+  std::string header = bytes.substr(0, kHeader);
+  header[8] = 1;  // the version; then the payload size and its CRC made to match
+  const std::string old = fuzz::withMatchingHeader(header + payload);
   Checkpoint loaded = readCheckpoint(old, "old");
   EXPECT_EQ(loaded.note, "old");
   EXPECT_EQ(loaded.world.parameters().contactModel, ContactModel::point);
@@ -334,13 +319,7 @@ class Forged {
   }
   Forged& f64(std::size_t at, double value) { return u64(at, std::bit_cast<std::uint64_t>(value)); }
   /// The forged file: its bytes with the CRC made to match.
-  std::string forged() const {
-    std::string bytes = bytes_;
-    const std::uint32_t crc = crc32Of(std::string_view(bytes).substr(24));
-    for (int b = 0; b < 4; ++b)
-      bytes[20 + b] = static_cast<char>((crc >> (8 * b)) & 0xffu);
-    return bytes;
-  }
+  std::string forged() const { return fuzz::withMatchingHeader(bytes_); }
   /// The load error of the forged file ("" when it loads).
   std::string error() const { return loadError(forged()); }
 
