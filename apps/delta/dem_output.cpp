@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -313,8 +314,12 @@ void DemOutput::resume(const dem::World& world, std::span<const double> frameTim
           std::size_t column = 0;
           for (int comma = 0; comma < 5 && column != std::string::npos; ++comma)
             column = row.find(',', column + 1);
-          if (column != std::string::npos)
-            startEnergy_ = std::strtod(row.c_str() + column + 1, nullptr);
+          // A value that is not a finite number (a log edited by hand) is not taken: every later
+          // row's energy_change would be NaN; the restart's own energy stands in.
+          if (column != std::string::npos) {
+            const double energy = std::strtod(row.c_str() + column + 1, nullptr);
+            if (std::isfinite(energy)) startEnergy_ = energy;
+          }
         }
         kept += row + "\n";
         begin = end + 1;

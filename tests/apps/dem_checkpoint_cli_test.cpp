@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -91,6 +92,29 @@ TEST(DemCheckpointCli, AStoppedAndRestartedRunEndsBitForBitWhereTheWholeRunEnds)
                (folder.path / "elsewhere").string() + "' --steps 450 --json --quiet");
   ASSERT_EQ(elsewhere.exitCode, 0) << elsewhere.err;
   EXPECT_EQ(jsonNumber(elsewhere.out, "steps"), 50.0) << elsewhere.out;
+}
+
+TEST(DemCheckpointCli, ARestartTakesNoStartEnergyThatIsNotANumber) {
+  // The log's first row gives energy_change its start; a log edited by hand with "nan" there
+  // made every later row's energy_change NaN. The restart's own energy stands in.
+  const TemporaryFolder folder("checkpoint_log_nan");
+  const std::filesystem::path run = folder.path / "run";
+  ASSERT_EQ(
+      runDelta(kSettle + " --steps 20 --checkpoint-every 20 --out '" + run.string() + "'").exitCode,
+      0);
+  std::string log = slurp(run / "log.csv");
+  const std::size_t row = log.find('\n') + 1;  // the first row: step 0
+  std::size_t column = row;
+  for (int comma = 0; comma < 5; ++comma)
+    column = log.find(',', column) + 1;
+  log.replace(column, log.find(',', column) - column, "nan");
+  { std::ofstream(run / "log.csv", std::ios::binary) << log; }
+  const CliRun restarted = runDelta("dem --restart '" + (run / "checkpoint.delta").string() +
+                                    "' --steps 40 --json --quiet");
+  ASSERT_EQ(restarted.exitCode, 0) << restarted.err;
+  EXPECT_TRUE(std::isfinite(jsonNumber(restarted.out, "energy_change"))) << restarted.out;
+  const std::string last = logRows(run / "log.csv").back();
+  EXPECT_EQ(last.find("nan"), std::string::npos) << last;
 }
 
 TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
