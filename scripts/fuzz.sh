@@ -19,8 +19,8 @@ build=${2:-build-fuzz}
 if [ "$build" = build-fuzz ]; then
   CC=clang CXX=clang++ scripts/setup.sh build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
-    -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_BUILD_TESTS=OFF \
-    -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
+    -DDELTA_SANITIZE=address,undefined -DDELTA_BUILD_FUZZERS=ON -DDELTA_FUZZ_COVERAGE_EVERYWHERE=ON \
+    -DDELTA_BUILD_TESTS=OFF -DDELTA_BUILD_BENCH=OFF -DDELTA_BUILD_APPS=OFF
 else
   grep -q '^DELTA_BUILD_FUZZERS:BOOL=ON' "$build/CMakeCache.txt" ||
     { echo "fuzz.sh: $build is not configured with -DDELTA_BUILD_FUZZERS=ON" >&2; exit 1; }
