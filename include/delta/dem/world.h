@@ -349,6 +349,9 @@ class World {
   double time() const noexcept { return time_; }
   std::size_t stepCount() const noexcept { return stepCount_; }
 
+  /// The energies of the current state (Energies). A sum beyond a double's range is +∞: a
+  /// World holds any finite state, and a speed beyond about 1e154 m/s has a kinetic energy no
+  /// double holds (the pass-through guard stops such a body before it could pass another).
   Energies energies() const noexcept;
   /// Σ m·v.
   Vec3 linearMomentum() const noexcept;
