@@ -328,8 +328,10 @@ class CheckpointCodec {
     world.stepCount_ = static_cast<std::size_t>(steps);
     const bool forcesCurrent = in.flag();
     world.elasticEnergy_ = in.f64();
-    if (!std::isfinite(world.time_) || !std::isfinite(world.elasticEnergy_))
-      in.fail("time or elastic energy not finite");
+    // The elastic energy may be +∞: a sum beyond a double's range, which a World may hold
+    // (World::energies); never NaN.
+    if (!std::isfinite(world.time_) || std::isnan(world.elasticEnergy_))
+      in.fail("time not finite or elastic energy not a number");
 
     in.tag("SHAP");
     const std::size_t shapes = in.count(8 * 16 + 16, "shape");

@@ -1149,6 +1149,9 @@ void World::requireFiniteParticles(Exchange* exchange) const {
   if (exchange) failed = exchange->firstNonFinite(failed);
   particle = static_cast<std::uint32_t>(failed >> 32);
   spring = static_cast<std::uint32_t>(failed);
+  // The time, the same on every process (no agreement needed).
+  if (!std::isfinite(time_ + parameters_.timeStep))
+    throw Error("dem: the time is no longer finite at step " + std::to_string(stepCount_ + 1));
   if (particle == kNone && spring == kNone) return;
   throw Error("dem: " +
               (particle != kNone

@@ -107,6 +107,18 @@ TEST(DemGuards, SpeedsWhoseSquaresOverflowAreStoppedToo) {
   EXPECT_GT(alone.particles()[1].position.x, 1e190);
 }
 
+TEST(DemGuards, AStepThatWouldTakeTheTimePastADoubleIsRefused) {
+  // A checkpoint holds the time, and its reader refuses one that is not finite: no step may end
+  // there.
+  World world(test::centimetreParameters(0.01, 1.0, 1.0, 0.0, {}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
+  world.setTimeStep(1e308);
+  EXPECT_EQ(stepError(world), "");
+  EXPECT_NE(stepError(world).find("the time is no longer finite at step 2"), std::string::npos);
+  EXPECT_EQ(world.stepCount(), 1u);
+}
+
 TEST(DemGuards, FastParticlesFarFromEverythingAreNotStopped) {
   // One particle crosses the box at 0.3 m a step beside a row it never comes near (a test of the
   // distributed DEM does this on purpose): nothing can pass through anything.
