@@ -17,6 +17,8 @@
 #include "delta/io/regular_file.h"
 #include "delta/mesh/mass_properties.h"
 
+#include "detail/finite_state.h"
+
 namespace delta::dem {
 
 namespace {
@@ -371,14 +373,9 @@ class CheckpointCodec {
       particle.angularMomentum = in.vec();
       particle.force = in.vec();
       particle.torque = in.vec();
-      const Quaternion& q = particle.orientation;
-      const bool finite = isFinite(particle.position) && isFinite(particle.velocity) &&
-                          isFinite(particle.angularVelocity) &&
-                          isFinite(particle.angularMomentum) && isFinite(particle.force) &&
-                          isFinite(particle.torque) && std::isfinite(q.w) && std::isfinite(q.x) &&
-                          std::isfinite(q.y) && std::isfinite(q.z);
-      if (!finite) in.fail("particle " + std::to_string(i) + " has a value that is not finite");
-      if (!unitQuaternion(q))
+      if (!detail::holdsFiniteState(particle))
+        in.fail("particle " + std::to_string(i) + " has a value that is not finite");
+      if (!unitQuaternion(particle.orientation))
         in.fail("particle " + std::to_string(i) + "'s orientation is not a unit quaternion");
       world.ids_[i] = static_cast<std::uint32_t>(i);
     }
@@ -389,7 +386,7 @@ class CheckpointCodec {
       springs->resize(in.count(8 * 5, "spring"));
       for (auto& entry : *springs) {
         entry = in.spring();
-        if (!isFinite(entry.second.displacement) || !std::isfinite(entry.second.twist))
+        if (!detail::holdsFiniteState(entry.second))
           in.fail("a spring has a value that is not finite");
       }
       for (std::size_t s = 1; s < springs->size(); ++s)

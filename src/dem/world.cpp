@@ -19,6 +19,7 @@
 #include "delta/query/self_intersections.h"
 #include "delta/query/sphere_contacts.h"
 
+#include "detail/finite_state.h"
 #include "detail/two_lanes.h"
 
 namespace delta::dem {
@@ -1131,19 +1132,13 @@ void World::requireFiniteParticles(Exchange* exchange) const {
   std::uint32_t particle = kNone, spring = kNone;
   // Every field a checkpoint holds (and its reader checks): a World that stepped into a value
   // that is not finite anywhere would write a checkpoint that cannot be read back.
-  for (std::size_t i = 0; i < owned_; ++i) {
-    const Particle& p = particles_[i];
-    const Quaternion& q = p.orientation;
-    if (!isFinite(p.position) || !isFinite(p.velocity) || !isFinite(p.angularMomentum) ||
-        !isFinite(p.angularVelocity) || !isFinite(p.force) || !isFinite(p.torque) ||
-        !std::isfinite(q.w + q.x + q.y + q.z))
-      particle = std::min(particle, ids_[i]);
-  }
+  for (std::size_t i = 0; i < owned_; ++i)
+    if (!detail::holdsFiniteState(particles_[i])) particle = std::min(particle, ids_[i]);
   // And the friction springs, by their pair's lower id (a spring kept from a checkpoint longer
   // than its contact's forces could have made it turned into NaN at the Coulomb limit).
   for (const auto* springs : {&particleSprings_, &obstacleSprings_})
     for (const auto& [key, kept] : *springs)
-      if (!isFinite(kept.displacement) || !std::isfinite(kept.twist))
+      if (!detail::holdsFiniteState(kept))
         spring = std::min(spring, static_cast<std::uint32_t>(key >> 32));
   std::uint64_t failed = std::uint64_t{particle} << 32 | spring;
   if (exchange) failed = exchange->firstNonFinite(failed);
