@@ -86,3 +86,16 @@ def test_a_grid_that_cannot_fit_is_refused_before_it_is_made():
     granulate = delta.granulate(1)
     with pytest.raises(delta.Error, match="32-bit indices hold"):
         delta.ib.AdaptiveGrid(granulate, levels=16)
+
+
+def test_a_refused_move_leaves_the_grid_as_it_was():
+    # A move beyond the coordinate range was found out half-way through: the grid was left
+    # without cells, and the next move crashed the interpreter.
+    grid = delta.ib.AdaptiveGrid(delta.icosphere(1), levels=3)
+    leaves, distances = grid.leaf_count, grid.distances.copy()
+    with pytest.raises(delta.Error, match="AdaptiveGrid"):
+        grid.move_boundary(delta.RigidTransform(translation=(1e61, 0, 0)))
+    assert grid.leaf_count == leaves
+    assert np.array_equal(grid.distances, distances)
+    grid.move_boundary_to(delta.RigidTransform())
+    assert grid.leaf_count == leaves

@@ -10,6 +10,7 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/memory.h"
+#include "delta/mesh/coordinate_range.h"
 #include "delta/query/self_intersections.h"
 
 namespace delta::ib {
@@ -41,6 +42,33 @@ Aabb currentBounds(const QueryMesh& boundary) {
                                       corner & 2 ? prepared.upper.y : prepared.lower.y,
                                       corner & 4 ? prepared.upper.z : prepared.lower.z}));
   return box;
+}
+
+/// Throws delta::Error where the distance queries of a move to `pose` would refuse a point
+/// half-way through it: where the boundary there, or a point of `domain` carried into the
+/// boundary's frame, lies beyond the coordinate range (mesh/coordinate_range.h). The points'
+/// images lie in the hull of the corners' (the map is affine); the allowance covers the rounding
+/// of carrying any of them, which is a few ulps of their size and the translation's.
+void requireQueryableAt(const QueryMesh& boundary, const RigidTransform& pose, const Aabb& domain) {
+  QueryMesh moved = boundary;
+  moved.setPose(pose);
+  checkCoordinateRange(currentBounds(moved), "AdaptiveGrid: the boundary moved to this pose");
+  const RigidTransform& inverse = moved.inversePose();
+  Aabb images;
+  double largest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{corner & 1 ? domain.upper.x : domain.lower.x,
+                 corner & 2 ? domain.upper.y : domain.lower.y,
+                 corner & 4 ? domain.upper.z : domain.lower.z};
+    images.extend(inverse.apply(p));
+    largest = std::max(largest, length(p));
+  }
+  const double allowance = 0x1p-40 * (largest + maxAbs(inverse.translation));
+  if (!(magnitude(images) + allowance <= kLargestCoordinate))
+    throw Error("AdaptiveGrid: this pose carries the domain " + toString(domain.lower) + " to " +
+                toString(domain.upper) + " to " + toString(images.lower) + " to " +
+                toString(images.upper) + " in the boundary's frame, beyond the coordinate range " +
+                coordinateRangeText() + " the distance queries answer; the grid is unchanged");
 }
 
 /// The largest displacement of a point of `box` (prepared frame) between poses `from` and `to`.
@@ -176,9 +204,19 @@ const GridStatistics& AdaptiveGrid::moveBoundary(const RigidTransform& motion) {
 
 const GridStatistics& AdaptiveGrid::moveBoundaryTo(const RigidTransform& pose) {
   const CancelScope uninterruptible({});  // a move stopped half-way would leave no valid grid
+  requireQueryableAt(boundary_, pose, domain_);  // before anything changes
+  const QueryMesh before = boundary_;
   boundary_.setPose(pose);
   poses_.push_back(boundary_.pose());
-  refine();
+  try {
+    refine();
+  } catch (...) {
+    // Not a refused point (checked above): memory ran out half-way, and the cells and vertices
+    // are neither before nor after the move. The grid is made anew where the boundary was, so
+    // that it stays usable, and the error passed on.
+    *this = AdaptiveGrid(before, options_);
+    throw;
+  }
   return statistics_;
 }
 

@@ -4,6 +4,7 @@
 #include <omp.h>
 #include <pthread.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -347,6 +348,76 @@ TEST(AdaptiveGrid, MovingBoundaryGivesTheGridOfItsNewPosition) {
     grid.moveBoundaryTo(fandisk.pose());
     expectSameAsNewGrid(grid);
   }
+}
+
+/// Everything a grid answers, to compare a grid before and after a refused move.
+struct GridSnapshot {
+  std::vector<std::vector<std::tuple<std::array<std::uint32_t, 3>, bool>>> cells;
+  std::vector<Vec3> positions;
+  std::vector<double> distances, bounds;
+  std::vector<double> pose;
+
+  explicit GridSnapshot(const AdaptiveGrid& grid)
+      : positions(grid.positions()),
+        distances(grid.distances().begin(), grid.distances().end()),
+        bounds(grid.errorBounds()) {
+    for (int level = 0; level <= grid.levels(); ++level) {
+      cells.emplace_back();
+      for (const Cell& cell : grid.cells(level))
+        cells.back().emplace_back(cell.origin, cell.leaf());
+    }
+    const RigidTransform& p = grid.boundary().pose();
+    pose = {p.rotation.w,    p.rotation.x,    p.rotation.y,   p.rotation.z,
+            p.translation.x, p.translation.y, p.translation.z};
+  }
+  bool operator==(const GridSnapshot&) const = default;
+};
+
+TEST(AdaptiveGrid, AMoveBeyondTheCoordinateRangeIsRefusedAndChangesNothing) {
+  // A move that puts the boundary, or the domain's points in the boundary's frame, beyond ±2²⁰⁰
+  // was found out by the distance queries half-way through it: the grid was left with no cells,
+  // the pose moved, and the next move read past the end of its levels (a crash from Python).
+  const QueryMesh sphere(primitives::icosphere(1));
+  AdaptiveGrid grid(sphere, {.levels = 3});
+  grid.moveBoundary(RigidTransform::translationBy({0.05, 0.0, 0.0}));
+  const GridSnapshot before(grid);
+  ASSERT_GT(grid.leafCount(), 1u);
+  for (const RigidTransform& far :
+       {RigidTransform::translationBy({1e61, 0, 0}),
+        RigidTransform::translationBy({0, -0x1p201, 0}),
+        RigidTransform::rotationAbout(Quaternion::fromAxisAngle({0, 0, 1}, 1.0),
+                                      {1e61, 1e61, 0})}) {
+    EXPECT_THROW(grid.moveBoundary(far), Error);
+    EXPECT_TRUE(GridSnapshot(grid) == before);
+    EXPECT_THROW(grid.moveBoundaryTo(far), Error);
+    EXPECT_TRUE(GridSnapshot(grid) == before);
+  }
+  try {
+    grid.moveBoundaryTo(RigidTransform::translationBy({1e61, 0, 0}));
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("AdaptiveGrid: the boundary moved", 0), 0u) << e.what();
+  }
+  // The boundary within the range, but the domain's far corner carried beyond it.
+  AdaptiveGrid wide(sphere,
+                    {.levels = 2, .domain = Aabb{{-1e60, -1e60, -1e60}, {1e60, 1e60, 1e60}}});
+  const GridSnapshot wideBefore(wide);
+  try {
+    wide.moveBoundary(RigidTransform::translationBy({1e60, 0, 0}));
+    ADD_FAILURE() << "a move that carries the domain beyond the range was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the grid is unchanged"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(GridSnapshot(wide) == wideBefore);
+  EXPECT_NO_THROW(wide.moveBoundary(RigidTransform::translationBy({1e59, 0, 0})));
+  // And the grid goes on: the next moves give the grid of their pose.
+  grid.moveBoundaryTo(RigidTransform::translationBy({-0.03, 0.02, 0.0}));
+  expectSameAsNewGrid(grid);
+  grid.moveBoundaryTo(RigidTransform{});
+  expectSameAsNewGrid(grid);
+  // Near the range, but within it, a move is taken: the boundary at 2¹⁹⁹, the domain's points
+  // at −2¹⁹⁹ in its frame.
+  EXPECT_NO_THROW(grid.moveBoundaryTo(RigidTransform::translationBy({0x1p199, 0, 0})));
+  EXPECT_EQ(grid.boundary().pose().translation.x, 0x1p199);
 }
 
 TEST(AdaptiveGrid, InfiniteBandKeepsEveryDistanceExact) {

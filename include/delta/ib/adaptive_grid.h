@@ -136,7 +136,11 @@ class AdaptiveGrid {
   AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options = {});
 
   /// Moves the boundary by `motion` (its pose becomes motion ∘ pose) and updates the grid.
-  /// Throws delta::Error, changing nothing, for a motion QueryMesh::transform refuses. The
+  /// Throws delta::Error, changing nothing, for a motion QueryMesh::transform refuses and for one
+  /// that would put the boundary, or carry a point of the domain into the boundary's frame,
+  /// beyond the coordinate range the distance queries answer (mesh/coordinate_range.h; within
+  /// 2⁻⁴⁰ of it, for the rounding). Should anything else stop a move half-way (memory), the grid
+  /// is made anew at the pose before it (a fresh build there) and the error passed on. The
   /// statistics returned are those of statistics(), valid until the next move.
   const GridStatistics& moveBoundary(const RigidTransform& motion);
   /// Puts the boundary at `pose` (from the frame its QueryMesh was prepared in) and updates.
