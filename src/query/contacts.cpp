@@ -246,10 +246,31 @@ void contactsOf(const Task& task, const TriangleSoA& first, const TriangleSoA& s
 
 }  // namespace
 
-std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& second,
-                                   double epsilon, kernels::Solver solver) {
+namespace {
+
+/// The least ε a contact query takes, 2⁻⁴⁸¹ (about 1.6e-145): below it (2ε)² would lie below
+/// kUnderflowingSquare, where a kernel's squared distance has lost precision to underflow or
+/// is 0, and a pair closer than 2ε could not be told from one farther (a pair at distance 0 was
+/// missed). Geometry that small is scaled up by a power of two, which is exact.
+constexpr double kSmallestEpsilon = 0x1p-481;
+static_assert(4.0 * kSmallestEpsilon * kSmallestEpsilon == detail::kUnderflowingSquare);
+
+void checkEpsilon(double epsilon) {
   if (!std::isfinite(epsilon) || !(epsilon > 0.0))
     throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
+  if (epsilon < kSmallestEpsilon)
+    throw Error("contacts: epsilon = " + toString(epsilon) + " is below 2^-481 (" +
+                toString(kSmallestEpsilon) +
+                "), where squared distances underflow and a pair closer than 2 epsilon cannot be "
+                "told from one farther; scale both meshes and epsilon up by a power of two "
+                "(exact)");
+}
+
+}  // namespace
+
+std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& second,
+                                   double epsilon, kernels::Solver solver) {
+  checkEpsilon(epsilon);
   if (first.size() == 0 || second.size() == 0) throw Error("contacts: a mesh has no triangles");
   if (first.size() >= kMaxTriangles || second.size() >= kMaxTriangles)
     throw Error("contacts: a mesh has more triangles than 32-bit ids can name");
@@ -585,11 +606,6 @@ void finishContacts(const QueryMesh& first, const QueryMesh& second,
       contact.normal = first.pose().rotation.rotate(contact.normal);
       contact.direction = first.pose().rotation.rotate(contact.direction);
     }
-}
-
-void checkEpsilon(double epsilon) {
-  if (!std::isfinite(epsilon) || !(epsilon > 0.0))
-    throw Error("contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
 }
 
 /// Where both QueryMesh contact queries start: ε and the pair checked, the second mesh placed

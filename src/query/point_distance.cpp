@@ -71,6 +71,20 @@ PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
   return query;
 }
 
+/// The squared limit a search for points closer than `epsilon` runs with: ε², or, where ε² may
+/// have lost precision to underflow (or be 0: ε below about 1e-162), kUnderflowingSquare, a
+/// superset whose answers `beyond` then cuts at ε by their distances at scale.
+double searchLimit(double epsilon) noexcept {
+  const double squared = epsilon * epsilon;
+  return squared < detail::kUnderflowingSquare ? detail::kUnderflowingSquare : squared;
+}
+
+/// Whether a search's answer lies at ε or beyond, though its square was within the limit: only
+/// where the limit was not ε² (searchLimit).
+bool beyond(double distance, double epsilon) noexcept {
+  return epsilon * epsilon < detail::kUnderflowingSquare && !(distance < epsilon);
+}
+
 /// Whether a point (world frame) and, carried into the mesh's prepared frame, `local` lie in
 /// the coordinate range (coordinate_range.h): false for a non-finite one too.
 bool inRange(const Vec3& point, const Vec3& local) noexcept {
@@ -129,7 +143,7 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
                      const detail::LeafCandidates* near = nullptr) {
   const detail::QueryMeshData& data = mesh.data();
   const Vec3 point = mesh.moved() ? mesh.inversePose().apply(worldPoint) : worldPoint;
-  const double limit = query.epsilon * query.epsilon;
+  const double limit = searchLimit(query.epsilon);
   // The seed's early "no contact" (for an unlimited search there is nothing to reject).
   if (!screened && std::isfinite(limit) && data.boundGrid.lowerBoundSquared(point) > limit)
     return {};
@@ -158,8 +172,10 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   }
   if (nearest.distanceSquared < detail::kUnderflowingSquare)
     nearest = detail::resolveUnderflow(data, point, nearest);
-  result.distance = detail::distanceOf(data, point, nearest);
-  if (hint) *hint = {nearest.sorted, point, result.distance};
+  const double distance = detail::distanceOf(data, point, nearest);
+  if (hint) *hint = {nearest.sorted, point, distance};
+  if (beyond(distance, query.epsilon)) return result;
+  result.distance = distance;
   result.closest =
       mesh.moved() ? mesh.pose().apply(nearest.closest.closest) : nearest.closest.closest;
   result.triangle = nearest.triangle;
@@ -463,7 +479,7 @@ void answerAll(const QueryMesh& mesh, std::size_t count, const PointAt& pointAt,
   const auto boundOf = [upperBounds](std::size_t i) {
     return upperBounds.empty() ? std::numeric_limits<double>::infinity() : upperBounds[i];
   };
-  const double limit = query.epsilon * query.epsilon;
+  const double limit = searchLimit(query.epsilon);
   if (count < kCoherentFrom || count > std::numeric_limits<std::uint32_t>::max()) {
     validatePoints(mesh, count, pointAt);
     cancellableParallelFor(0, count, kGrain, [&](std::size_t begin, std::size_t end) {

@@ -274,5 +274,45 @@ TEST(FarCoordinates, TinyGapsAreNotReportedZero) {
   EXPECT_EQ(kernels::distanceAtScale(unit.b, unit), 0.0);
 }
 
+TEST(FarCoordinates, AnEpsilonWhoseSquareUnderflowsStillFindsWhatIsCloser) {
+  // ε² below about 1e-324 is 0, and d² < ε² missed even a point on the mesh (distance 0); the
+  // search now runs with a limit that does not underflow and cuts its answers at ε by their
+  // distances at scale. The same tetrahedra as above: a point 1e-301 off the small one's face.
+  Mesh mesh = scaled(kTetra, 1e-300);
+  Mesh big = kTetra;
+  big.translate({2, 2, 2});
+  std::vector<Vec3> vertices(mesh.vertices().begin(), mesh.vertices().end());
+  std::vector<TriangleIndices> triangles(mesh.triangles().begin(), mesh.triangles().end());
+  for (const TriangleIndices& t : big.triangles())
+    triangles.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
+  vertices.insert(vertices.end(), big.vertices().begin(), big.vertices().end());
+  const QueryMesh query(Mesh(vertices, triangles));
+  const Vec3 off{0.25e-300, 0.25e-300, -1e-301}, on{0.25e-300, 0.25e-300, 0},
+      vertex = big.vertices()[0];
+  for (const std::size_t copies : {std::size_t{1}, std::size_t{3000}}) {  // one point, the sieve
+    for (const double epsilon : {1e-163, 1e-200, 1e-301, std::nextafter(1e-301, 1.0), 5e-324}) {
+      std::vector<Vec3> points(copies, off);
+      points.push_back(on);
+      points.push_back(vertex);
+      const std::vector<PointDistance> found = distances(query, points, {.epsilon = epsilon});
+      // Strictly closer than ε: 1e-301 is not closer than 1e-301.
+      EXPECT_EQ(found[0].found(), 1e-301 < epsilon) << epsilon;
+      if (found[0].found()) {
+        EXPECT_EQ(found[0].distance, 1e-301);
+      }
+      EXPECT_TRUE(found[copies].found()) << epsilon;
+      EXPECT_EQ(found[copies].distance, 0.0);
+      EXPECT_TRUE(found[copies + 1].found()) << epsilon;
+      EXPECT_EQ(found[copies + 1].distance, 0.0);
+    }
+  }
+  // Points–mesh contacts take the same path.
+  EXPECT_EQ(contacts(query, std::vector<Vec3>{vertex, off}, 1e-200).size(), 2u);
+  // Mesh–mesh contacts cannot tell pairs apart there: such an ε is refused, with the reason.
+  const QueryMesh box(primitives::box());
+  expectErrorSaying([&] { (void)contacts(box, box, 1e-163); }, {"below 2^-481"});
+  EXPECT_FALSE(contacts(box, box, 0x1p-481).empty());
+}
+
 }  // namespace
 }  // namespace delta::contactdetection

@@ -44,7 +44,9 @@ namespace delta::contactdetection {
 /// with itself and with each neighbour it shares a vertex or an edge with (and an ordinary one
 /// for every other pair closer than 2ε). Meshes further than 2ε apart give none.
 ///
-/// Throws delta::Error when ε is not finite and positive, a mesh has no triangles, or a mesh is
+/// Throws delta::Error when ε is not finite and positive or below 2⁻⁴⁸¹ (about 1.6e-145: there
+/// (2ε)² underflows, and a pair closer than 2ε cannot be told from one farther; scale the meshes
+/// and ε up by a power of two, which is exact), a mesh has no triangles, or a mesh is
 /// outside the coordinate range (mesh/coordinate_range.h: a coordinate beyond ±2²⁰⁰, or every
 /// coordinate below 2⁻²⁰⁰; the message names the first or second mesh, its box and the range).
 ///

@@ -71,7 +71,9 @@ std::optional<Sign> parseSign(std::string_view text) noexcept;
 /// Threading: a value type; no shared state.
 struct PointQuery {
   /// Answer only points closer than ε (strictly); the others get distance +∞ and no triangle.
-  /// A finite ε lets the search stop near the root for points far from the mesh.
+  /// A finite ε lets the search stop near the root for points far from the mesh. Any positive ε
+  /// is exact: one whose square underflows (below about 1e-154) is compared with the distance
+  /// itself, not its square.
   double epsilon = std::numeric_limits<double>::infinity();
   /// Also decide inside/outside, as `sign` says. Sign::pseudonormal (the mesh must be closed and
   /// not cross itself): by the angle-weighted pseudonormal of the feature (vertex, edge or face)
