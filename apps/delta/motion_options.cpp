@@ -53,7 +53,8 @@ Quaternion parseRotation(const std::string& text, const char* option) {
   const std::vector<double> r = parseNumbers(text, 4, option);
   if (r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0)
     throw Error(std::string(option) + " '" + text + "': the axis AX,AY,AZ must not be zero");
-  return Quaternion::fromAxisAngle({r[0], r[1], r[2]}, r[3] * std::numbers::pi / 180.0);
+  // Degrees as radians: π/180 first, so that a finite angle stays finite.
+  return Quaternion::fromAxisAngle({r[0], r[1], r[2]}, r[3] * (std::numbers::pi / 180.0));
 }
 
 void SecondMeshMotion::validate() const {

@@ -10,18 +10,28 @@ namespace delta {
 using detail::normalizedOrIdentity;
 
 Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
-  const double n = length(axis);
-  if (!isFinite(axis) || !std::isfinite(radians) || !(n > 0.0)) {
-    throw Error("rotation: axis " + toString(axis) + " and angle " + toString(radians) +
-                " do not define a rotation (the axis must be finite and non-zero)");
+  if (!std::isfinite(radians))
+    throw Error("rotation: angle " + toString(radians) + " (radians) is not finite");
+  const double largest = maxAbs(axis);
+  if (!isFinite(axis) || !(largest > 0.0))
+    throw Error("rotation: axis " + toString(axis) + " must be finite and non-zero");
+  // An axis whose squared length over- or underflows is scaled by a power of two (exact) first.
+  Vec3 direction = axis;
+  double n = length(direction);
+  if (!(n > 0x1p-500 && n < 0x1p500)) {
+    const int exponent = -std::ilogb(largest);  // ldexp, not a factor: 2^1074 overflows
+    direction = {std::ldexp(axis.x, exponent), std::ldexp(axis.y, exponent),
+                 std::ldexp(axis.z, exponent)};
+    n = length(direction);
   }
   const double s = std::sin(0.5 * radians) / n;
-  return normalizedOrIdentity(std::cos(0.5 * radians), axis.x * s, axis.y * s, axis.z * s);
+  return normalizedOrIdentity(std::cos(0.5 * radians), direction.x * s, direction.y * s,
+                              direction.z * s);
 }
 
 Quaternion Quaternion::fromComponents(double w, double x, double y, double z) {
-  const double n2 = w * w + x * x + y * y + z * z;
-  if (!std::isfinite(n2) || !(n2 > 0.0)) {
+  const bool finite = std::isfinite(w) && std::isfinite(x) && std::isfinite(y) && std::isfinite(z);
+  if (!finite || (w == 0.0 && x == 0.0 && y == 0.0 && z == 0.0)) {
     throw Error("rotation: quaternion (" + toString(w) + ", " + toString(x) + ", " + toString(y) +
                 ", " + toString(z) + ") is zero or not finite");
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "delta/core/error.h"
 
@@ -61,6 +62,43 @@ TEST(Rotation, RejectsWhatIsNotARotation) {
   Mat3 nan = Mat3::identity();
   nan(1, 2) = NAN;
   EXPECT_THROW(Quaternion::fromMatrix(nan), Error);
+}
+
+TEST(Rotation, AnAxisOfAnyFiniteLengthKeepsItsDirection) {
+  // An axis whose squared length overflowed became no rotation at all, silently (1e200 × (1, 1,
+  // 1) turned nothing), and one whose square underflowed was refused as zero.
+  const Quaternion unit = Quaternion::fromAxisAngle({1, 1, 1}, 0.7);
+  for (const double scale : {1e200, 1e300, 1.7e308, 1e-170, 1e-300, 5e-324 * 4}) {
+    const Quaternion q = Quaternion::fromAxisAngle(Vec3{1, 1, 1} * scale, 0.7);
+    EXPECT_NEAR(q.w, unit.w, 1e-15) << scale;
+    EXPECT_NEAR(q.x, unit.x, 1e-15) << scale;
+    EXPECT_NEAR(q.y, unit.y, 1e-15) << scale;
+    EXPECT_NEAR(q.z, unit.z, 1e-15) << scale;
+  }
+  // Components of any size make the unit quaternion of their direction.
+  const Quaternion big = Quaternion::fromComponents(0, 1e300, 1e300, 0);
+  EXPECT_NEAR(big.x, std::sqrt(0.5), 4e-16);
+  EXPECT_NEAR(big.y, std::sqrt(0.5), 4e-16);
+  const Quaternion tiny = Quaternion::fromComponents(1e-320, 0, 0, 0);
+  EXPECT_EQ(tiny.w, 1.0);
+  // Ordinary sizes are not rescaled: the same bits as the plain formula.
+  const Vec3 axis{0.3, -1.0, 0.7};
+  const double s = std::sin(0.35) / length(axis);
+  const Quaternion plain =
+      detail::normalizedOrIdentity(std::cos(0.35), axis.x * s, axis.y * s, axis.z * s);
+  const Quaternion q = Quaternion::fromAxisAngle(axis, 0.7);
+  EXPECT_EQ(q.w, plain.w);
+  EXPECT_EQ(q.x, plain.x);
+  EXPECT_EQ(q.y, plain.y);
+  EXPECT_EQ(q.z, plain.z);
+  // The messages say what is wrong.
+  try {
+    (void)Quaternion::fromAxisAngle({1, 0, 0}, INFINITY);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("angle inf (radians) is not finite"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Rotation, NearlyOrthonormalMatrixIsProjected) {

@@ -22,8 +22,9 @@ struct Quaternion {
 
   static constexpr Quaternion identity() noexcept { return {}; }
 
-  /// The rotation by `radians` about `axis` (right-handed). Throws delta::Error when the axis is
-  /// zero or either argument is not finite.
+  /// The rotation by `radians` about `axis` (right-handed): any finite, non-zero axis, however
+  /// long or short (its direction is what counts). Throws delta::Error when the axis is zero or
+  /// either argument is not finite.
   static Quaternion fromAxisAngle(const Vec3& axis, double radians);
 
   /// The rotation of an orthonormal matrix with determinant +1. Throws delta::Error when `m` is
@@ -51,9 +52,21 @@ struct Quaternion {
 };
 
 namespace detail {
-/// (w, x, y, z) / |(w, x, y, z)|, or the identity for a zero (or NaN) one.
+/// (w, x, y, z) / |(w, x, y, z)|, or the identity for a zero (or NaN) one. Where the sum of
+/// squares would over- or underflow (components beyond about 1e150 or all below 1e-150), the
+/// components are first scaled by a power of two (exact), so a finite, non-zero quaternion
+/// always keeps its direction; elsewhere nothing is scaled and no bit changes.
 inline Quaternion normalizedOrIdentity(double w, double x, double y, double z) noexcept {
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!(n > 0x1p-500 && n < 0x1p500)) [[unlikely]] {
+    const double largest =
+        std::fmax(std::fmax(std::fabs(w), std::fabs(x)), std::fmax(std::fabs(y), std::fabs(z)));
+    if (!(largest > 0.0) || !std::isfinite(largest)) return Quaternion{};
+    const int exponent = -std::ilogb(largest);  // ldexp, not a factor: 2^1074 overflows
+    w = std::ldexp(w, exponent), x = std::ldexp(x, exponent);
+    y = std::ldexp(y, exponent), z = std::ldexp(z, exponent);
+    n = std::sqrt(w * w + x * x + y * y + z * z);
+  }
   if (!(n > 0.0)) return Quaternion{};
   return {w / n, x / n, y / n, z / n};
 }
