@@ -167,7 +167,16 @@ Sphere boundingSphere(std::span<const Vec3> points) {
   // Work relative to the box centre so that far from the origin the support computations keep
   // their digits (points near 1e9 with a spread of 1).
   const Vec3 origin = box.lower * 0.5 + box.upper * 0.5;
-  const auto local = [&](std::size_t i) { return points[i] - origin; };
+  // A set so small that squared distances would underflow (below about 1e-120 across) is worked
+  // on scaled up by a power of two, which is exact; elsewhere nothing is scaled.
+  const double extent = maxAbs(box.extent());
+  const int exponent = extent > 0.0 && extent < 0x1p-400 ? -std::ilogb(extent) : 0;
+  const auto scaled = [exponent](const Vec3& v) {
+    return exponent == 0 ? v
+                         : Vec3{std::ldexp(v.x, exponent), std::ldexp(v.y, exponent),
+                                std::ldexp(v.z, exponent)};
+  };
+  const auto local = [&](std::size_t i) { return scaled(points[i] - origin); };
 
   std::vector<Vec3> active;
   for (std::size_t i : extremes.indices)
@@ -207,9 +216,15 @@ Sphere boundingSphere(std::span<const Vec3> points) {
     }
   }
 
-  Sphere sphere{origin + ball.center, 0.0};
+  const Vec3 center = exponent == 0 ? ball.center
+                                    : Vec3{std::ldexp(ball.center.x, -exponent),
+                                           std::ldexp(ball.center.y, -exponent),
+                                           std::ldexp(ball.center.z, -exponent)};
+  Sphere sphere{origin + center, 0.0};
   for (const Vec3& p : points)
-    sphere.radius = std::max(sphere.radius, distance(p, sphere.center));
+    sphere.radius = std::max(
+        sphere.radius, exponent == 0 ? distance(p, sphere.center)
+                                     : std::ldexp(length(scaled(p - sphere.center)), -exponent));
   sphere.radius *= 1.0 + 4.0 * std::numeric_limits<double>::epsilon();
   if (!isFinite(sphere.center) || !std::isfinite(sphere.radius))
     throw Error("boundingSphere: the points span " + toString(box.lower) + " to " +

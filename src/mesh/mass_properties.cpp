@@ -88,7 +88,7 @@ MassProperties massProperties(const Mesh& mesh, double density) {
   const double volume = integral[0];
   // Zero relative to the mesh's size: rounding alone makes a flat closed mesh's volume of order
   // 1e-16 · diagonal³ (in the scaled frame, where the half extent is about 1).
-  const double diagonal = length((box.upper * 0.5 - box.lower * 0.5) * (2.0 * frame.scale));
+  const double diagonal = length(frame.scaled(box.upper * 0.5 - box.lower * 0.5) * 2.0);
   const double zeroVolume = 1e-12 * diagonal * diagonal * diagonal;
   if (volume < -zeroVolume)
     fail("the mesh is inside-out (signed volume " +

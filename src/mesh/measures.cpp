@@ -44,8 +44,8 @@ double surfaceArea(const Mesh& mesh) {
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     // b·s − a·s is (b − a)·s exactly (when nothing overflows): the edges keep their accuracy.
     const Triangle triangle = mesh.triangle(t);
-    const Vec3 a = triangle.a * frame.scale;
-    twiceArea += length(cross(triangle.b * frame.scale - a, triangle.c * frame.scale - a));
+    const Vec3 a = frame.scaled(triangle.a);
+    twiceArea += length(cross(frame.scaled(triangle.b) - a, frame.scaled(triangle.c) - a));
   }
   return detail::scaledBack(twiceArea * 0.5, 2 * frame.exponent, "surfaceArea", "area");
 }
@@ -61,8 +61,8 @@ EdgeLengths edgeLengths(const Mesh& mesh) {
   for (std::size_t i = 0; i < edges.size(); ++i) {
     if (i > 0 && edges[i].key == edges[i - 1].key) continue;
     const double edgeLength =
-        distance(vertices[detail::edgeFirstVertex(edges[i].key)] * frame.scale,
-                 vertices[detail::edgeSecondVertex(edges[i].key)] * frame.scale);
+        distance(frame.scaled(vertices[detail::edgeFirstVertex(edges[i].key)]),
+                 frame.scaled(vertices[detail::edgeSecondVertex(edges[i].key)]));
     lengths.min = distinct == 0 ? edgeLength : std::min(lengths.min, edgeLength);
     lengths.max = std::max(lengths.max, edgeLength);
     sum += edgeLength;

@@ -222,6 +222,26 @@ TEST(BoundingSphere, HugeOffsetKeepsTheSpread) {
   EXPECT_NEAR(sphere.radius, std::sqrt(3.0) / 2, 1e-6);
 }
 
+TEST(BoundingSphere, TinySetsAreNotCollapsedToAPoint) {
+  // Below about 1e-154 across, squared distances underflowed: a cube of side 1e-200 got radius 0
+  // about one of its corners. Now its ball is the cube's, at every scale down to subnormals, and
+  // the same (in units of the scale) as the unit cube's wherever the scaling is exact.
+  std::vector<Vec3> unit;
+  for (int i = 0; i < 8; ++i)
+    unit.push_back(Vec3{double(i & 1), double(i >> 1 & 1), double(i >> 2)} - Vec3{0.5, 0.5, 0.5});
+  const Sphere reference = boundingSphere(unit);
+  for (const int exponent : {-500, -540, -700, -1000, -1040}) {
+    std::vector<Vec3> corners;
+    for (const Vec3& c : unit)
+      corners.push_back(
+          {std::ldexp(c.x, exponent), std::ldexp(c.y, exponent), std::ldexp(c.z, exponent)});
+    const Sphere sphere = boundingSphere(corners);
+    EXPECT_EQ(sphere.radius, std::ldexp(reference.radius, exponent)) << exponent;
+    EXPECT_EQ(sphere.center.x, std::ldexp(reference.center.x, exponent)) << exponent;
+    EXPECT_GT(sphere.radius, 0.0);
+  }
+}
+
 TEST(BoundingSphere, MeshVertices) {
   const Mesh ball = primitives::icosphere(3, 2.5, {1, 2, 3});
   const Sphere sphere = boundingSphere(ball);

@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
+#include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
 
 namespace delta {
@@ -78,6 +80,32 @@ TEST(Measures, ZeroLengthEdgesGiveZerosNotNaN) {
   EXPECT_EQ(lengths.min, 0.0);
   EXPECT_DOUBLE_EQ(lengths.max, 1.0);
   EXPECT_DOUBLE_EQ(lengths.mean, 2.0 / 3.0);
+}
+
+TEST(Measures, MeshesOfSubnormalSizeAreMeasuredNotNaN) {
+  // A mesh below about 1e-308 across was scaled by 2^1030, beyond a double: its edge lengths
+  // came out NaN, and its area "(-nan × 2^-2130) overflows". Now the lengths are the unit
+  // square's scaled (exact where they are normal), and an area below the normal doubles is
+  // refused as an underflow.
+  for (const int exponent : {-1000, -1030, -1060}) {
+    const Mesh square({{0, 0, 0},
+                       {std::ldexp(1.0, exponent), 0, 0},
+                       {std::ldexp(1.0, exponent), std::ldexp(1.0, exponent), 0},
+                       {0, std::ldexp(1.0, exponent), 0}},
+                      {{0, 1, 2}, {0, 2, 3}});
+    const EdgeLengths lengths = edgeLengths(square);
+    EXPECT_EQ(lengths.min, std::ldexp(1.0, exponent)) << exponent;
+    EXPECT_NEAR(lengths.max / std::ldexp(1.0, exponent), std::sqrt(2.0),
+                exponent < -1022 ? 1e-4 : 1e-15);
+    EXPECT_TRUE(std::isfinite(lengths.mean));
+    try {
+      (void)surfaceArea(square);
+      ADD_FAILURE() << "an area below the normal doubles was answered";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("underflows"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find("nan"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Measures, AreasOfPrimitivesMatchAnalyticValues) {

@@ -18,12 +18,17 @@ namespace delta::detail {
 /// (then an error says so).
 struct ScaledFrame {
   Vec3 origin;
-  double scale = 1.0;
   int exponent = 0;
 
-  /// (p − origin)·scale, computed from p·scale and origin·scale: nothing overflows even where
-  /// the coordinates span the whole double range.
-  Vec3 operator()(const Vec3& p) const noexcept { return p * scale - origin * scale; }
+  /// v·2^-exponent, exactly where the result is a normal number. By ldexp, not by a factor:
+  /// for a mesh of subnormal size the factor 2^-exponent (up to 2^1074) is itself beyond a
+  /// double.
+  Vec3 scaled(const Vec3& v) const noexcept {
+    return {std::ldexp(v.x, -exponent), std::ldexp(v.y, -exponent), std::ldexp(v.z, -exponent)};
+  }
+  /// (p − origin)·2^-exponent, computed from p and origin each scaled: nothing overflows even
+  /// where the coordinates span the whole double range.
+  Vec3 operator()(const Vec3& p) const noexcept { return scaled(p) - scaled(origin); }
 };
 
 inline ScaledFrame scaledFrame(const Aabb& box) noexcept {
@@ -32,7 +37,6 @@ inline ScaledFrame scaledFrame(const Aabb& box) noexcept {
   const double halfExtent = maxAbs(box.upper * 0.5 - box.lower * 0.5);
   if (halfExtent > 0.0 && std::isfinite(halfExtent)) {
     frame.exponent = std::ilogb(halfExtent);
-    frame.scale = std::ldexp(1.0, -frame.exponent);
   }
   return frame;
 }
