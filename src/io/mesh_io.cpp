@@ -25,6 +25,7 @@
 #include "delta/io/atomic_file.h"
 #include "delta/io/regular_file.h"
 #include "delta/io/vtk.h"
+#include "delta/mesh/coordinate_range.h"
 
 #include "detail/isolated_import.h"
 #include "detail/mesh_readers.h"
@@ -324,6 +325,15 @@ void fillScene(aiScene& scene, const Mesh& mesh) {
   scene.mMeshes[0] = new aiMesh();
   aiMesh& out = *scene.mMeshes[0];
   out.mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  // Below single precision's normal range the file keeps fewer digits than float's own rounding
+  // gives the mesh (a mesh of size 1e-100 would be written as one point at the origin).
+  const double largest = magnitude(mesh.bounds());
+  if (largest > 0.0 && largest < std::numeric_limits<float>::min())
+    throw Error("the mesh's largest coordinate, " + delta::toString(largest) +
+                ", is below single precision's normal range (" +
+                delta::toString(double{std::numeric_limits<float>::min()}) +
+                "), which the file stores: its vertices would round to zero; scale the mesh by a "
+                "power of two first");
   out.mVertices = new aiVector3D[mesh.vertexCount()];
   out.mNumVertices = static_cast<unsigned>(mesh.vertexCount());
   for (std::size_t v = 0; v < mesh.vertexCount(); ++v)

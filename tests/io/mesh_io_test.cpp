@@ -517,5 +517,23 @@ TEST(IoSave, RejectsCoordinatesBeyondSinglePrecision) {
   EXPECT_THROW(save(huge, dir / "huge.stl"), Error);
 }
 
+TEST(IoSave, RejectsAMeshBelowSinglePrecisionsNormalRange) {
+  // A cube of side 1e-100 was written as one vertex at the origin and twelve collapsed faces.
+  TempDir dir;
+  for (const char* name : {"tiny.stl", "tiny.ply", "tiny.obj"}) {
+    Mesh tiny = unitCube();
+    tiny.scale(1e-100);
+    EXPECT_THROW(save(tiny, dir / name), Error) << name;
+    EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    // At the bottom of the normal range (side 2^-100), the file holds the cube.
+    Mesh small = unitCube();
+    small.scale(0x1p-100);
+    save(small, dir / name);
+    const Mesh back = load(dir / name);
+    EXPECT_EQ(back.vertexCount(), small.vertexCount()) << name;
+    EXPECT_NEAR(back.bounds().upper.x / small.bounds().upper.x, 1.0, 1e-6) << name;  // .obj: text
+  }
+}
+
 }  // namespace
 }  // namespace delta::io

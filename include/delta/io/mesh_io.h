@@ -107,7 +107,9 @@ Mesh load(const std::filesystem::path& path);
 /// STL comes back with shared vertices. Δ does not read .vtp.
 ///
 /// Throws delta::Error, naming the path and the reason, for another extension, a coordinate
-/// beyond single precision (.stl, .ply, .obj), or when writing fails (a full disk, /dev/full). The
+/// beyond single precision or a mesh whose largest coordinate is below its normal range (about
+/// 1.2e-38, where the file would round the vertices to zero; .stl, .ply, .obj), or when writing
+/// fails (a full disk, /dev/full). The
 /// file is written whole or not at all (io/atomic_file.h): an existing file is replaced only by a
 /// complete one, and left as it was when writing fails; a symlink at `path` is kept and its target
 /// replaced. Degenerate triangles are written as they are.
