@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -120,6 +121,29 @@ TEST(Overlap, CoplanarFacesAndTheSameMeshTwice) {
   EXPECT_NEAR(same.total.volume, 1.0, 1e-15);
   const QueryMesh sphere(primitives::icosphere(3));
   EXPECT_NEAR(overlap(sphere, sphere).total.volume, signedVolume(sphere.mesh()), 1e-13);
+}
+
+TEST(Overlap, CoordinatesWhereThePredicatesUnderflowAreRefusedWithTheReason) {
+  // A mesh moved by 1e-300 against its copy: the predicates' products of differences underflowed,
+  // and the query said "inconsistent crossing (internal error)" or called a closed mesh open (and
+  // a sign could have been wrong without a word). Such a vertex is now refused by name.
+  const QueryMesh a(primitives::icosphere(1));
+  for (const Vec3& shift : {Vec3{0, 0, 1e-300}, Vec3{1e-300, 0, 0}, Vec3{0, 0, 1e-200}}) {
+    const QueryMesh b = placed(primitives::icosphere(1), RigidTransform::translationBy(shift));
+    try {
+      (void)overlap(a, b);
+      ADD_FAILURE() << "answered";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("second mesh"), std::string::npos) << message;
+      EXPECT_NE(message.find("below 2^-250"), std::string::npos) << message;
+      EXPECT_EQ(message.find("internal"), std::string::npos) << message;
+    }
+  }
+  // At 2^-250 and above, the copy shifted along z shares all but a sliver.
+  const QueryMesh b =
+      placed(primitives::icosphere(1), RigidTransform::translationBy({0, 0, 0x1p-250}));
+  EXPECT_NEAR(overlap(a, b).total.volume, signedVolume(a.mesh()), 1e-14);
 }
 
 TEST(Overlap, SpheresShareTheirLens) {

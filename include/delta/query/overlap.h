@@ -105,7 +105,9 @@ struct OverlapOptions {
 /// An inside-out mesh (negative signed volume) bounds the same solid as its reversal: its
 /// triangles are read reversed. Throws delta::Error where a mesh is not closed and consistently
 /// oriented (naming its defects), crosses itself (selfIntersections), or lies outside the
-/// coordinate range.
+/// coordinate range, and where a vertex the query meets has a coordinate below 2⁻²⁵⁰ (about
+/// 5.5e-76) but not 0, where it stands (after its pose): there the exact predicates' products
+/// of coordinate differences would underflow and could give a wrong sign.
 ///
 /// Threading: reads both meshes only; any number of threads may call it at once. Serial. Each
 /// thread keeps slot maps as large as the largest meshes it has compared (three 4-byte entries
