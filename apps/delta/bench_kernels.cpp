@@ -225,7 +225,14 @@ void addBenchCommand(CLI::App& app) {
                       "neon, sve (AArch64) "
                       "(default: the widest this CPU runs)");
   kernels->add_flag("--json", options->json, "Print one JSON object instead of a table");
-  kernels->callback([options] { run(*options); });
+  // A stray word after `kernels` falls through to BENCHMARK, whose check runs after this
+  // callback: checked here first, so that nothing runs for a command line that is refused.
+  kernels->callback([options, unknown] {
+    if (!unknown->empty())
+      throw Error("bench kernels: unexpected argument '" + *unknown +
+                  "' (see delta bench kernels --help)");
+    run(*options);
+  });
 }
 
 }  // namespace delta::cli

@@ -32,6 +32,7 @@
 #include "files.h"
 #include "json.h"
 #include "mesh_source.h"
+#include "motion_options.h"
 #include "progress.h"
 #include "run_lock.h"
 #include "stopwatch.h"
@@ -884,9 +885,15 @@ void addDemCommand(CLI::App& app) {
                 "Replace the output of an earlier run in --out (a run is refused otherwise)");
   dem->add_flag("--json", options->json, "Print one JSON object instead of text");
   dem->add_flag("--quiet", options->quiet, "No progress line");
-  dem->add_option("--checkpoint-every", options->checkpointEvery,
-                  "Keep a checkpoint of the run, DIR/checkpoint.delta (--out DIR), written every "
-                  "N steps and at the end (and when stopped by SIGINT or SIGTERM)")
+  // Parsed as the step counts are: CLI11's unsigned conversion wrapped -1 round and saturated
+  // 2^64, and such a run went on without periodic checkpoints.
+  dem->add_option_function<std::string>(
+         "--checkpoint-every",
+         [options](const std::string& text) {
+           options->checkpointEvery = parseStepCount(text, "--checkpoint-every", 0);
+         },
+         "Keep a checkpoint of the run, DIR/checkpoint.delta (--out DIR), written every N steps "
+         "and at the end (and when stopped by SIGINT or SIGTERM)")
       ->type_name("N");
   dem->add_option("--restart", options->restart,
                   "Continue the run a checkpoint holds; --steps is then the run's total, --out "

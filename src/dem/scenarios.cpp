@@ -324,9 +324,12 @@ Scenario hopper(std::size_t count, std::uint64_t seed, ParticleKind kind, Contac
   const auto columns = static_cast<std::size_t>(std::ceil(std::cbrt(static_cast<double>(count))));
   // The funnel: its top wide enough for the lattice's corners, walls at 60° to the horizontal.
   const double spacingEstimate = 2.0 * r + 0.1 * r + 0.3 * r;
-  const double topRadius =
-      std::numbers::sqrt2 * 0.5 * static_cast<double>(columns) * spacingEstimate + r;
   const double outletRadius = 4.5 * r, outletHeight = 10.0 * r;
+  // At least a grain wider than the outlet: a lattice of one or two columns (up to 8 particles)
+  // is narrower than the outlet, and the funnel had no height.
+  const double topRadius =
+      std::max(std::numbers::sqrt2 * 0.5 * static_cast<double>(columns) * spacingEstimate + r,
+               outletRadius + r);
   const double topHeight =
       outletHeight + (topRadius - outletRadius) * std::tan(std::numbers::pi / 3);
   GranularSetup setup =

@@ -133,6 +133,8 @@ TEST(DeltaCli, BenchKernelsRejectsBadInput) {
   expectOneLineError(runDelta("bench kernels --isa avx1024"), "avx1024");
   expectOneLineError(runDelta("bench"), "kernels");
   expectOneLineError(runDelta("bench frobnicate"), "frobnicate");
+  // Refused before the benchmark runs (expectOneLineError: nothing on stdout).
+  expectOneLineError(runDelta("bench kernels --pairs 100 extra"), "'extra'");
   for (const char* command : {"bench --help", "bench kernels --help"}) {
     const CliRun run = runDelta(command);
     EXPECT_EQ(run.exitCode, 0) << command;

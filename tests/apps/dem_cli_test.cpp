@@ -296,6 +296,11 @@ TEST(DemCli, RejectsBadInputWithOneLine) {
   expectOneLineError(runDelta("dem --particle-radius 0.01"), "particle_mesh");
   expectOneLineError(runDelta("dem --config /nonexistent/run.cfg"), "/nonexistent/run.cfg");
   expectOneLineError(runDelta("dem two-particles --steps"), "--steps");
+  // Wrapped round or saturated by the unsigned conversion, these ran without checkpoints.
+  for (const char* every : {"-1", "-5", "18446744073709551616", "1e23", "2.5"})
+    expectOneLineError(
+        runDelta(std::string("dem two-particles --steps 3 --checkpoint-every ") + every),
+        "--checkpoint-every '" + std::string(every) + "' must be a whole number");
 }
 
 TEST(DemCli, NamesTheFileLineAndKeyOfABadConfig) {

@@ -96,6 +96,18 @@ TEST(DemScenarios, HopperBuildsAThousandGranulatesApart) {
   EXPECT_FALSE(analyzeTopology(world.obstacles()[0].mesh).closed);  // open funnel
 }
 
+TEST(DemScenarios, AHopperOfOneToEightParticlesHasAFunnel) {
+  // One or two columns of the lattice are narrower than the outlet: the funnel's top came out
+  // below its outlet, and hopper(1) to hopper(8) threw "funnel: topHeight ... must exceed".
+  for (std::size_t count = 1; count <= 9; ++count)
+    for (const ContactModel model : {ContactModel::point, ContactModel::volume}) {
+      Scenario scenario = hopper(count, 1, ParticleKind::Mesh, model);
+      EXPECT_EQ(scenario.world.particles().size(), count);
+      scenario.world.run(20);
+      EXPECT_EQ(scenario.world.stepCount(), 20u);
+    }
+}
+
 TEST(DemScenarios, RejectBadArguments) {
   EXPECT_THROW(twoParticles(1.2), Error);
   EXPECT_THROW(twoParticles(0.5, 1.0), Error);
