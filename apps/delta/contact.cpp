@@ -50,6 +50,7 @@ void validate(const ContactOptions& options) {
   const std::string extension = extensionOf(options.out);
   if (!options.out.empty() && extension != ".csv" && extension != ".vtp")
     throw Error("--out '" + options.out + "': write .csv or .vtp");
+  requireOutputIsNotAnInput(options.out, {options.meshA, options.meshB});
   if (!kernels::parseSolver(options.method))
     throw Error("--method '" + options.method + "': use hybrid, penalty or bruteforce");
 }

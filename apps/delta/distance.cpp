@@ -75,6 +75,7 @@ void validate(const DistanceOptions& options) {
   const std::string extension = extensionOf(options.out);
   if (!options.out.empty() && extension != ".csv" && extension != ".vtp")
     throw Error("--out '" + options.out + "': write .csv or .vtp");
+  requireOutputIsNotAnInput(options.out, {options.mesh, options.points});
 }
 
 /// What the summary line (or JSON) says of the answers, added up call by call.

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <system_error>
 
@@ -25,6 +26,21 @@ inline std::string frameFileName(const char* series, std::size_t frame, const ch
   char name[128];
   std::snprintf(name, sizeof name, "%s_%06zu%s", series, frame, extension);
   return name;
+}
+
+/// Throws delta::Error where --out `out` is one of the command's input files, through whatever
+/// path or link: the readers tell formats by content, so an input may carry an output's
+/// extension, and it was replaced by the output without a word. `inputs` may hold built-in
+/// sources and paths that do not exist (neither is a file to lose).
+inline void requireOutputIsNotAnInput(const std::string& out,
+                                      std::initializer_list<std::string> inputs) {
+  if (out.empty()) return;
+  for (const std::string& input : inputs) {
+    std::error_code error;
+    if (!input.empty() && std::filesystem::equivalent(out, input, error))
+      throw Error("--out '" + out + "' is the input '" + input +
+                  "': writing it would replace it; write elsewhere");
+  }
 }
 
 /// Makes the folder given to --out (and its parents) unless it exists. Throws delta::Error naming

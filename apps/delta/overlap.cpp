@@ -38,6 +38,7 @@ struct OverlapCliOptions {
 void validate(const OverlapCliOptions& options) {
   if (!options.out.empty() && extensionOf(options.out) != ".vtp")
     throw Error("--out '" + options.out + "': write the curves as FILE.vtp");
+  requireOutputIsNotAnInput(options.out, {options.meshA, options.meshB});
   options.moveB.validate();
 }
 

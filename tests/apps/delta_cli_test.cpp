@@ -32,6 +32,7 @@ using delta::test::CliRun;
 using delta::test::expectOneLineError;
 using delta::test::runDelta;
 using delta::test::slurp;
+using delta::test::TemporaryFolder;
 
 std::string dataPath(const std::string& relative) {
   return std::string(DELTA_DATA_DIR) + "/" + relative;
@@ -217,6 +218,35 @@ std::vector<std::string> lines(const std::string& path) {
   for (std::string line; std::getline(file, line);)
     all.push_back(line);
   return all;
+}
+
+TEST(DeltaCli, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
+  // The readers tell formats by content, so an input may be named .csv or .vtp: --out naming it
+  // (or a link to it) replaced it with the output.
+  const TemporaryFolder folder("out_is_input");
+  const std::string mesh = (folder.path / "mesh.csv").string();
+  const std::string points = (folder.path / "points.csv").string();
+  const std::string link = (folder.path / "link.vtp").string();
+  std::filesystem::copy_file(std::string(DELTA_DATA_DIR) + "/meshes/fandisk.off", mesh);
+  { std::ofstream(points) << "0 0 0\n1 1 1\n"; }
+  std::filesystem::create_symlink(points, link);
+  const std::string meshBefore = slurp(mesh), pointsBefore = slurp(points);
+  expectOneLineError(runDelta("contact " + mesh + " builtin:box --eps 0.1 --out " + mesh),
+                     "is the input");
+  const std::string solid = (folder.path / "box.vtp").string();
+  std::filesystem::copy_file(std::string(DELTA_DATA_DIR) + "/meshes/fandisk.off", solid);
+  expectOneLineError(runDelta("overlap builtin:box " + solid + " --out " + solid), "is the input");
+  EXPECT_EQ(slurp(solid), meshBefore);
+  expectOneLineError(runDelta("distance builtin:box --points " + points + " --out " + link),
+                     "is the input");
+  expectOneLineError(runDelta("distance " + mesh + " --points " + points + " --out " + mesh),
+                     "is the input");
+  EXPECT_EQ(slurp(mesh), meshBefore);
+  EXPECT_EQ(slurp(points), pointsBefore);
+  // Another name in the same folder is written.
+  const CliRun run = runDelta("distance builtin:box --points " + points + " --out " +
+                              (folder.path / "d.csv").string());
+  EXPECT_EQ(run.exitCode, 0) << run.err;
 }
 
 TEST(DeltaCli, DistanceWritesOneRowPerPointInInputOrder) {
