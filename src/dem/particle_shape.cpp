@@ -53,11 +53,28 @@ double largestVertexDistance(const Mesh& mesh) noexcept {
 }  // namespace
 
 Mat3 inverse(const Mat3& m) noexcept {
-  const Vec3 r0 = m.row(0), r1 = m.row(1), r2 = m.row(2);
+  // The determinant is of degree 3 in the entries: for a matrix whose entries lie far from 1 (the
+  // inertia of a particle of radius 1e-22 is about 1e-107, its determinant 1e-321, subnormal) it
+  // would under- or overflow. Such a matrix is inverted scaled by a power of two (exact), the
+  // inverse scaled back; elsewhere nothing is scaled.
+  double largest = 0.0;
+  for (const double entry : m.entries)
+    largest = std::max(largest, std::abs(entry));
+  const int exponent =
+      largest > 0.0 && std::isfinite(largest) && !(largest > 0x1p-250 && largest < 0x1p250)
+          ? std::ilogb(largest)
+          : 0;
+  Mat3 scaled = m;
+  for (double& entry : scaled.entries)
+    entry = std::ldexp(entry, -exponent);
+  const Vec3 r0 = scaled.row(0), r1 = scaled.row(1), r2 = scaled.row(2);
   // The columns of the inverse are the cross products of the rows over the determinant.
   const Vec3 c0 = cross(r1, r2), c1 = cross(r2, r0), c2 = cross(r0, r1);
   const double scale = 1.0 / dot(r0, c0);
-  return Mat3::fromRows(c0, c1, c2).transposed() * scale;
+  Mat3 result = Mat3::fromRows(c0, c1, c2).transposed() * scale;
+  for (double& entry : result.entries)
+    entry = std::ldexp(entry, -exponent);
+  return result;
 }
 
 ParticleShape::ParticleShape(const Mesh& mesh, double density)

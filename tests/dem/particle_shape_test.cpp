@@ -36,6 +36,22 @@ TEST(DemParticleShape, InverseInertiaOfATurnedGranulate) {
   EXPECT_GT(std::fabs(shape.inertia()(0, 1)), 1e-3);
 }
 
+TEST(DemParticleShape, TheInertiaOfATinyParticleIsInvertedToo) {
+  // A particle of radius 1e-22 has an inertia of about 1e-107, whose determinant (1e-321) was
+  // subnormal: its inverse was garbage, and the first step ended "no longer finite" with a time
+  // step that was the one suggested. The inverse is now taken scaled by a power of two.
+  for (const double size : {1e-22, 1e-40, 1e25}) {
+    Mesh grain = primitives::granulate(3, {1.0, 0.7, 0.5});
+    grain.rotate(Vec3{1, 2, 3}, 0.8);
+    grain.scale(size);
+    const ParticleShape shape(grain, 2.0);
+    const Mat3 product = shape.inertia() * shape.inverseInertia();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(product(r, c), r == c ? 1.0 : 0.0, 1e-12) << size;
+  }
+}
+
 TEST(DemParticleShape, RejectsOpenMeshesAndBadDensities) {
   EXPECT_THROW(ParticleShape(primitives::quad(), 1.0), Error);
   EXPECT_THROW(ParticleShape(primitives::icosphere(1), 0.0), Error);

@@ -109,7 +109,8 @@ class ParticleShape {
   ParticleKind kind_;
 };
 
-/// The inverse of a 3×3 matrix by cofactors. The caller guarantees it is invertible (an
+/// The inverse of a 3×3 matrix by cofactors, taken scaled by a power of two where the entries lie
+/// beyond 2^±250 (a tiny particle's inertia). The caller guarantees it is invertible (an
 /// inertia tensor of a solid is symmetric positive definite); a singular matrix gives infinities
 /// or NaN, unchecked.
 ///
