@@ -323,7 +323,14 @@ class CheckpointCodec {
         in.fail("contact model " + std::to_string(model) + " is neither point (0) nor volume (1)");
       p.contactModel = static_cast<ContactModel>(model);
     }
-    Checkpoint checkpoint{World(p), {}};  // checks the parameters
+    const auto checkedWorld = [&in](const Parameters& parameters) {
+      try {
+        return World(parameters);  // checks the parameters
+      } catch (const Error& error) {
+        in.fail(error.what());
+      }
+    };
+    Checkpoint checkpoint{checkedWorld(p), {}};
     World& world = checkpoint.world;
     world.time_ = in.f64();
     const std::uint64_t steps = in.u64();

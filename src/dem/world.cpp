@@ -13,6 +13,7 @@
 #include "delta/core/parallel.h"
 #include "delta/dem/broad_phase.h"
 #include "delta/dem/narrow_phase.h"
+#include "delta/mesh/coordinate_range.h"
 #include "delta/mesh/topology.h"
 #include "delta/query/overlap.h"
 #include "delta/query/point_distance.h"
@@ -63,14 +64,25 @@ void requirePositive(double value, const char* name) {
                 " must be finite and positive");
 }
 
+/// A distance of the contact law (ε, the filter's): positive and within what the contact queries
+/// take, from 2⁻⁴⁸¹ (below, their squares underflow: contacts.h) to the coordinate range
+/// (beyond, the broad phase's margins overflow), so that no step refuses it half-way.
+void requireContactDistance(double value, const char* name) {
+  requirePositive(value, name);
+  if (!(value >= 0x1p-481 && value <= kLargestCoordinate))
+    throw Error(std::string("dem parameters: ") + name + " = " + toString(value) +
+                " must lie between 2^-481 (" + toString(0x1p-481) + ") and the coordinate range " +
+                coordinateRangeText());
+}
+
 void requireFinite(const Vec3& value, const std::string& what) {
   if (!isFinite(value)) throw Error(what + " = " + toString(value) + " must be finite");
 }
 
 ContactLaw contactLawOf(const Parameters& parameters) {
   requirePositive(parameters.timeStep, "timeStep");
-  requirePositive(parameters.epsilon, "epsilon");
-  requirePositive(parameters.filterDistance, "filterDistance");
+  requireContactDistance(parameters.epsilon, "epsilon");
+  requireContactDistance(parameters.filterDistance, "filterDistance");
   requirePositive(parameters.stiffness, "stiffness");
   requirePositive(parameters.tangentialStiffnessRatio, "tangentialStiffnessRatio");
   if (!std::isfinite(parameters.friction) || parameters.friction < 0.0)

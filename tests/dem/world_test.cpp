@@ -54,6 +54,14 @@ TEST(DemWorld, RejectsBadInput) {
   rejects([](Parameters& p) { p.timeStep = kNaN; });
   rejects([](Parameters& p) { p.epsilon = 0.0; });
   rejects([](Parameters& p) { p.epsilon = kNaN; });
+  // Beyond what the contact queries take: refused here, not by a step half-way (1e308 made the
+  // broad phase's margin +inf; below 2^-481 the contacts refuse ε).
+  rejects([](Parameters& p) { p.epsilon = 1e308; });
+  rejects([](Parameters& p) { p.epsilon = 1e-200; });
+  rejects([](Parameters& p) { p.filterDistance = 1e300; });
+  good.epsilon = 0x1p-481;
+  EXPECT_NO_THROW(World{good});
+  good.epsilon = 1e-3;
   rejects([](Parameters& p) { p.filterDistance = -1.0; });
   rejects([](Parameters& p) { p.stiffness = 0.0; });
   rejects([](Parameters& p) { p.restitution = 1.5; });

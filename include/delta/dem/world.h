@@ -34,12 +34,15 @@ namespace delta::dem {
 ///
 /// Threading: a value type; no shared state.
 struct Parameters {
-  double timeStep = 0.0;        ///< dt > 0; see World::suggestedTimeStep
-  double epsilon = 0.0;         ///< ε > 0: surfaces closer than 2ε are in contact
-  double filterDistance = 0.0;  ///< h > 0: contact points of a pair closer than h are merged
-  double stiffness = 0.0;       ///< k > 0, the normal spring of a pair (contact_model.h)
-  double restitution = 0.5;     ///< e in [0, 1], normal coefficient of restitution
-  double friction = 0.0;        ///< μ ≥ 0, Coulomb coefficient; 0 is frictionless
+  double timeStep = 0.0;  ///< dt > 0; see World::suggestedTimeStep
+  /// ε, from 2⁻⁴⁸¹ to 2²⁰⁰ (what the contact queries take): surfaces closer than 2ε are in
+  /// contact.
+  double epsilon = 0.0;
+  /// h, from 2⁻⁴⁸¹ to 2²⁰⁰: contact points of a pair closer than h are merged.
+  double filterDistance = 0.0;
+  double stiffness = 0.0;    ///< k > 0, the normal spring of a pair (contact_model.h)
+  double restitution = 0.5;  ///< e in [0, 1], normal coefficient of restitution
+  double friction = 0.0;     ///< μ ≥ 0, Coulomb coefficient; 0 is frictionless
   double tangentialStiffnessRatio = 2.0 / 7.0;  ///< k_t / k > 0, used when μ > 0
   Vec3 gravity{0.0, 0.0, -9.81};                ///< acceleration, finite
   /// The contact law (contact_model.h): the point law on the ε-shell, or the energy-conserving
