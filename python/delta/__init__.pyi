@@ -544,7 +544,11 @@ class RigidTransform:
         p -> R p + t with R the rotation (a Quaternion) and t the translation (3 numbers).
         """
         ...
-    def __mul__(self, arg0: RigidTransform) -> RigidTransform: ...
+    def __mul__(self, arg0: RigidTransform) -> RigidTransform:
+        """
+        The composition: b first, then a (delta.Error where its translation overflows).
+        """
+        ...
     def apply(self, points: numpy.typing.ArrayLike) -> numpy.ndarray:
         """
         Moves points, an array of shape (..., 3); returns a new float64 array.
@@ -558,7 +562,7 @@ class RigidTransform:
         ...
     def inverse(self) -> RigidTransform:
         """
-        The motion that undoes this one.
+        The motion that undoes this one (delta.Error where its translation overflows).
         """
         ...
     @property

@@ -7,6 +7,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/memory.h"
 
 namespace delta::python {
 
@@ -94,6 +95,9 @@ DoubleArray pointArray(const ArrayLike& argument, const char* what, bool exactly
     throw Error(std::string(what) + " must have shape " + (exactlyTwoAxes ? "(n, 3)" : "(..., 3)") +
                 ", not " + shapeOf(array));
   requireExactIntegers(array, what);
+  // The float64 copy NumPy makes of any other array, and the library's own copy: refused with
+  // a clear error where they would not fit (a broadcast view of 10^9 points was OOM-killed).
+  requireMemory(2.0 * static_cast<double>(array.size()) * sizeof(double), what);
   DoubleArray points = DoubleArray::ensure(array);
   if (!points) throw Error(std::string(what) + ": conversion to float64 failed");
   return points;

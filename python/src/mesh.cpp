@@ -16,6 +16,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/core/memory.h"
 #include "delta/core/rotation.h"
 #include "delta/io/mesh_io.h"
 #include "delta/mesh/bounding_sphere.h"
@@ -100,6 +101,8 @@ std::vector<TriangleIndices> triangleIndices(const ArrayLike& triangles) {
   if (given.array.ndim() != 2 || given.array.shape(1) != 3)
     throw Error("Mesh: triangles must have shape (m, 3), not " + shapeOf(given.array));
   const auto count = static_cast<std::size_t>(given.array.shape(0));
+  // NumPy's 64-bit copy and the 32-bit corners.
+  requireMemory(static_cast<double>(count) * 3.0 * (8.0 + 4.0), "Mesh: triangles");
   std::vector<TriangleIndices> corners(count);
   const auto copy = [&]<typename Index>(Index) {
     using Indices = py::array_t<Index, py::array::c_style | py::array::forcecast>;
@@ -147,6 +150,15 @@ Topology topologyOf(const PyMesh& mesh) {
   const std::shared_ptr<const Mesh> snapshot = mesh.snapshot();
   py::gil_scoped_release release;
   return analyzeTopology(*snapshot);
+}
+
+/// `motion`, or delta::Error naming `what` where its translation is not finite (two finite
+/// motions whose translations add beyond a double): a Python object never holds one.
+RigidTransform finiteMotion(const RigidTransform& motion, const char* what) {
+  if (!isFinite(motion.translation))
+    throw Error(std::string(what) + ": the translation " + toString(motion.translation) +
+                " overflows a double");
+  return motion;
 }
 
 void bindRotations(py::module_& module) {
@@ -239,8 +251,18 @@ Mesh.transform and the immersed-boundary grid's moves take.)")
             return mapPoints(points, [&](const Vec3& p) { return motion.apply(p); });
           },
           "points"_a, "Moves points, an array of shape (..., 3); returns a new float64 array.")
-      .def("inverse", &RigidTransform::inverse, "The motion that undoes this one.")
-      .def("__mul__", [](const RigidTransform& a, const RigidTransform& b) { return a * b; })
+      .def(
+          "inverse",
+          [](const RigidTransform& motion) {
+            return finiteMotion(motion.inverse(), "RigidTransform.inverse()");
+          },
+          "The motion that undoes this one (delta.Error where its translation overflows).")
+      .def(
+          "__mul__",
+          [](const RigidTransform& a, const RigidTransform& b) {
+            return finiteMotion(a * b, "RigidTransform * RigidTransform");
+          },
+          "The composition: b first, then a (delta.Error where its translation overflows).")
       .def("__repr__", [](const RigidTransform& motion) {
         return "RigidTransform(rotation=" + repr(motion.rotation) +
                ", translation=" + repr(motion.translation) + ")";

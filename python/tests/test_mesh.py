@@ -232,3 +232,27 @@ def test_real_mesh_matches_delta_info(meshes, cli_json):
     assert mesh.degenerate_triangle_count == info["degenerate_triangles"]
     np.testing.assert_array_equal(mesh.bounds, [info["bounds"]["lower"], info["bounds"]["upper"]])
     assert mesh.edge_lengths()["mean"] == info["mesh_size"]["mean_edge"]
+
+
+def test_arrays_too_large_for_memory_are_refused_before_they_are_copied():
+    # A broadcast view costs nothing, but its float64 copy would: it was OOM-killed.
+    triangle = np.array([[0, 1, 2]])
+    huge = np.broadcast_to(np.zeros(3), (10**10, 3))
+    with pytest.raises(ValueError, match="memory"):
+        delta.Mesh(huge, triangle)
+    with pytest.raises(ValueError, match="memory"):
+        delta.Mesh(delta.box().vertices, np.broadcast_to(np.array([0, 1, 2]), (10**10, 3)))
+    with pytest.raises(ValueError, match="memory"):
+        delta.distance(delta.box(), huge)
+
+
+def test_a_composition_whose_translation_overflows_is_refused():
+    # A RigidTransform never holds a translation that is not finite (the constructor refuses
+    # one); composing or inverting finite motions could make one.
+    far = delta.RigidTransform(translation=(1e308, 0, 0))
+    with pytest.raises(ValueError, match="overflows"):
+        far * far
+    turned = delta.RigidTransform(delta.Quaternion.from_axis_angle((0, 0, 1), 1.0), (1e308, 1e308, 0))
+    with pytest.raises(ValueError, match="overflows"):
+        turned.inverse()
+    assert np.array_equal((far * delta.RigidTransform()).translation, [1e308, 0, 0])
