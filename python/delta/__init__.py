@@ -100,5 +100,16 @@ def signed_distance(result):
     """The signed distance of a `distance(..., signed=True)` result: negative inside.
 
     `result` is a structured array of delta.distance_dtype; returns a float64 array of its shape.
+    Raises TypeError for anything else.
     """
+    if not isinstance(result, (_np.ndarray, _np.void)) or result.dtype != distance_dtype:
+        raise TypeError(
+            "signed_distance: result must be a NumPy array of delta.distance_dtype "
+            "(what distance(..., signed=True) returns), not "
+            + (
+                f"one of dtype {result.dtype}"
+                if isinstance(result, (_np.ndarray, _np.void))
+                else type(result).__name__
+            )
+        )
     return _np.where(result["inside"], -result["distance"], result["distance"])

@@ -222,3 +222,13 @@ def test_bad_queries_raise_delta_error(fandisk):
                                                           ("triangle_a", "u4"), ("triangle_b", "u4")]), 0.1)
     with pytest.raises(TypeError):
         delta.contacts(fandisk, "fandisk.off", 0.1)
+
+
+def test_signed_distance_takes_only_a_distance_result():
+    # An array of points was an IndexError from inside NumPy.
+    result = delta.distance(delta.box(), np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), signed=True)
+    assert delta.signed_distance(result).tolist() == [-0.5, 1.5]
+    assert delta.signed_distance(result[1]) == 1.5
+    for wrong in (np.zeros(3), [1, 2], None):
+        with pytest.raises(TypeError, match="distance_dtype"):
+            delta.signed_distance(wrong)
