@@ -236,19 +236,25 @@ TEST(FarCoordinates, WindingNumberRescales) {
   EXPECT_NEAR(windingNumber(TriangleSoA(edge), {0, 0, 1e307}), 1.0, 1e-12);
 }
 
+/// A tetrahedron of size 1e-300 at the origin beside one of size 1 at (2, 2, 2), in one mesh (its
+/// scale is 3: in range); the big one's vertices follow the small one's.
+Mesh tinyBesideUnitTetrahedron() {
+  const Mesh small = scaled(kTetra, 1e-300);
+  Mesh big = kTetra;
+  big.translate({2, 2, 2});
+  std::vector<Vec3> vertices(small.vertices().begin(), small.vertices().end());
+  std::vector<TriangleIndices> triangles(small.triangles().begin(), small.triangles().end());
+  for (const TriangleIndices& t : big.triangles())
+    triangles.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
+  vertices.insert(vertices.end(), big.vertices().begin(), big.vertices().end());
+  return Mesh(vertices, triangles);
+}
+
 TEST(FarCoordinates, TinyGapsAreNotReportedZero) {
   // A tetrahedron of size 1e-300 beside one of size 1 (the mesh's scale is 3: in range). A
   // point 1e-301 off the small one's face has a squared distance that underflows to 0 (it was
   // reported on the surface); its distance is 1e-301, and its side is decided.
-  Mesh mesh = scaled(kTetra, 1e-300);
-  Mesh big = kTetra;
-  big.translate({2, 2, 2});
-  std::vector<Vec3> vertices(mesh.vertices().begin(), mesh.vertices().end());
-  std::vector<TriangleIndices> triangles(mesh.triangles().begin(), mesh.triangles().end());
-  for (const TriangleIndices& t : big.triangles())
-    triangles.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
-  vertices.insert(vertices.end(), big.vertices().begin(), big.vertices().end());
-  const QueryMesh query(Mesh(vertices, triangles));
+  const QueryMesh query(tinyBesideUnitTetrahedron());
   ASSERT_TRUE(query.closed());
   const PointDistance outside =
       distance(query, {0.25e-300, 0.25e-300, -1e-301}, {.signedDistance = true});
@@ -278,17 +284,9 @@ TEST(FarCoordinates, AnEpsilonWhoseSquareUnderflowsStillFindsWhatIsCloser) {
   // ε² below about 1e-324 is 0, and d² < ε² missed even a point on the mesh (distance 0); the
   // search now runs with a limit that does not underflow and cuts its answers at ε by their
   // distances at scale. The same tetrahedra as above: a point 1e-301 off the small one's face.
-  Mesh mesh = scaled(kTetra, 1e-300);
-  Mesh big = kTetra;
-  big.translate({2, 2, 2});
-  std::vector<Vec3> vertices(mesh.vertices().begin(), mesh.vertices().end());
-  std::vector<TriangleIndices> triangles(mesh.triangles().begin(), mesh.triangles().end());
-  for (const TriangleIndices& t : big.triangles())
-    triangles.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
-  vertices.insert(vertices.end(), big.vertices().begin(), big.vertices().end());
-  const QueryMesh query(Mesh(vertices, triangles));
+  const QueryMesh query(tinyBesideUnitTetrahedron());
   const Vec3 off{0.25e-300, 0.25e-300, -1e-301}, on{0.25e-300, 0.25e-300, 0},
-      vertex = big.vertices()[0];
+      vertex = query.mesh().vertices()[4];                                // the big one's first
   for (const std::size_t copies : {std::size_t{1}, std::size_t{3000}}) {  // one point, the sieve
     for (const double epsilon : {1e-163, 1e-200, 1e-301, std::nextafter(1e-301, 1.0), 5e-324}) {
       std::vector<Vec3> points(copies, off);
