@@ -10,6 +10,7 @@
 #include "delta/dem/checkpoint.h"
 #include "delta/io/atomic_file.h"
 
+#include "motion_options.h"
 #include "stopwatch.h"
 
 namespace delta::cli {
@@ -25,9 +26,10 @@ extern "C" void requestStop(int signal) {
 std::size_t sizeOf(const std::string& text, const std::string& key, const std::string& origin) {
   std::size_t value = 0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc{} || end != text.data() + text.size())
+  // At most what --steps takes: a note edited to 2^64 − 1 steps ran for ever.
+  if (error != std::errc{} || end != text.data() + text.size() || value > kMaxSteps)
     throw Error("'" + origin + "': the checkpoint's note has " + key + " = '" + text +
-                "', not a count");
+                "', not a count from 0 to " + std::to_string(kMaxSteps));
   return value;
 }
 

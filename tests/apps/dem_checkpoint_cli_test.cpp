@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "apps/cli_run.h"
+#include "forged_checkpoint.h"
 
 namespace {
 
@@ -139,6 +140,25 @@ TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
   { std::ofstream(folder.path / "cut.delta", std::ios::binary) << cut; }
   expectOneLineError(runDelta("dem --restart '" + (folder.path / "cut.delta").string() + "'"),
                      "truncated");
+  // The run's note edited, its length and the checksum made to match: a count beyond what
+  // --steps takes (2^64 - 1 steps ran for ever) is refused.
+  const std::string bytes = slurp(checkpoint);
+  const std::size_t note = bytes.rfind("delta dem\n");
+  ASSERT_NE(note, std::string::npos);
+  for (const char* edited : {"steps = 18446744073709551615", "checkpoint_every = 1000000000001"}) {
+    const std::string key = std::string(edited).substr(0, std::string(edited).find(' '));
+    std::string text = bytes.substr(note);
+    const std::size_t line = text.find("\n" + key + " = ") + 1;
+    text.replace(line, text.find('\n', line) - line, edited);
+    std::string forged = bytes.substr(0, note - 8);
+    for (int b = 0; b < 8; ++b)
+      forged += static_cast<char>((text.size() >> (8 * b)) & 0xffu);
+    forged += text;
+    const std::filesystem::path path = folder.path / "edited.delta";
+    { std::ofstream(path, std::ios::binary) << delta::fuzz::withMatchingHeader(forged); }
+    expectOneLineError(runDelta("dem --restart '" + path.string() + "' --steps 30"),
+                       "not a count from 0 to 1000000000000");
+  }
 }
 
 /// Stops a long run with `signal` once it has logged some steps; checks its exit code, the
