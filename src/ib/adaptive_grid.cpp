@@ -162,7 +162,12 @@ void check(const GridOptions& options, const QueryMesh& boundary) {
 
 /// The domain of checked options: the one given, or the boundary's box made a cube and padded.
 Aabb domainOf(const GridOptions& options, const QueryMesh& boundary) {
-  if (options.domain) return *options.domain;
+  // Its vertices are the distance queries' points: the domain must lie in their range (a huge
+  // padding or domain was refused by the queries as "point 0 (…)", or overflowed to NaN).
+  if (options.domain) {
+    checkCoordinateRange(*options.domain, "GridOptions: the domain");
+    return *options.domain;
+  }
   const Aabb box = currentBounds(boundary);
   const Vec3 extent = box.extent();
   const double side = std::max({extent.x, extent.y, extent.z}) * (1.0 + 2.0 * options.padding);
@@ -174,7 +179,11 @@ Aabb domainOf(const GridOptions& options, const QueryMesh& boundary) {
     throw Error("GridOptions: the default domain " + toString(domain.lower) + " to " +
                 toString(domain.upper) +
                 " around the boundary must be finite with a positive extent (do its vertices "
-                "all coincide?)");
+                "all coincide, or is padding " +
+                toString(options.padding) + " too large?)");
+  checkCoordinateRange(domain,
+                       "GridOptions: the default domain (the boundary's box grown by padding = " +
+                           toString(options.padding) + " of its size on each side)");
   return domain;
 }
 

@@ -172,6 +172,17 @@ TEST(AdaptiveGrid, RejectsBadOptions) {
   EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, 0, 1}}}), Error);
   EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, NAN, 1}}}), Error);
   EXPECT_THROW(AdaptiveGrid(sphere, {.domain = Aabb{{0, 0, 0}, {1, INFINITY, 1}}}), Error);
+  // A domain beyond the queries' range: named as the domain, not as "point 0" of a query.
+  for (const GridOptions& huge :
+       {GridOptions{.padding = 1e100},
+        GridOptions{.domain = Aabb{{-1e308, -1e308, -1e308}, {1e308, 1e308, 1e308}}}}) {
+    try {
+      AdaptiveGrid grid(sphere, huge);
+      ADD_FAILURE() << "a domain beyond the range was taken";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("GridOptions: the", 0), 0u) << e.what();
+    }
+  }
   AdaptiveGrid grid(sphere, {.levels = 2});
   EXPECT_THROW(grid.cells(3), Error);
   EXPECT_THROW(grid.moveBoundary(RigidTransform::translationBy({NAN, 0, 0})), Error);
