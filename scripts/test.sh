@@ -12,6 +12,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
+# Every stage's Debian packages before any build: the AArch64 stage's would otherwise update
+# system headers under the sanitizer builds' precompiled headers, which clang then refuses on
+# the next run (scripts/test_aarch64.sh).
+scripts/test_aarch64.sh --install-only
+
 echo "== sanitizer build (ASan + UBSan)"
 # Built with clang, as the fuzzers and the TSan build are: GCC takes minutes for each ISA's
 # batch table (optimised in every build, src/CMakeLists.txt) once the sanitizers instrument it,

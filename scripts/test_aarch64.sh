@@ -6,6 +6,7 @@
 # take NEON's and SVE's paths, and the default is SVE; then the dispatch tests on a CPU without).
 # Idempotent; needs the meshes scripts/setup.sh unpacks. Called by scripts/test.sh.
 #   scripts/test_aarch64.sh [BUILD_DIR]   (default BUILD_DIR: build-aarch64)
+#   scripts/test_aarch64.sh --install-only (the Debian packages, nothing else)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +18,10 @@ packages=(
 dpkg --print-foreign-architectures | grep -qx arm64 || dpkg --add-architecture arm64
 source scripts/install_missing.sh
 install_missing "${packages[@]}"
+# scripts/test.sh installs these first of all: the arm64 libraries bring amd64's kernel headers
+# to their version (multiarch), and a sanitizer build's precompiled header made before that is
+# refused by clang ("has been modified since the precompiled header") when test.sh runs again.
+[ "${1:-}" = --install-only ] && exit 0
 
 build=${1:-build-aarch64}
 cmake -S . -B "$build" -G Ninja -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake \
