@@ -907,8 +907,11 @@ void addDemCommand(CLI::App& app) {
       std::fflush(stdout);
       if (!stopped.report) std::exit(128 + stopped.signal);  // another rank's line says it
       const char* name = stopped.signal == SIGINT ? "SIGINT" : "SIGTERM";
+      // A new line ends the progress line where there is one; otherwise the message is the
+      // only line.
+      if (showProgress(options->quiet || options->json)) std::fputc('\n', stderr);
       if (options->out.empty() && options->restart.empty())
-        std::fprintf(stderr, "\ndelta: stopped by %s after step %zu (no --out: no checkpoint)\n",
+        std::fprintf(stderr, "delta: stopped by %s after step %zu (no --out: no checkpoint)\n",
                      name, stopped.step);
       else {
         const std::filesystem::path folder =
@@ -918,7 +921,7 @@ void addDemCommand(CLI::App& app) {
                 : std::filesystem::path(".");
         const std::string path = (folder / kCheckpointName).string();
         std::fprintf(stderr,
-                     "\ndelta: stopped by %s after step %zu; checkpoint %s (continue: delta dem "
+                     "delta: stopped by %s after step %zu; checkpoint %s (continue: delta dem "
                      "--restart %s)\n",
                      name, stopped.step, path.c_str(), path.c_str());
       }

@@ -180,6 +180,9 @@ void stopAndRestart(int signal, int expectedExit) {
   EXPECT_EQ(WEXITSTATUS(status), expectedExit) << slurp(folder.path / "stderr");
   const std::string err = slurp(folder.path / "stderr");
   EXPECT_NE(err.find("checkpoint.delta"), std::string::npos) << err;
+  // One line: no progress line was drawn (--quiet, not a terminal), so none is ended first.
+  EXPECT_EQ(err.rfind("delta: stopped by ", 0), 0u) << err;
+  EXPECT_EQ(err.find('\n'), err.size() - 1) << err;
   ASSERT_TRUE(std::filesystem::exists(out / "checkpoint.delta"));
   EXPECT_FALSE(std::filesystem::exists(out / ".delta.lock")) << "released on the way out";
   // Every row logged is whole, and the last one is the step the checkpoint holds.
