@@ -123,6 +123,8 @@ DemSettings readDemConfig(const std::string& path) {
   } catch (const Error& error) {
     throw Error("cannot read config '" + path + "': " + error.what());
   }
+  // A UTF-8 byte-order mark (some editors write one) is not part of the first key.
+  if (contents.starts_with("\xEF\xBB\xBF")) contents.erase(0, 3);
   std::istringstream file(contents);
   DemSettings settings;
   std::string line;

@@ -10,6 +10,8 @@
 #include "delta/io/regular_file.h"
 #include "delta/mesh/coordinate_range.h"
 
+#include "detail/text_scan.h"
+
 namespace delta::io {
 namespace {
 
@@ -88,7 +90,7 @@ std::vector<Vec3> loadPoints(const std::filesystem::path& path) {
     for (std::uintmax_t offset = 0; offset < file.size(); offset += kChunkBytes) {
       const std::string chunk = file.read(offset, kChunkBytes);
       if (chunk.empty()) break;  // the file shrank
-      std::string_view rest = chunk;
+      std::string_view rest = offset == 0 ? detail::withoutByteOrderMark(chunk) : chunk;
       for (std::size_t end = rest.find('\n'); end != rest.npos; end = rest.find('\n')) {
         if (line.empty()) {
           takeLine(rest.substr(0, end));

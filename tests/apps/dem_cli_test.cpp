@@ -265,6 +265,12 @@ TEST(DemCli, ReadsAConfigFileThatOptionsOverride) {
   const CliRun overridden = runDelta("dem --config '" + config.string() + "' --steps 2 --json");
   ASSERT_EQ(overridden.exitCode, 0) << overridden.err;
   EXPECT_EQ(jsonNumber(overridden.out, "steps"), 2.0);
+  // A UTF-8 byte-order mark before the first key (some editors write one) is not part of it.
+  const fs::path marked = folder.path / "marked.cfg";
+  std::ofstream(marked) << "\xEF\xBB\xBFscenario = settle\nparticles = 8\nsteps = 4\n";
+  const CliRun fromMarked = runDelta("dem '" + marked.string() + "' --json");
+  ASSERT_EQ(fromMarked.exitCode, 0) << fromMarked.err;
+  EXPECT_EQ(jsonNumber(fromMarked.out, "particles"), 8.0);
 }
 
 TEST(DemCli, UsesAClosedMeshAsTheParticleShape) {

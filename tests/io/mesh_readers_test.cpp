@@ -17,6 +17,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -289,6 +290,30 @@ TEST(MeshReaders, ContentDecidesTheFormat) {
   EXPECT_EQ(detail::detectMeshFormat("v 0 0 0\n", 100, ".nff", true), detail::MeshFormat::other);
   EXPECT_EQ(detail::detectMeshFormat("v 0 0 0\n", 100, ".dat", false), detail::MeshFormat::obj);
   EXPECT_EQ(detail::detectMeshFormat("glTF", 100, ".glb", true), detail::MeshFormat::other);
+}
+
+TEST(MeshReaders, AByteOrderMarkAtTheStartIsNotContent) {
+  // Some editors start a text file with U+FEFF: "unknown OFF keyword '\ufeffOFF'" named an
+  // invisible character. The OFF, OBJ and ASCII PLY readers and the detection skip it, and read
+  // the same mesh as without it (a binary PLY's body is found after its header all the same).
+  TempDir dir;
+  const std::string bom = "\xEF\xBB\xBF";
+  const std::vector<std::pair<const char*, std::string>> files = {
+      {"a.off", "OFF\n3 1 0\n0.1 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"a.obj", "v 0.1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+      {"a.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+       "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+       "end_header\n0.1 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"}};
+  for (const auto& [name, text] : files) {
+    const Mesh plain = load(dir.write(std::string("plain_") + name, text));
+    const Mesh marked = load(dir.write(std::string("marked_") + name, bom + text));
+    ASSERT_EQ(marked.vertexCount(), plain.vertexCount()) << name;
+    EXPECT_EQ(marked.vertices()[0], plain.vertices()[0]) << name;
+    EXPECT_EQ(marked.triangles()[0], plain.triangles()[0]) << name;
+  }
+  // Only at the start: elsewhere it is what it was, an error naming the line.
+  EXPECT_FALSE(loadError(dir.write("middle.off", "OFF\n" + bom + "3 1 0\n")).empty());
 }
 
 TEST(MeshReaders, AssimpOnlyFormatsAreMarkedSinglePrecision) {

@@ -52,6 +52,17 @@ TEST(Points, ReadsSeparatorsCommentsAndFormats) {
   EXPECT_EQ(points[3].x, 1e-300);
 }
 
+TEST(Points, AByteOrderMarkAtTheStartIsNotContent) {
+  // "line 1 is not three numbers" named a line that looked right: U+FEFF was invisible in it.
+  const fs::path path = writeFile("bom.xyz",
+                                  "\xEF\xBB\xBF"
+                                  "0.5 1 2\n3 4 5\n");
+  const std::vector<Vec3> points = loadPoints(path);
+  fs::remove(path);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[0], (Vec3{0.5, 1, 2}));
+}
+
 TEST(Points, MalformedLinesAreNamedByNumber) {
   const struct {
     const char* text;

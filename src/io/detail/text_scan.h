@@ -9,11 +9,21 @@
 /// Small allocation-free helpers for the mesh readers (mesh_readers.h): lines, tokens, numbers.
 namespace delta::detail {
 
-/// Walks a text line by line. A line ends at '\n', '\r' or '\f'; runs of line ends are skipped
-/// (as assimp's GetNextLine does), so an empty line is never returned.
+/// The UTF-8 byte-order mark (U+FEFF) some editors write at the start of a text file: not content.
+inline constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+
+/// `text` without a byte-order mark at its start (a file's first line named "\ufeffOFF" as an
+/// unknown keyword, the mark invisible in the message).
+inline std::string_view withoutByteOrderMark(std::string_view text) noexcept {
+  return text.starts_with(kByteOrderMark) ? text.substr(kByteOrderMark.size()) : text;
+}
+
+/// Walks a text line by line, from after a byte-order mark at its start. A line ends at '\n', '\r'
+/// or '\f'; runs of line ends are skipped (as assimp's GetNextLine does), so an empty line is never
+/// returned.
 class LineReader {
  public:
-  explicit LineReader(std::string_view text) noexcept : rest_(text) {}
+  explicit LineReader(std::string_view text) noexcept : rest_(withoutByteOrderMark(text)) {}
 
   /// The next non-empty line, without its line end; nullopt at the end of the text.
   std::optional<std::string_view> next() noexcept;
