@@ -19,9 +19,8 @@ Quaternion Quaternion::fromAxisAngle(const Vec3& axis, double radians) {
   Vec3 direction = axis;
   double n = length(direction);
   if (!(n > 0x1p-500 && n < 0x1p500)) {
-    const int exponent = -std::ilogb(largest);  // ldexp, not a factor: 2^1074 overflows
-    direction = {std::ldexp(axis.x, exponent), std::ldexp(axis.y, exponent),
-                 std::ldexp(axis.z, exponent)};
+    const int exponent = -std::ilogb(largest);
+    direction = ldexp(axis, exponent);
     n = length(direction);
   }
   const double s = std::sin(0.5 * radians) / n;

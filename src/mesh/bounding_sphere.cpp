@@ -171,12 +171,7 @@ Sphere boundingSphere(std::span<const Vec3> points) {
   // on scaled up by a power of two, which is exact; elsewhere nothing is scaled.
   const double extent = maxAbs(box.extent());
   const int exponent = extent > 0.0 && extent < 0x1p-400 ? -std::ilogb(extent) : 0;
-  const auto scaled = [exponent](const Vec3& v) {
-    return exponent == 0 ? v
-                         : Vec3{std::ldexp(v.x, exponent), std::ldexp(v.y, exponent),
-                                std::ldexp(v.z, exponent)};
-  };
-  const auto local = [&](std::size_t i) { return scaled(points[i] - origin); };
+  const auto local = [&](std::size_t i) { return ldexp(points[i] - origin, exponent); };
 
   std::vector<Vec3> active;
   for (std::size_t i : extremes.indices)
@@ -216,15 +211,10 @@ Sphere boundingSphere(std::span<const Vec3> points) {
     }
   }
 
-  const Vec3 center = exponent == 0 ? ball.center
-                                    : Vec3{std::ldexp(ball.center.x, -exponent),
-                                           std::ldexp(ball.center.y, -exponent),
-                                           std::ldexp(ball.center.z, -exponent)};
-  Sphere sphere{origin + center, 0.0};
+  Sphere sphere{origin + ldexp(ball.center, -exponent), 0.0};
   for (const Vec3& p : points)
-    sphere.radius = std::max(
-        sphere.radius, exponent == 0 ? distance(p, sphere.center)
-                                     : std::ldexp(length(scaled(p - sphere.center)), -exponent));
+    sphere.radius =
+        std::max(sphere.radius, std::ldexp(length(ldexp(p - sphere.center, exponent)), -exponent));
   sphere.radius *= 1.0 + 4.0 * std::numeric_limits<double>::epsilon();
   if (!isFinite(sphere.center) || !std::isfinite(sphere.radius))
     throw Error("boundingSphere: the points span " + toString(box.lower) + " to " +

@@ -110,6 +110,13 @@ inline double maxAbs(const Vec3& v) noexcept {
   return larger(std::fabs(v.x), larger(std::fabs(v.y), std::fabs(v.z)));
 }
 
+/// v·2^exponent coordinate by coordinate, by std::ldexp: exact wherever the result is a normal
+/// number, and defined for exponents whose power of two is itself beyond a double (scaling a
+/// subnormal vector up by 2^1074), where a multiplication by the factor is not.
+inline Vec3 ldexp(const Vec3& v, int exponent) noexcept {
+  return {std::ldexp(v.x, exponent), std::ldexp(v.y, exponent), std::ldexp(v.z, exponent)};
+}
+
 /// Whether no coordinate is NaN or infinite.
 inline bool isFinite(const Vec3& v) noexcept {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);

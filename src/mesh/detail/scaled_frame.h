@@ -23,9 +23,7 @@ struct ScaledFrame {
   /// v·2^-exponent, exactly where the result is a normal number. By ldexp, not by a factor:
   /// for a mesh of subnormal size the factor 2^-exponent (up to 2^1074) is itself beyond a
   /// double.
-  Vec3 scaled(const Vec3& v) const noexcept {
-    return {std::ldexp(v.x, -exponent), std::ldexp(v.y, -exponent), std::ldexp(v.z, -exponent)};
-  }
+  Vec3 scaled(const Vec3& v) const noexcept { return ldexp(v, -exponent); }
   /// (p − origin)·2^-exponent, computed from p and origin each scaled: nothing overflows even
   /// where the coordinates span the whole double range.
   Vec3 operator()(const Vec3& p) const noexcept { return scaled(p) - scaled(origin); }
