@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/dem/checkpoint.h"
 #include "delta/io/atomic_file.h"
 
@@ -28,7 +29,7 @@ std::size_t sizeOf(const std::string& text, const std::string& key, const std::s
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   // At most what --steps takes: a note edited to 2^64 − 1 steps ran for ever.
   if (error != std::errc{} || end != text.data() + text.size() || value > kMaxSteps)
-    throw Error("'" + origin + "': the checkpoint's note has " + key + " = '" + text +
+    throw Error("'" + origin + "': the checkpoint's note has " + key + " = '" + printable(text) +
                 "', not a count from 0 to " + std::to_string(kMaxSteps));
   return value;
 }

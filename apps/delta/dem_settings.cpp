@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/dem/contact_model.h"
 #include "delta/io/regular_file.h"
 
@@ -40,9 +41,9 @@ std::uint64_t wholeNumber(const std::string& text, const std::string& origin, st
   const char* end = text.data() + text.size();
   const auto [stop, status] = std::from_chars(text.data(), end, value);
   if (text.empty() || status == std::errc::invalid_argument || stop != end)
-    throw Error(origin + " '" + text + "' must be a whole number, " + range);
+    throw Error(origin + " '" + printable(text) + "' must be a whole number, " + range);
   if (status == std::errc::result_out_of_range || value < low || value > high)
-    throw Error(origin + " '" + text + "' is out of range: must be " + range);
+    throw Error(origin + " '" + printable(text) + "' is out of range: must be " + range);
   return value;
 }
 
@@ -53,7 +54,7 @@ double realNumber(const std::string& text, const std::string& origin) {
   const char* end = text.data() + text.size();
   const auto [stop, status] = std::from_chars(begin, end, value);
   if (text.empty() || status != std::errc() || stop != end || !std::isfinite(value))
-    throw Error(origin + " '" + text + "' must be a finite number");
+    throw Error(origin + " '" + printable(text) + "' must be a finite number");
   return value;
 }
 
@@ -68,7 +69,8 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
                    const std::string& origin) {
   if (key == "scenario") {
     if (!isDemScenario(text))
-      throw Error(origin + " '" + text + "' is not a scenario (two-particles, settle, hopper)");
+      throw Error(origin + " '" + printable(text) +
+                  "' is not a scenario (two-particles, settle, hopper)");
     settings.scenario = text;
   } else if (key == "particles") {
     settings.particles = wholeNumber(text, origin, 1, kMaxDemParticles);
@@ -76,16 +78,17 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
     settings.seed = wholeNumber(text, origin, 0, UINT64_MAX);
   } else if (key == "restitution") {
     const double e = realNumber(text, origin);
-    if (e < 0.0 || e > 1.0) throw Error(origin + " '" + text + "' must lie in [0, 1]");
+    if (e < 0.0 || e > 1.0) throw Error(origin + " '" + printable(text) + "' must lie in [0, 1]");
     settings.restitution = e;
   } else if (key == "friction") {
     const double mu = realNumber(text, origin);
-    if (mu < 0.0) throw Error(origin + " '" + text + "' must not be negative");
+    if (mu < 0.0) throw Error(origin + " '" + printable(text) + "' must not be negative");
     settings.friction = mu;
   } else if (key == "offset") {
     const double offset = realNumber(text, origin);
     if (offset < 0.0 || offset >= 1.0)
-      throw Error(origin + " '" + text + "' must lie in [0, 1) (a fraction of the sum of radii)");
+      throw Error(origin + " '" + printable(text) +
+                  "' must lie in [0, 1) (a fraction of the sum of radii)");
     settings.offset = offset;
   } else if (key == "steps") {
     settings.steps = parseStepCount(text, origin, 1);
@@ -96,11 +99,11 @@ void setDemSetting(DemSettings& settings, const std::string& key, const std::str
     settings.particleMesh = text;
   } else if (key == "contact_model") {
     if (!dem::parseContactModel(text))
-      throw Error(origin + " '" + text + "' is neither point nor volume");
+      throw Error(origin + " '" + printable(text) + "' is neither point nor volume");
     settings.contactModel = text;
   } else if (key == "particle_radius") {
     const double radius = realNumber(text, origin);
-    if (!(radius > 0.0)) throw Error(origin + " '" + text + "' must be positive");
+    if (!(radius > 0.0)) throw Error(origin + " '" + printable(text) + "' must be positive");
     settings.particleRadius = radius;
   } else {
     std::string known;
@@ -135,14 +138,16 @@ DemSettings readDemConfig(const std::string& path) {
     if (text.empty()) continue;
     const std::size_t equals = text.find('=');
     if (equals == std::string_view::npos)
-      throw Error(where + ": '" + std::string(text) + "' is not 'key = value'");
+      throw Error(where + ": '" + printable(text) + "' is not 'key = value'");
     const std::string key(trimmed(text.substr(0, equals)));
     const std::string value(trimmed(text.substr(equals + 1)));
     if (key.empty()) throw Error(where + ": no key before '='");
+    // The key as a message may quote it (a garbled file's bytes are not written raw).
+    const std::string named = where + ": " + printable(key);
     if (settings.origins.contains(key))
-      throw Error(where + ": " + key + " set again (first at " + settings.origins[key] + ")");
-    if (value.empty()) throw Error(where + ": " + key + " has no value");
-    setDemSetting(settings, key, value, where + ": " + key);
+      throw Error(named + " set again (first at " + settings.origins[key] + ")");
+    if (value.empty()) throw Error(named + " has no value");
+    setDemSetting(settings, key, value, named);
   }
   if (file.bad()) throw Error("reading config '" + path + "' failed");
   // A mesh named relative to the config file is found wherever the command runs.

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/core/memory.h"
 #include "delta/mesh/primitives.h"
 
@@ -32,7 +33,7 @@ std::uint64_t parameter(std::string_view text, std::uint64_t fallback, std::uint
                            describeBytes(static_cast<double>(value) * bytesEach) + " of memory"
                      : std::string()));
   if (status != std::errc() || end != text.data() + text.size())
-    throw Error("mesh '" + source + "': parameter '" + std::string(text) +
+    throw Error("mesh '" + source + "': parameter '" + printable(text) +
                 "' is not a non-negative integer");
   return value;
 }

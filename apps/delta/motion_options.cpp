@@ -7,6 +7,7 @@
 #include <system_error>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 
 #include "commands.h"
 #include "mesh_source.h"
@@ -39,8 +40,8 @@ std::size_t parseStepCount(const std::string& text, const std::string& origin, s
   const char* end = text.data() + text.size();
   const auto [stop, status] = std::from_chars(text.data(), end, value);
   if (text.empty() || status != std::errc() || stop != end || value < least || value > kMaxSteps)
-    throw Error(origin + " '" + text + "' must be a whole number from " + std::to_string(least) +
-                " to " + std::to_string(kMaxSteps));
+    throw Error(origin + " '" + printable(text) + "' must be a whole number from " +
+                std::to_string(least) + " to " + std::to_string(kMaxSteps));
   return value;
 }
 

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/core/memory.h"
 #include "delta/io/points.h"
 
@@ -15,8 +16,7 @@ std::uint64_t number(std::string_view text, const std::string& source) {
   std::uint64_t value = 0;
   const auto [end, status] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (text.empty() || status != std::errc() || end != text.data() + text.size())
-    throw Error("points '" + source + "': '" + std::string(text) +
-                "' is not a non-negative integer");
+    throw Error("points '" + source + "': '" + printable(text) + "' is not a non-negative integer");
   return value;
 }
 

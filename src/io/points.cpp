@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/io/regular_file.h"
 #include "delta/mesh/coordinate_range.h"
 
@@ -52,21 +53,21 @@ Vec3 parseLine(std::string_view line, std::size_t number) {
   for (int axis = 0; axis < 3; ++axis)
     if (!nextNumber(line, position, point[static_cast<std::size_t>(axis)]))
       throw Error("line " + std::to_string(number) + " is not three numbers 'x y z': '" +
-                  std::string(line.substr(0, 80)) + "'");
+                  printable(line) + "'");
   while (position < line.size() && isSeparator(line[position]))
     ++position;
   if (position != line.size())
     throw Error("line " + std::to_string(number) + " has more than three numbers: '" +
-                std::string(line.substr(0, 80)) + "'");
+                printable(line) + "'");
   if (!isFinite(point))
     throw Error("line " + std::to_string(number) + " has a coordinate that is not finite: '" +
-                std::string(line.substr(0, 80)) + "'");
+                printable(line) + "'");
   // Refused here, by its line, rather than by the query that would refuse it by its index in
   // whatever batch it came in.
   if (!inCoordinateRange(point))
     throw Error("line " + std::to_string(number) + " has a coordinate beyond " +
                 coordinateRangeText() + ", the range in which Δ's distances are exact: '" +
-                std::string(line.substr(0, 80)) + "'");
+                printable(line) + "'");
   return point;
 }
 

@@ -273,6 +273,22 @@ TEST(DemCli, ReadsAConfigFileThatOptionsOverride) {
   EXPECT_EQ(jsonNumber(fromMarked.out, "particles"), 8.0);
 }
 
+TEST(DemCli, AConfigsBinaryBytesAreQuotedInHexNotWrittenRaw) {
+  // A NUL cut the message short ("scenario 'two-"); other bytes reached the terminal raw.
+  const TemporaryFolder folder("config_bytes");
+  const fs::path nul = folder.path / "nul.cfg";
+  std::ofstream(nul, std::ios::binary) << std::string("scenario = two-\0particles\n", 26);
+  const CliRun withNul = runDelta("dem '" + nul.string() + "'");
+  expectOneLineError(withNul, "scenario 'two-\\x00particles' is not a scenario");
+  const fs::path garbage = folder.path / "garbage.cfg";
+  std::ofstream(garbage, std::ios::binary) << "\x1B]0;\x07\xFF\xFE = 3\nsteps = \x1B[2J\n";
+  const CliRun withGarbage = runDelta("dem '" + garbage.string() + "'");
+  expectOneLineError(withGarbage, ":1: \\x1B]0;\\x07\\xFF\\xFE: unknown key");
+  for (const CliRun* run : {&withNul, &withGarbage})
+    for (char c : run->err)
+      EXPECT_TRUE(static_cast<unsigned char>(c) >= 0x20 || c == '\n') << run->err;
+}
+
 TEST(DemCli, UsesAClosedMeshAsTheParticleShape) {
   const CliRun run =
       runDelta("dem settle --particles 8 --steps 3 --particle-mesh builtin:icosphere:1 --json");

@@ -87,6 +87,18 @@ TEST(Points, MalformedLinesAreNamedByNumber) {
   }
 }
 
+TEST(Points, BinaryBytesAreQuotedInHexNotWrittenRaw) {
+  // Garbage in a points file was echoed to the terminal; a NUL cut the message short.
+  const fs::path path = writeFile("binary.xyz", std::string("0 0 0\n1 \x1B[2J\0\xFF 2\n", 17));
+  const std::string message = loadError(path);
+  fs::remove(path);
+  EXPECT_NE(message.find("line 2 is not three numbers 'x y z': '1 \\x1B[2J\\x00\\xFF 2"),
+            std::string::npos)
+      << message;
+  for (char c : message)
+    EXPECT_TRUE(static_cast<unsigned char>(c) >= 0x20) << message;
+}
+
 TEST(Points, CoordinatesBeyondTheQueriesRangeAreNamedByLine) {
   // ±2^200 (kLargestCoordinate) is the last coordinate the queries answer exactly; the next
   // double beyond is refused by its line, not later by a query that knows only its index.

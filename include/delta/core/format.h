@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <string_view>
 
 #include "delta/core/vec3.h"
 
@@ -16,5 +18,14 @@ std::string toString(const Vec3& v);
 ///
 /// Threading: a pure function.
 std::string toString(double value);
+
+/// `text` as it may be quoted in a message printed on a terminal: at most `limit` characters,
+/// then "..."; every byte that is not printable text (a control character, NUL included, DEL,
+/// the C1 controls, a byte of no valid UTF-8 sequence) written as "\xNN". Valid UTF-8 beyond
+/// ASCII is kept. For quoting what a file holds: binary garbage never reaches the terminal raw,
+/// and a NUL byte does not cut the message short where it is read as a C string.
+///
+/// Threading: a pure function.
+std::string printable(std::string_view text, std::size_t limit = 80);
 
 }  // namespace delta

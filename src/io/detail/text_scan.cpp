@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 
 namespace delta::detail {
 namespace {
@@ -102,9 +103,7 @@ void requireText(std::string_view text) {
 }
 
 std::string excerpt(std::string_view text) {
-  constexpr std::size_t kLimit = 40;
-  if (text.size() <= kLimit) return std::string(text);
-  return std::string(text.substr(0, kLimit)) + "...";
+  return printable(text, 40);
 }
 
 }  // namespace delta::detail

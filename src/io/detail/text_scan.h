@@ -75,7 +75,8 @@ ParsedReal parseReal(std::string_view token) noexcept;
 /// Throws delta::Error if `text` holds a NUL byte: assimp's text readers stop there.
 void requireText(std::string_view text);
 
-/// `text` cut to at most 40 characters, for quoting a bad line in a message.
+/// `text` cut to at most 40 characters, for quoting a bad line in a message: printable
+/// (core/format.h), so that binary garbage is shown as "\xNN" rather than written to the terminal.
 std::string excerpt(std::string_view text);
 
 }  // namespace delta::detail
