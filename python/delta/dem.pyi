@@ -297,7 +297,7 @@ class World:
         ...
     def run(self, steps: int) -> None:
         """
-        Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps).
+        Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps); a step that fails raises delta.Error and leaves the world as the steps before it left it.
         """
         ...
     def save(self, path: str) -> None:
@@ -345,7 +345,7 @@ class World:
         ...
     def step(self) -> None:
         """
-        Advances by one time step.
+        Advances by one time step. A step that fails raises delta.Error and leaves the world as it was before it (only the last step's contacts may be gone with it).
         """
         ...
     @property

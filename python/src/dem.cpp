@@ -379,9 +379,13 @@ RuntimeError.)")
           },
           "particle"_a, "angular_velocity"_a, "Sets a particle's angular velocity (world frame).")
       .def(
-          "step", [](PyWorld& world) { world.run(1); }, "Advances by one time step.")
+          "step", [](PyWorld& world) { world.run(1); },
+          "Advances by one time step. A step that fails raises delta.Error and leaves the world "
+          "as it was before it (only the last step's contacts may be gone with it).")
       .def("run", &PyWorld::run, "steps"_a,
-           "Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps).")
+           "Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps); a "
+           "step that fails raises delta.Error and leaves the world as the steps before it left "
+           "it.")
       .def(
           "meter_restitution",
           [](const std::shared_ptr<PyWorld>& world, std::size_t first, std::size_t second) {

@@ -96,6 +96,29 @@ def test_bad_parameters_raise_delta_error():
         delta.dem.ParticleShape(delta.quad(), 1000.0)
 
 
+def test_a_step_that_fails_leaves_the_world_as_it_was():
+    # Two particles falling along x under 1e71 m/s², stepped by 1e-40 s; a step of 1e-5 s
+    # carries them beyond the queries' coordinate range, and their pair's query fails half-way
+    # through the step. The positions stayed moved, with the step count as before.
+    parameters = delta.dem.Parameters(time_step=1e-40, epsilon=5e-4, filter_distance=2.5e-3,
+                                      stiffness=1e4, gravity=(1e71, 0, 0))
+    world = delta.dem.World(parameters)
+    shape = world.add_shape(delta.icosphere(1).scale(0.01), 2500.0)
+    world.add_particle(shape, position=(0, 0, 0))
+    world.add_particle(shape, position=(0.05, 0, 0))
+    world.run(5)
+    before = (world.state_digest, world.step_count, world.time, world.positions.copy())
+    world.set_time_step(1e-5)
+    with pytest.raises(delta.Error, match="coordinate"):
+        world.step()
+    assert (world.state_digest, world.step_count, world.time) == before[:3]
+    np.testing.assert_array_equal(world.positions, before[3])
+    assert np.isfinite(world.energies()["total"])
+    world.set_time_step(1e-40)
+    world.run(2)
+    assert world.step_count == before[1] + 2
+
+
 def test_a_running_world_refuses_other_threads():
     scenario = delta.dem.two_particles(restitution=0.5)
     world = scenario.world

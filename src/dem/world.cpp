@@ -539,6 +539,8 @@ Sphere World::boundingSphere(const Particle& particle) const noexcept {
 }
 
 void World::evaluateForces(bool halfStepVelocities, Exchange* exchange) {
+  ++evaluations_;
+  contactsLost_ = false;
   Clock::time_point start = Clock::now();
   // The neighbour list is kept between evaluations in a World of one process; a distributed
   // one's particles and ghosts change between them.
@@ -1036,6 +1038,11 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
 
 std::span<const Contact> World::contacts() const {
   const std::lock_guard<std::mutex> lock(contactsLock_.mutex);
+  if (contactsLost_)
+    throw Error(
+        "dem: contacts: the records of the last force evaluation went with the step that "
+        "failed after it (the World is as that evaluation left it); the next step makes "
+        "them anew");
   if (contactsPending_) {
     makeContacts();
     contactsPending_ = false;
@@ -1094,15 +1101,21 @@ void World::kick(Particle& particle, double half) const noexcept {
   particle.angularVelocity = angularVelocityOf(particle, particle.orientation);
 }
 
-void World::kickAndDrift() {
+void World::kickAndDrift(bool keepStart) {
   const double dt = parameters_.timeStep, half = 0.5 * dt;
+  // With keepStart (a World of one process: no ghosts), the moved particles are written into
+  // the kept buffer, which then changes place with particles_: the state at the step's start
+  // stays whole for restoreStepStart, at no cost beyond the step's own pass.
+  std::vector<Particle>& moved = keepStart ? stepStart_.particles : particles_;
+  if (keepStart) moved.resize(particles_.size());
   // One parallel loop: each particle's half kick, then its drift (they read only its own
   // state), so that a short step wakes the pool's workers once.
   parallelFor(0, owned_, kParticleGrain, [&](std::size_t begin, std::size_t end) {
     Particle* lanes[kTurnLanes];
     std::size_t waiting = 0;
     for (std::size_t i = begin; i < end; ++i) {
-      Particle& particle = particles_[i];
+      Particle& particle = moved[i];
+      if (keepStart) particle = particles_[i];
       kick(particle, half);
       particle.position += particle.velocity * dt;
       // A body of isotropic inertia (a sphere's) turns at L/I whatever its orientation: the ω
@@ -1126,6 +1139,10 @@ void World::kickAndDrift() {
     for (std::size_t k = 0; k < waiting; ++k)
       lanes[k]->orientation = turned(lanes[k]->orientation, lanes[k]->angularVelocity, dt);
   });
+  if (keepStart) {
+    particles_.swap(moved);
+    stepStart_.particlesMoved = true;
+  }
   for (Obstacle& obstacle : obstacles_) {
     const ObstacleMotion& motion = obstacle.motion;
     const Vec3 pivot = obstacle.pose.apply(motion.pivot);
@@ -1171,6 +1188,61 @@ void World::requireFiniteParticles(Exchange* exchange) const {
 }
 
 void World::advance(Exchange* exchange) {
+  // A DistributedWorld's ranks would all have to undo their parts, and agree that one failed;
+  // they stop instead.
+  if (exchange) {
+    advanceOnce(exchange);
+    return;
+  }
+  keepStepStart();
+  try {
+    advanceOnce(nullptr);
+  } catch (...) {
+    restoreStepStart();
+    throw;
+  }
+}
+
+void World::keepStepStart() {
+  // The particles are kept by kickAndDrift (it writes the moved ones elsewhere); the rest is
+  // copied into the kept buffers (their capacity stays).
+  stepStart_.particlesMoved = false;
+  stepStart_.particleSprings = particleSprings_;
+  stepStart_.obstacleSprings = obstacleSprings_;
+  stepStart_.obstaclePoses.resize(obstacles_.size());
+  for (std::size_t k = 0; k < obstacles_.size(); ++k)
+    stepStart_.obstaclePoses[k] = obstacles_[k].pose;
+  stepStart_.statistics = statistics_;
+  stepStart_.elasticEnergy = elasticEnergy_;
+  stepStart_.evaluations = evaluations_;
+  stepStart_.forcesCurrent = forcesCurrent_;
+  stepStart_.contactsPending = contactsPending_;
+}
+
+void World::restoreStepStart() noexcept {
+  // Swapped back (no allocation where memory may have run out); the kept buffers are refilled
+  // at the next step's start.
+  // Before kickAndDrift, a step changes only the forces (the first evaluation's, which
+  // forcesCurrent_ = false below makes the next step's first evaluation repeat).
+  if (stepStart_.particlesMoved) particles_.swap(stepStart_.particles);
+  particleSprings_.swap(stepStart_.particleSprings);
+  obstacleSprings_.swap(stepStart_.obstacleSprings);
+  for (std::size_t k = 0; k < obstacles_.size(); ++k)
+    obstacles_[k].pose = stepStart_.obstaclePoses[k];
+  statistics_ = stepStart_.statistics;
+  elasticEnergy_ = stepStart_.elasticEnergy;
+  forcesCurrent_ = stepStart_.forcesCurrent;
+  // The records of the last evaluation: kept where contacts() had made them, or where this step
+  // failed before its evaluation began; otherwise its pairs and outcomes overwrote them.
+  contactsLost_ =
+      contactsLost_ || (stepStart_.contactsPending && evaluations_ != stepStart_.evaluations);
+  contactsPending_ = stepStart_.contactsPending && !contactsLost_;
+  // The neighbour list and the pairs' caches were made for the moved bodies: the list is made
+  // anew; the caches hold for any pose (they bound the move since they were made).
+  neighbours_.valid = false;
+}
+
+void World::advanceOnce(Exchange* exchange) {
   // Threads under load (world.h): threaded steps whose calling thread ran for less than 60% of
   // them, the rest put aside by the operating system or waiting for workers that were, were
   // held up by other processes on every core; the next steps run on the calling thread alone,
@@ -1201,7 +1273,7 @@ void World::advance(Exchange* exchange) {
   Clock::time_point phase = Clock::now();
   // One process only: a DistributedWorld would need every rank to agree to stop (dem/mpi).
   if (!exchange) requireCatchableMotion();
-  kickAndDrift();
+  kickAndDrift(exchange == nullptr);
   requireFiniteParticles(exchange);  // before the broad phase meets it
   double integration = secondsSince(phase);
   refreshGhosts();

@@ -168,5 +168,49 @@ TEST(DemGuards, ParticlesPlacedOverlappingShowOverlapAfterTheFirstStep) {
   EXPECT_GT(world.statistics().overlappingContacts, 0u);
 }
 
+TEST(DemGuards, AStepThatFailsLeavesTheWorldAsItWasAndItMayGoOn) {
+  // Two particles 5 cm apart along x, falling along x under a gravity of 1e71 m/s², stepped by
+  // 1e-40 s. A step of 1e-5 s carries both beyond the queries' coordinate range (they pass
+  // through nothing: the guard lets them go), and their pair's query throws half-way through
+  // the step. The positions stayed moved, with the step count and the time as before: a World
+  // that went on, or was saved, held half a step.
+  Parameters parameters = test::centimetreParameters(0.01, 1.0, 1.0, 0.5, {1e71, 0, 0});
+  parameters.timeStep = 1e-40;
+  World world(parameters);
+  world.addShape(primitives::icosphere(1, kRadius), kDensity);
+  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
+  world.addParticle(0, {{0.05, 0, 0}, {}, {}, {}});
+  world.run(5);
+  for (const bool recordsMade : {false, true}) {
+    const std::size_t madeBefore = recordsMade ? world.contacts().size() : 0;
+    const World before = world;
+    world.setTimeStep(1e-5);
+    const std::string message = stepError(world);
+    EXPECT_NE(message.find("coordinate"), std::string::npos) << message;
+    EXPECT_EQ(world.stateDigest(), before.stateDigest());
+    EXPECT_EQ(world.stepCount(), before.stepCount());
+    EXPECT_EQ(world.time(), before.time());
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(world.particles()[i].position, before.particles()[i].position);
+      EXPECT_EQ(world.particles()[i].velocity, before.particles()[i].velocity);
+    }
+    EXPECT_EQ(world.energies().kinetic(), before.energies().kinetic());
+    // The last evaluation's records: kept where they had been made; otherwise overwritten by
+    // the failed step's, and contacts() says so rather than answer with them.
+    if (recordsMade) {
+      EXPECT_EQ(world.contacts().size(), madeBefore);
+    } else {
+      EXPECT_THROW(static_cast<void>(world.contacts()), Error);
+    }
+    // It goes on with the smaller time step, bit for bit as the World that never tried.
+    world.setTimeStep(parameters.timeStep);
+    World untried = before;
+    world.run(2);
+    untried.run(2);
+    EXPECT_EQ(world.stateDigest(), untried.stateDigest());
+    EXPECT_EQ(world.contacts().size(), untried.contacts().size());
+  }
+}
+
 }  // namespace
 }  // namespace delta::dem

@@ -324,10 +324,14 @@ class World {
   // Running.
 
   /// Advances by one time step. Throws delta::Error when a particle's state stops being finite
-  /// (a time step too large for the stiffness), leaving the state as that step made it; and,
-  /// before changing anything, when bodies would move farther in the step than the contact
-  /// shell catches (the class comment: "No pass-through"). A world with no particles only moves
-  /// its obstacles and its clock.
+  /// (a time step too large for the stiffness), when bodies would move farther in the step than
+  /// the contact shell catches (the class comment: "No pass-through"), when a body leaves the
+  /// coordinate range of the queries, or when memory runs out; a step that throws leaves the
+  /// World as it was before it: particles, springs, obstacles, time, step count and energies, so
+  /// that it may go on (with a smaller time step, say) or be saved. Only the contact records of
+  /// the last evaluation may be lost with it: contacts() then throws until the next step. (A
+  /// DistributedWorld's failed step leaves each part as that step made it; its ranks stop.)
+  /// A world with no particles only moves its obstacles and its clock.
   void step();
   /// Advances by `steps` time steps (step() `steps` times; 0 does nothing).
   void run(std::size_t steps);
@@ -450,8 +454,12 @@ class World {
     virtual std::uint64_t firstNonFinite(std::uint64_t local) = 0;
   };
 
-  /// One step (step()), with `exchange` between the phases when not null.
+  /// One step (step()), with `exchange` between the phases when not null: advanceOnce, which
+  /// in a World of one process is undone when it throws (keepStepStart, restoreStepStart).
   void advance(Exchange* exchange);
+  void advanceOnce(Exchange* exchange);
+  void keepStepStart();
+  void restoreStepStart() noexcept;
   /// The forces at the current state, in phases: findPairs (the broad phase), detectContacts,
   /// applyContactLaw, exchangeGhostForces (with `exchange`), sumForces.
   void evaluateForces(bool halfStepVelocities, Exchange* exchange);
@@ -523,7 +531,8 @@ class World {
   void halfKick();
   void kick(Particle& particle, double half) const noexcept;
   /// Steps 1 and 2 of the class comment, particle by particle in one pass; the obstacles moved.
-  void kickAndDrift();
+  /// With `keepStart`, the particles as they were stay in stepStart_ (keepStepStart).
+  void kickAndDrift(bool keepStart);
   Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation) const noexcept;
   /// ω = R·I⁻¹·Rᵀ·L of the particle's shape at `orientation`, for the angular momentum given.
   Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation,
@@ -616,6 +625,28 @@ class World {
   std::vector<std::pair<std::uint64_t, TangentialSpring>> obstacleSprings_;
   StepStatistics statistics_;
   double elasticEnergy_ = 0.0;
+  /// Force evaluations begun (evaluateForces): whether a failed step overwrote the last one's
+  /// contact records.
+  std::uint64_t evaluations_ = 0;
+  /// Set when a failed step overwrote the records contacts() makes (contacts() then throws);
+  /// cleared by the next evaluation.
+  bool contactsLost_ = false;
+  /// What a step changes, as it was at the step's start (keepStepStart): a step that throws is
+  /// undone from it (restoreStepStart; time_ and stepCount_ change only once it succeeded). The
+  /// buffers are kept, so that a step allocates nothing here once the sizes settle.
+  struct StepStart {
+    /// The particles before kickAndDrift moved them (particlesMoved: it has, in this step).
+    std::vector<Particle> particles;
+    bool particlesMoved = false;
+    std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings, obstacleSprings;
+    std::vector<RigidTransform> obstaclePoses;
+    StepStatistics statistics;
+    double elasticEnergy = 0.0;
+    std::uint64_t evaluations = 0;
+    bool forcesCurrent = false;
+    bool contactsPending = false;
+  };
+  StepStart stepStart_;
   double time_ = 0.0;
   std::size_t stepCount_ = 0;
   bool forcesCurrent_ = false;
