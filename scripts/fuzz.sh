@@ -4,9 +4,10 @@
 # AddressSanitizer + UndefinedBehaviorSanitizer: builds the targets with clang (in BUILD,
 # default build-fuzz/), replays every regression input in tests/fuzz/TARGET/, then fuzzes each
 # target for SECONDS (default 20) from seeds: those regression inputs, assimp's test models and
-# CGAL's meshes of the target's format, and the corpus earlier runs grew in BUILD/corpus/. Fails
-# on the first crash, leak, hang (10 s an input) or sanitizer report, leaving the input in
-# BUILD/crashes/TARGET/: add it to tests/fuzz/TARGET/ once fixed, as a regression.
+# CGAL's meshes of the target's format, and the corpus earlier runs grew in BUILD/corpus/; the
+# targets run side by side, as many as there are cores. Fails on any crash, leak, hang (10 s an
+# input) or sanitizer report, leaving the input in BUILD/crashes/TARGET/: add it to
+# tests/fuzz/TARGET/ once fixed, as a regression.
 #   scripts/fuzz.sh [SECONDS [BUILD]]
 # BUILD, when given, is a sanitized clang build already configured with -DDELTA_BUILD_FUZZERS=ON
 # (scripts/test.sh passes its ASan build, so that the library is compiled once); otherwise
@@ -38,35 +39,60 @@ seeds() {
   esac
 }
 
-total=0
-for target in load_off load_ply load_obj load_stl points dem_config checkpoint queries; do
-  fuzzer=$build/fuzz/fuzz_$target
-  regressions=tests/fuzz/$target
-  corpus=$build/corpus/$target
-  seed_dir=$build/seeds/$target
-  crashes=$build/crashes/$target/
+# One target: its regression inputs replayed, then fuzzed from its seeds; what it found in
+# BUILD/fuzz_TARGET.out, and BUILD/fuzz_TARGET.failed when it failed.
+fuzz_target() {
+  local target=$1
+  local fuzzer=$build/fuzz/fuzz_$target
+  local regressions=tests/fuzz/$target
+  local corpus=$build/corpus/$target
+  local seed_dir=$build/seeds/$target
+  local crashes=$build/crashes/$target/
   mkdir -p "$corpus" "$seed_dir" "$crashes"
   seeds "$target" | while read -r seed; do cp -f "$seed" "$seed_dir/"; done
   if compgen -G "$regressions/*" >/dev/null; then
-    replay=$build/replay_$target.log
+    local replay=$build/replay_$target.log
     if ! "$fuzzer" "$regressions"/* >"$replay" 2>&1; then
       tail -n 60 "$replay"
       echo "fuzz_$target: a regression input crashes again" >&2
-      exit 1
+      return 1
     fi
     echo "fuzz_$target: $(grep -c '^Executed' "$replay") regression inputs replayed, no crash"
   fi
   echo "== fuzz_$target: fuzzing for ${seconds}s"
-  log=$build/fuzz_$target.log
+  local log=$build/fuzz_$target.log
   if ! "$fuzzer" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$crashes" "$corpus" "$seed_dir" \
     $([ -d "$regressions" ] && echo "$regressions") >"$log" 2>&1; then
     tail -n 60 "$log"
     echo "fuzz_$target: a crash; the input is in $crashes" >&2
-    exit 1
+    return 1
   fi
+  local runs
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
   echo "fuzz_$target: ${runs:-?} inputs run, no crash"
+}
+
+# The targets run side by side, one a core (libFuzzer runs one process on one core): each gets
+# its SECONDS, and the stage takes its share of the wall clock.
+targets=(load_off load_ply load_obj load_stl points dem_config checkpoint queries)
+parallel=$(nproc)
+for target in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$parallel" ]; do wait -n || true; done
+  rm -f "$build/fuzz_$target.failed"
+  { fuzz_target "$target" || touch "$build/fuzz_$target.failed"; } >"$build/fuzz_$target.out" 2>&1 &
+done
+wait
+total=0
+failed=0
+for target in "${targets[@]}"; do
+  cat "$build/fuzz_$target.out"
+  if [ -f "$build/fuzz_$target.failed" ]; then
+    failed=1
+    continue
+  fi
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$build/fuzz_$target.log")
   total=$((total + ${runs:-0}))
 done
+[ "$failed" = 0 ] || exit 1
 echo "fuzzing: $total inputs run in all, no crash"

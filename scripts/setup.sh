@@ -2,6 +2,7 @@
 # Sets up everything Δ needs on Debian 12, as root, and builds it. Idempotent: a second run
 # installs nothing, unpacks nothing and rebuilds only what changed.
 #   scripts/setup.sh [BUILD_DIR [extra cmake options...]]   (default BUILD_DIR: build)
+# With DELTA_SETUP_WITHOUT_BENCH set, the benchmark programs (bench/) are left unbuilt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,7 +41,15 @@ shift || true
 # the same flags, no debug information) share the object.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache \
   "$@" >/dev/null
-cmake --build "$build"
+if [ -n "${DELTA_SETUP_WITHOUT_BENCH:-}" ]; then
+  # Everything but the benchmark programs (scripts/test.sh: no test runs them, and they took a
+  # tenth of CI's time; they stay configured, built by `cmake --build BUILD` or by name).
+  mapfile -t targets < <(ninja -C "$build" -t query all | sed -n 's/^ *\([A-Za-z0-9_]*\/all\)$/\1/p' |
+    grep -vx 'bench/all')
+  cmake --build "$build" --target "${targets[@]}"
+else
+  cmake --build "$build"
+fi
 
 # The Python module: a .pth file in Debian's Python's site-packages points at this build's
 # python/ folder, so that `python3 -c "import delta"` works from anywhere (the last build set up
