@@ -317,7 +317,7 @@ class World:
         ...
     def set_time_step(self, time_step: float) -> None:
         """
-        Changes dt (the forces are evaluated again first).
+        Changes dt from the next step on (the forces at the current state stay: they do not depend on the step that follows).
         """
         ...
     def set_velocity(self, particle: int, velocity: numpy.ndarray) -> None:

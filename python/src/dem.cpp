@@ -357,7 +357,9 @@ RuntimeError.)")
       .def(
           "set_time_step",
           [](PyWorld& world, double timeStep) { world.write().setTimeStep(timeStep); },
-          "time_step"_a, "Changes dt (the forces are evaluated again first).")
+          "time_step"_a,
+          "Changes dt from the next step on (the forces at the current state stay: they do not "
+          "depend on the step that follows).")
       .def(
           "set_pose",
           [](PyWorld& world, std::size_t particle, const Vec3& position,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "delta/core/error.h"
+#include "delta/core/format.h"
 #include "delta/core/memory.h"
 #include "delta/io/atomic_file.h"
 #include "delta/io/regular_file.h"
@@ -564,7 +565,8 @@ Checkpoint loadCheckpoint(const std::filesystem::path& path) {
     requireMemory(static_cast<double>(file.size()), "reading DEM checkpoint");
     bytes = file.readAll();
   } catch (const Error& error) {
-    throw Error("cannot read DEM checkpoint '" + path.string() + "': " + error.what());
+    throw Error("cannot read DEM checkpoint '" + printable(path.string(), 4096) +
+                "': " + error.what());
   }
   return readCheckpoint(bytes, path.string());
 }

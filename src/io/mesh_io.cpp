@@ -385,7 +385,8 @@ LoadedMesh loadWithStatistics(const fs::path& path) {
         },
         limits));
   } catch (...) {
-    throw Error("cannot load '" + path.string() + "': " + currentExceptionReason());
+    throw Error("cannot load '" + printable(path.string(), 4096) +
+                "': " + currentExceptionReason());
   }
 }
 

@@ -109,7 +109,8 @@ std::vector<Vec3> loadPoints(const std::filesystem::path& path) {
     if (points.empty()) throw Error("it holds no points");
     return points;
   } catch (const Error& error) {
-    throw Error("cannot load points from '" + path.string() + "': " + error.what());
+    throw Error("cannot load points from '" + printable(path.string(), 4096) +
+                "': " + error.what());
   }
 }
 

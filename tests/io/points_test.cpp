@@ -97,6 +97,9 @@ TEST(Points, BinaryBytesAreQuotedInHexNotWrittenRaw) {
       << message;
   for (char c : message)
     EXPECT_TRUE(static_cast<unsigned char>(c) >= 0x20) << message;
+  // And so is a path (a config names one).
+  EXPECT_NE(loadError("/nonexistent/\x1B[2J.xyz").find("'/nonexistent/\\x1B[2J.xyz'"),
+            std::string::npos);
 }
 
 TEST(Points, CoordinatesBeyondTheQueriesRangeAreNamedByLine) {

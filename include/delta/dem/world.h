@@ -312,7 +312,8 @@ class World {
   /// Throws for a non-finite motion or, with the volume law, a mesh it cannot use.
   std::size_t addObstacle(const Mesh& mesh, const ObstacleMotion& motion = {});
 
-  // Changing the state (each makes the next step re-evaluate the forces first). Each throws
+  // Changing the state (each but setTimeStep makes the next step re-evaluate the forces first;
+  // the forces at a state do not depend on the step that follows it). Each throws
   // delta::Error for a particle index that does not exist or a value that is not finite (a
   // time step must also be positive; an orientation non-zero).
 
@@ -341,6 +342,9 @@ class World {
   const Parameters& parameters() const noexcept { return parameters_; }
   const ContactLaw& contactLaw() const noexcept { return law_; }
   std::span<const ParticleShape> shapes() const noexcept { return shapes_; }
+  /// The particles, by index (a DistributedWorld's part: those it owns). The span lasts until
+  /// the World is stepped or changed: a step writes the moved particles into a buffer of its
+  /// own (the one before is kept to undo a step that fails), so ask again after each.
   std::span<const Particle> particles() const noexcept { return {particles_.data(), owned_}; }
   std::span<const Obstacle> obstacles() const noexcept { return obstacles_; }
   /// The contact points of the last force evaluation (after the last step), sorted by pair
