@@ -28,17 +28,22 @@ void expectEveryIsaLikeAllTriangles(const Mesh& mesh, const char* name,
                                     std::vector<Vec3> points = {}) {
   const QueryMesh query(mesh);
   if (points.empty()) points = test::probes(mesh, test::scaledCount(300), 3);
-  for (kernels::Isa isa : kernels::supportedIsas()) {
-    for (const Vec3& p : points) {
-      double expected = std::numeric_limits<double>::infinity();
-      std::uint32_t triangle = 0;
-      for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
-        const double d = kernels::closestPointOnTriangle(p, mesh.triangle(t)).distanceSquared;
-        if (d < expected) {
-          expected = d;
-          triangle = t;
-        }
+  // Each point's answer by every triangle, once for all the ISAs.
+  std::vector<double> distances(points.size(), std::numeric_limits<double>::infinity());
+  std::vector<std::uint32_t> triangles(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+      const double d = kernels::closestPointOnTriangle(points[i], mesh.triangle(t)).distanceSquared;
+      if (d < distances[i]) {
+        distances[i] = d;
+        triangles[i] = t;
       }
+    }
+  for (kernels::Isa isa : kernels::supportedIsas()) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Vec3& p = points[i];
+      const double expected = distances[i];
+      const std::uint32_t triangle = triangles[i];
       const Nearest found =
           nearestTriangle(query.data(), p, std::numeric_limits<double>::infinity(), isa);
       ASSERT_EQ(found.distanceSquared, expected) << name << ", " << kernels::name(isa);

@@ -14,6 +14,7 @@
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/query/query_mesh.h"
 
+#include "kernels/triangle_pairs.h"
 #include "query/detail/dual_traversal.h"
 #include "query/detail/query_mesh_data.h"
 
@@ -42,7 +43,7 @@ TEST(NodeSlab, GapNeverExceedsTheTrianglesDistance) {
     const QueryMeshData &a = first.data(), &b = second.data();
     const MatrixMotion motion = matrixMotion(first.inversePose() * second.pose());
     const MovedTree tree(b.levels, &motion);
-    for (int round = 0; round < 300; ++round) {
+    for (std::size_t round = 0; round < test::scaledCount(300); ++round) {
       const std::size_t la = random() % 2, lb = random() % 2;
       const std::size_t na = random() % a.levels[la].size(), nb = random() % b.levels[lb].size();
       const double gap = slabGap(a.slabs[la][na], a.levels[la][na], tree.moved(b.slabs[lb][nb]),
