@@ -1217,13 +1217,13 @@ void World::keepStepStart() {
   stepStart_.evaluations = evaluations_;
   stepStart_.forcesCurrent = forcesCurrent_;
   stepStart_.contactsPending = contactsPending_;
+  stepStart_.contactsLost = contactsLost_;
 }
 
 void World::restoreStepStart() noexcept {
   // Swapped back (no allocation where memory may have run out); the kept buffers are refilled
-  // at the next step's start.
-  // Before kickAndDrift, a step changes only the forces (the first evaluation's, which
-  // forcesCurrent_ = false below makes the next step's first evaluation repeat).
+  // at the next step's start. Before kickAndDrift moved them, a step changes only the
+  // particles' forces, by a first evaluation that forcesCurrent_ = false (restored) repeats.
   if (stepStart_.particlesMoved) particles_.swap(stepStart_.particles);
   particleSprings_.swap(stepStart_.particleSprings);
   obstacleSprings_.swap(stepStart_.obstacleSprings);
@@ -1234,8 +1234,9 @@ void World::restoreStepStart() noexcept {
   forcesCurrent_ = stepStart_.forcesCurrent;
   // The records of the last evaluation: kept where contacts() had made them, or where this step
   // failed before its evaluation began; otherwise its pairs and outcomes overwrote them.
-  contactsLost_ =
-      contactsLost_ || (stepStart_.contactsPending && evaluations_ != stepStart_.evaluations);
+  // (Lost at the start, by a step that failed before, they stay lost.)
+  contactsLost_ = stepStart_.contactsLost ||
+                  (stepStart_.contactsPending && evaluations_ != stepStart_.evaluations);
   contactsPending_ = stepStart_.contactsPending && !contactsLost_;
   // The neighbour list and the pairs' caches were made for the moved bodies: the list is made
   // anew; the caches hold for any pose (they bound the move since they were made).

@@ -201,6 +201,10 @@ TEST(DemGuards, AStepThatFailsLeavesTheWorldAsItWasAndItMayGoOn) {
       EXPECT_EQ(world.contacts().size(), madeBefore);
     } else {
       EXPECT_THROW(static_cast<void>(world.contacts()), Error);
+      // And still after a second step that fails (its evaluation begins and fails again).
+      EXPECT_NE(stepError(world).find("coordinate"), std::string::npos);
+      EXPECT_THROW(static_cast<void>(world.contacts()), Error);
+      EXPECT_EQ(world.stateDigest(), before.stateDigest());
     }
     // It goes on with the smaller time step, bit for bit as the World that never tried.
     world.setTimeStep(parameters.timeStep);

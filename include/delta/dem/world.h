@@ -649,6 +649,7 @@ class World {
     std::uint64_t evaluations = 0;
     bool forcesCurrent = false;
     bool contactsPending = false;
+    bool contactsLost = false;
   };
   StepStart stepStart_;
   double time_ = 0.0;
