@@ -52,10 +52,10 @@ TriangleSoA soaOf(const std::vector<Triangle>& triangles) {
 }
 
 /// `count` points uniform in the box grown by `growth` of its extent on every side (a flat axis
-/// grown by `growth` of the diagonal), then every vertex and edge midpoint (in slow builds those
-/// of every fourth triangle: each costs a loop over every triangle).
+/// grown by `growth` of the diagonal), then the vertices and edge midpoints of every `every`th
+/// triangle (six a triangle, in order from triangle 0).
 std::vector<Vec3> probes(const TriangleSoA& triangles, std::size_t count, double growth,
-                         std::uint64_t seed) {
+                         std::uint64_t seed, std::size_t every = 1) {
   const Aabb box = boundsOf(triangles);
   Vec3 margin = box.extent() * growth;
   for (std::size_t axis = 0; axis < 3; ++axis)
@@ -66,7 +66,7 @@ std::vector<Vec3> probes(const TriangleSoA& triangles, std::size_t count, double
   for (std::size_t i = 0; i < count; ++i)
     points.push_back(lower +
                      Vec3{size.x * unit(random), size.y * unit(random), size.z * unit(random)});
-  for (std::size_t t = 0; t < triangles.size(); t += test::kSlowBuild ? 4 : 1) {
+  for (std::size_t t = 0; t < triangles.size(); t += every) {
     const Triangle triangle = triangles.triangle(t);
     for (const Vec3& on : {triangle.a, triangle.b, triangle.c, (triangle.a + triangle.b) * 0.5,
                            (triangle.b + triangle.c) * 0.5, (triangle.c + triangle.a) * 0.5})
@@ -112,10 +112,11 @@ BoundCheck expectNeverAbove(const TriangleSoA& triangles, const BoundGrid& grid,
 }
 
 /// The grid at several resolutions (0.5 to 64 cells a triangle) is never above the distance, and
-/// is not vacuous: a quarter of the points get a positive bound, some one within 10%.
+/// is not vacuous: a quarter of the points get a positive bound, some one within 10%. The points
+/// on the surface of every fourth triangle in slow builds (each costs a loop over every triangle).
 void expectSafeAndUseful(const TriangleSoA& triangles, std::size_t count, std::uint64_t seed) {
   const Aabb box = boundsOf(triangles);
-  const std::vector<Vec3> points = probes(triangles, count, 0.2, seed);
+  const std::vector<Vec3> points = probes(triangles, count, 0.2, seed, test::kSlowBuild ? 4 : 1);
   const std::vector<double> exact = bruteForceSquared(triangles, points);
   for (const double cellsPerTriangle : {0.5, 4.0, 64.0}) {
     SCOPED_TRACE("cells per triangle " + toString(cellsPerTriangle));
@@ -250,6 +251,7 @@ TEST(BoundGrid, NeverAboveTheDistanceOnArmadillo) {
   const QueryMesh prepared(mesh);
   const TriangleSoA& triangles = prepared.triangles();
   std::vector<Vec3> points = probes(triangles, 20000, 0.2, 20);
+  ASSERT_EQ(points.size(), 20000 + 6 * triangles.size());  // read by triangle below
   std::vector<Vec3> sample(points.begin(), points.begin() + 20000);
   for (std::size_t t = 0; t < triangles.size(); t += 10)
     for (std::size_t k = 0; k < 6; ++k)
