@@ -42,8 +42,9 @@ shift || true
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache \
   "$@" >/dev/null
 if [ -n "${DELTA_SETUP_WITHOUT_BENCH:-}" ]; then
-  # Everything but the benchmark programs (scripts/test.sh: no test runs them, and they took a
-  # tenth of CI's time; they stay configured, built by `cmake --build BUILD` or by name).
+  # Everything but the benchmark programs (scripts/test.sh: no test runs them, and they were a
+  # sixth of the Release build's compile time; they stay configured, built by
+  # `cmake --build BUILD` or by name).
   mapfile -t targets < <(ninja -C "$build" -t query all | sed -n 's/^ *\([A-Za-z0-9_]*\/all\)$/\1/p' |
     grep -vx 'bench/all')
   cmake --build "$build" --target "${targets[@]}"
