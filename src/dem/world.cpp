@@ -79,6 +79,13 @@ void requireFinite(const Vec3& value, const std::string& what) {
   if (!isFinite(value)) throw Error(what + " = " + toString(value) + " must be finite");
 }
 
+/// The box of a particle's bounding sphere, radius `radius` about its centre of mass at
+/// `position`: it holds the particle's mesh wherever it turns.
+Aabb sphereBox(const Vec3& position, double radius) noexcept {
+  const Vec3 reach{radius, radius, radius};
+  return {position - reach, position + reach};
+}
+
 ContactLaw contactLawOf(const Parameters& parameters) {
   requirePositive(parameters.timeStep, "timeStep");
   requireContactDistance(parameters.epsilon, "epsilon");
@@ -290,6 +297,8 @@ std::size_t World::addParticle(std::size_t shape, const ParticleState& state) {
     throw Error("dem: too many particles for 32-bit ids");
   const std::string what = "dem: addParticle " + std::to_string(particles_.size()) + ": ";
   requireFinite(state.position, what + "position");
+  checkCoordinateRange(sphereBox(state.position, shapes_[shape].boundingRadius()),
+                       what + "its bounding sphere");
   requireFinite(state.velocity, what + "velocity");
   requireFinite(state.angularVelocity, what + "angular velocity");
   const Quaternion& q = state.orientation;
@@ -311,6 +320,7 @@ std::size_t World::addObstacle(const Mesh& mesh, const ObstacleMotion& motion) {
   requireFinite(motion.angularVelocity, what + "angular velocity");
   requireFinite(motion.pivot, what + "pivot");
   QueryMesh prepared(mesh);
+  checkCoordinateRange(prepared.bounds(), what + "its mesh");
   if (law_.model == ContactModel::volume) requireVolumeLawMesh(prepared, what);
   obstacles_.push_back(Obstacle{mesh, std::move(prepared), RigidTransform{}, motion});
   forcesCurrent_ = false;
@@ -335,6 +345,8 @@ void World::setTimeStep(double timeStep) {
 void World::setPose(std::size_t index, const Vec3& position, const Quaternion& orientation) {
   Particle& particle = particleAt(index, "setPose");
   requireFinite(position, "dem: setPose: position");
+  checkCoordinateRange(sphereBox(position, shapes_[particle.shape].boundingRadius()),
+                       "dem: setPose: particle " + std::to_string(index) + "'s bounding sphere");
   particle.position = position;
   particle.orientation =
       Quaternion::fromComponents(orientation.w, orientation.x, orientation.y, orientation.z);
@@ -1187,6 +1199,42 @@ void World::requireFiniteParticles(Exchange* exchange) const {
               toString(suggestedTimeStep()) + ")");
 }
 
+void World::requireBodiesInRange(Exchange* exchange) const {
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::uint32_t particle = kNone;
+  std::size_t local = owned_;  // its index here, where it is here
+  for (std::size_t i = 0; i < owned_; ++i) {
+    const Particle& p = particles_[i];
+    if (!boxInCoordinateRange(sphereBox(p.position, shapes_[p.shape].boundingRadius())) &&
+        ids_[i] < particle) {
+      particle = ids_[i];
+      local = i;
+    }
+  }
+  if (exchange) {
+    const auto first = static_cast<std::uint32_t>(
+        exchange->firstNonFinite(std::uint64_t{particle} << 32 | kNone) >> 32);
+    if (first != particle) local = owned_;
+    particle = first;
+  }
+  const std::string step = " at step " + std::to_string(stepCount_ + 1);
+  if (particle != kNone) {
+    const std::string what = "dem: particle " + std::to_string(particle);
+    if (local < owned_) {
+      const Particle& p = particles_[local];
+      checkCoordinateRange(sphereBox(p.position, shapes_[p.shape].boundingRadius()),
+                           what + "'s bounding sphere" + step);
+    }
+    throw Error(what + " (on another process) leaves the coordinate range " +
+                coordinateRangeText() + step + ", within which Δ answers exactly");
+  }
+  // The obstacles, the same on every process; those at rest were checked when added.
+  for (std::size_t k = 0; k < obstacles_.size(); ++k)
+    if (!isIdentity(obstacles_[k].pose))
+      checkCoordinateRange(movedBox(obstacles_[k].queryMesh.bounds(), obstacles_[k].pose),
+                           "dem: obstacle " + std::to_string(k) + step);
+}
+
 void World::advance(Exchange* exchange) {
   // A DistributedWorld's ranks would all have to undo their parts, and agree that one failed;
   // they stop instead.
@@ -1276,6 +1324,7 @@ void World::advanceOnce(Exchange* exchange) {
   if (!exchange) requireCatchableMotion();
   kickAndDrift(exchange == nullptr);
   requireFiniteParticles(exchange);  // before the broad phase meets it
+  requireBodiesInRange(exchange);    // before a pair's query does
   double integration = secondsSince(phase);
   refreshGhosts();
   statistics_.communicationSeconds = 0.0;

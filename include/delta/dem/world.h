@@ -303,19 +303,22 @@ class World {
   /// Adds a shape made before (shares its prepared mesh); returns its index.
   std::size_t addShape(const ParticleShape& shape);
   /// Adds a particle of shape `shape`; returns its index. Throws for an unknown shape, a state
-  /// that is not finite, or a zero orientation (any other is normalised). Particles placed
-  /// interpenetrating, or within 2ε, are accepted: the first step pushes them apart, with the
-  /// force of the law's overlap rule, so place them apart unless that is meant.
+  /// that is not finite, a bounding sphere beyond the coordinate range (coordinate_range.h), or
+  /// a zero orientation (any other is normalised). Particles placed interpenetrating, or within
+  /// 2ε, are accepted: the first step pushes them apart, with the force of the law's overlap
+  /// rule, so place them apart unless that is meant.
   std::size_t addParticle(std::size_t shape, const ParticleState& state);
   /// Adds an obstacle (any valid mesh, open or closed, degenerate triangles included; with the
   /// volume law closed and consistently oriented, not crossing itself); returns its index.
-  /// Throws for a non-finite motion or, with the volume law, a mesh it cannot use.
+  /// Throws for a non-finite motion, a mesh beyond the coordinate range or, with the volume
+  /// law, a mesh it cannot use.
   std::size_t addObstacle(const Mesh& mesh, const ObstacleMotion& motion = {});
 
   // Changing the state (each but setTimeStep makes the next step re-evaluate the forces first;
   // the forces at a state do not depend on the step that follows it). Each throws
   // delta::Error for a particle index that does not exist or a value that is not finite (a
-  // time step must also be positive; an orientation non-zero).
+  // time step must also be positive; an orientation non-zero; a pose must keep the particle's
+  // bounding sphere within the coordinate range).
 
   void setTimeStep(double timeStep);
   void setPose(std::size_t particle, const Vec3& position, const Quaternion& orientation);
@@ -514,6 +517,11 @@ class World {
   /// Throws delta::Error naming the lowest id of a particle (on any process) that is no longer
   /// finite in any field a checkpoint holds, or else of one whose friction spring is not.
   void requireFiniteParticles(Exchange* exchange) const;
+  /// Throws delta::Error naming the lowest id of a particle (on any process) whose bounding
+  /// sphere reaches beyond the queries' coordinate range (coordinate_range.h), or else the
+  /// first moving obstacle that does: a body far from all others is met by no query, and would
+  /// otherwise fly on beyond the range unrefused.
+  void requireBodiesInRange(Exchange* exchange) const;
   /// Throws delta::Error when the coming drift could carry two surfaces through each other
   /// unseen (the class comment: "No pass-through"); reads the state only (src/dem/guards.cpp).
   void requireCatchableMotion() const;
