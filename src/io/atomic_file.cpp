@@ -45,12 +45,23 @@ fs::path followLinks(const fs::path& path) {
   throw Error("too many levels of symbolic links");
 }
 
-/// A path under /dev or /proc (/dev/stdout, /dev/fd/3, /proc/self/fd/1): a stream the process
-/// was handed, whatever file is behind it, never a file to replace.
+/// Whether `path`, or a link on the way from it to its file, lies under /proc or /dev/fd
+/// (/dev/stdout → /proc/self/fd/1 → whatever the process was handed): a stream the process
+/// holds, whatever file is behind it, never a file to replace. Other paths under /dev (a file on
+/// the /dev/shm tmpfs) are files like any other: a rule on the prefix /dev appended to them.
 bool isStream(const fs::path& path) {
-  std::error_code error;
-  const std::string text = fs::absolute(path, error).lexically_normal().string();
-  return text.starts_with("/dev/") || text.starts_with("/proc/");
+  fs::path current = path;
+  for (int hops = 0; hops <= kMaxLinks; ++hops) {
+    std::error_code error;
+    const std::string text = fs::absolute(current, error).lexically_normal().string();
+    if (text.starts_with("/proc/") || text.starts_with("/dev/fd/")) return true;
+    struct stat status {};
+    if (::lstat(current.c_str(), &status) != 0 || !S_ISLNK(status.st_mode)) return false;
+    const fs::path link = fs::read_symlink(current, error);
+    if (error) return false;
+    current = link.is_absolute() ? link : current.parent_path() / link;
+  }
+  return false;
 }
 
 /// 16 hex digits that differ between calls, threads and processes (the name is then created

@@ -249,6 +249,33 @@ TEST(AtomicFile, AStreamTheProcessHoldsIsWrittenInPlace) {
   EXPECT_EQ(namesIn(folder.path), std::vector<std::string>{"log.txt"});
 }
 
+TEST(AtomicFile, ARegularFileUnderDevIsReplacedNotAppendedTo) {
+  // Files on the /dev/shm tmpfs are files like any other: a rule on the prefix /dev appended
+  // every rewrite to them (two CSVs in one file, a DEM checkpoint that could not be read back).
+  // A link elsewhere to /dev/stdout still names a stream.
+  const fs::path shm = "/dev/shm";
+  std::error_code error;
+  if (!fs::is_directory(shm, error) || ::access(shm.c_str(), W_OK) != 0)
+    GTEST_SKIP() << "no writable /dev/shm";
+  const fs::path path = shm / ("delta_atomic_" + std::to_string(::getpid()) + ".csv");
+  writeFileAtomically(path, "first\n");
+  writeFileAtomically(path, "second\n");
+  EXPECT_EQ(contentOf(path), "second\n");
+  fs::remove(path);
+
+  Folder folder("stream_link");
+  const fs::path log = folder.path / "log.txt";
+  const int descriptor = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ASSERT_GE(descriptor, 0);
+  ASSERT_EQ(::write(descriptor, "before\n", 7), 7);
+  const fs::path link = folder.path / "out.csv";
+  fs::create_symlink("/proc/self/fd/" + std::to_string(descriptor), link);
+  writeFileAtomically(link, "after\n");
+  ::close(descriptor);
+  EXPECT_EQ(contentOf(log), "before\nafter\n");
+  EXPECT_TRUE(fs::is_symlink(link));
+}
+
 // Every writer of Δ's library goes through AtomicFile: a full disk is an error, and the previous
 // file stays.
 

@@ -21,9 +21,10 @@ namespace delta::io {
 ///   file; a new file gets 0666 less the umask, as a plain open would. A file the process may
 ///   not write (access(2)) is refused, as a plain open would refuse it.
 /// - A `path` that exists and is neither a regular file nor a folder (a character device such as
-///   /dev/full, a FIFO), or any path under /dev or /proc (/dev/stdout, whatever is behind it), is
-///   written in place, appended to what it holds, each write checked, since it cannot
-///   be replaced.
+///   /dev/full, a FIFO), or that lies under /proc or /dev/fd or links there (/dev/stdout, whatever
+///   is behind it), is written in place, appended to what it holds, each write checked, since it
+///   cannot be replaced. Other regular files under /dev (on the /dev/shm tmpfs) are replaced as
+///   any other.
 ///
 /// Throws delta::Error "cannot write 'PATH': REASON" (the reason from the system: "No space left
 /// on device", "File too large", "Permission denied"...) when the folder is missing or not
