@@ -52,6 +52,7 @@ struct DemOptions {
   std::map<std::string, std::string> given;  ///< config key → text, from the options
   std::string out;
   std::string frames = "state";  ///< --frames: DemFrames by name
+  bool framesGiven = false;      ///< --frames was given (a restart takes the checkpoint's)
   bool json = false;
   bool quiet = false;
   bool overwrite = false;           ///< --overwrite: replace an earlier run's output in --out
@@ -639,13 +640,18 @@ struct RestartPlan {
 RestartPlan planRestart(const DemOptions& options) {
   if (!options.scenario.empty() || !options.config.empty())
     throw Error("--restart continues the run its checkpoint holds: give no SCENARIO or --config");
+  const auto refuse = [](const std::string& option) {
+    throw Error("--restart continues the run its checkpoint holds: " + option +
+                " cannot change it (only --steps, --out, --checkpoint-every, --json, --quiet, "
+                "and --overwrite with another --out)");
+  };
   for (const auto& [key, text] : options.given)
     if (key != "steps") {
       std::string option = "--" + key;
       std::replace(option.begin(), option.end(), '_', '-');
-      throw Error("--restart continues the run its checkpoint holds: " + option +
-                  " cannot change it (only --steps, --out, --checkpoint-every, --json, --quiet)");
+      refuse(option);
     }
+  if (options.framesGiven) refuse("--frames");
   const std::filesystem::path file = options.restart;
   const Stopwatch clock;
   dem::Checkpoint checkpoint = dem::loadCheckpoint(file);
@@ -660,6 +666,11 @@ RestartPlan planRestart(const DemOptions& options) {
   if (total < done)
     throw Error("--steps " + std::to_string(total) + " is fewer than the " + std::to_string(done) +
                 " steps '" + file.string() + "' has run (--steps is the run's total)");
+  // The run's total and checkpoint interval as this restart sets them: its checkpoints carry
+  // them, so that a later restart goes on to the same end (they kept the first run's, and a
+  // restart of a restart stopped there, with exit 0).
+  note.steps = total;
+  if (options.checkpointEvery > 0) note.checkpointEvery = options.checkpointEvery;
   const std::filesystem::path folder =
       file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
   RestartPlan plan{Prepared{dem::Scenario{note.scenario, std::move(checkpoint.world), note.steps,
@@ -671,6 +682,10 @@ RestartPlan planRestart(const DemOptions& options) {
   if (plan.options.out.empty()) plan.options.out = folder.string();
   std::error_code error;
   plan.options.continuing = std::filesystem::equivalent(plan.options.out, folder, error);
+  if (plan.options.continuing && options.overwrite)
+    throw Error(
+        "--restart into the checkpoint's folder continues its output: --overwrite would "
+        "remove it (give another --out to start a new series there)");
   plan.continuation.resumeOutput = plan.options.continuing;
   plan.continuation.frameTimes = note.frameTimes;
   Prepared& prepared = plan.prepared;
@@ -831,9 +846,9 @@ would move farther in a step than the contact shell catches, stops the run with 
 naming the particle and the largest safe time step.
 
 Checkpoints: --checkpoint-every N keeps DIR/checkpoint.delta (every N steps and at the end);
-SIGINT and SIGTERM finish the step, write it (with --out) and exit 130 and 143. delta dem
---restart DIR/checkpoint.delta [--steps TOTAL] goes on from it, bit for bit: the same
-state_digest (--json) as a run that was never stopped, on any thread or rank count.
+SIGINT, SIGTERM and SIGHUP finish the step, write it (with --out) and exit 130, 143 and 129.
+delta dem --restart DIR/checkpoint.delta [--steps TOTAL] goes on from it, bit for bit: the
+same state_digest (--json) as a run that was never stopped, on any thread or rank count.
 
 Under mpirun (where delta was built with MPI): mpirun -np P delta dem ... splits the particles
 over P ranks (recursive coordinate bisection, split again when the counts drift 10% apart),
@@ -877,9 +892,14 @@ void addDemCommand(CLI::App& app) {
   dem->add_option("--out", options->out,
                   "Write a ParaView series and log.csv into folder DIR (made if missing)")
       ->type_name("DIR");
-  dem->add_option("--frames", options->frames,
-                  "What each frame shows of the particles with --out: state (a point per "
-                  "particle, the default), triangles (their surfaces, ~16x larger) or both")
+  dem->add_option_function<std::string>(
+         "--frames",
+         [options](const std::string& text) {
+           options->frames = text;
+           options->framesGiven = true;
+         },
+         "What each frame shows of the particles with --out: state (a point per particle, the "
+         "default), triangles (their surfaces, ~16x larger) or both")
       ->type_name("state|triangles|both");
   dem->add_flag("--overwrite", options->overwrite,
                 "Replace the output of an earlier run in --out (a run is refused otherwise)");
@@ -893,7 +913,7 @@ void addDemCommand(CLI::App& app) {
            options->checkpointEvery = parseStepCount(text, "--checkpoint-every", 0);
          },
          "Keep a checkpoint of the run, DIR/checkpoint.delta (--out DIR), written every N steps "
-         "and at the end (and when stopped by SIGINT or SIGTERM)")
+         "and at the end (and when stopped by SIGINT, SIGTERM or SIGHUP)")
       ->type_name("N");
   dem->add_option("--restart", options->restart,
                   "Continue the run a checkpoint holds; --steps is then the run's total, --out "
@@ -906,7 +926,9 @@ void addDemCommand(CLI::App& app) {
       // The files are closed and the lock released (unwound); say where to go on from.
       std::fflush(stdout);
       if (!stopped.report) std::exit(128 + stopped.signal);  // another rank's line says it
-      const char* name = stopped.signal == SIGINT ? "SIGINT" : "SIGTERM";
+      const char* name = stopped.signal == SIGINT    ? "SIGINT"
+                         : stopped.signal == SIGTERM ? "SIGTERM"
+                                                     : "SIGHUP";
       // A new line ends the progress line where there is one; otherwise the message is the
       // only line.
       if (showProgress(options->quiet || options->json)) std::fputc('\n', stderr);

@@ -96,11 +96,13 @@ DemCheckpoints::DemCheckpoints(std::filesystem::path directory, std::size_t ever
   action.sa_flags = SA_RESTART;  // a write under way goes on
   sigaction(SIGINT, &action, &previousInterrupt_);
   sigaction(SIGTERM, &action, &previousTerminate_);
+  sigaction(SIGHUP, &action, &previousHangUp_);  // a closed terminal, a dropped connection
 }
 
 DemCheckpoints::~DemCheckpoints() {
   sigaction(SIGINT, &previousInterrupt_, nullptr);
   sigaction(SIGTERM, &previousTerminate_, nullptr);
+  sigaction(SIGHUP, &previousHangUp_, nullptr);
 }
 
 int DemCheckpoints::afterStep(const dem::World& world, const DemOutput* output) {

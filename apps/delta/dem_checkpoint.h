@@ -84,6 +84,7 @@ class DemCheckpoints {
   std::size_t bytes_ = 0;
   struct sigaction previousInterrupt_ {};
   struct sigaction previousTerminate_ {};
+  struct sigaction previousHangUp_ {};
 };
 
 }  // namespace delta::cli

@@ -249,7 +249,7 @@ class World:
         """
         ...
     @staticmethod
-    def load(path: str) -> World:
+    def load(path: os.PathLike) -> World:
         """
         The World a checkpoint file holds (delta.Error when it is missing, not a checkpoint, of another version, truncated or corrupt).
         """
@@ -300,7 +300,7 @@ class World:
         Advances by `steps` time steps without the GIL (Ctrl-C stops it between steps); a step that fails raises delta.Error and leaves the world as the steps before it left it.
         """
         ...
-    def save(self, path: str) -> None:
+    def save(self, path: os.PathLike) -> None:
         """
         Writes a checkpoint of the whole state to `path`, atomically (delta.Error naming the path and the reason). World.load(path) continues bit for bit where this world would.
         """

@@ -4,11 +4,13 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -397,7 +399,9 @@ RuntimeError.)")
           "A RestitutionMeter for the collision of two particles from now on.")
       .def(
           "save",
-          [](const PyWorld& world, const std::string& path) {
+          // A path, not a string: pybind11 refuses an embedded NUL (TypeError) where the C
+          // calls would stop at it and write another file.
+          [](const PyWorld& world, const std::filesystem::path& path) {
             const dem::World& read = world.read();
             py::gil_scoped_release release;
             read.save(path);
@@ -408,7 +412,7 @@ RuntimeError.)")
           "would.")
       .def_static(
           "load",
-          [](const std::string& path) {
+          [](const std::filesystem::path& path) {
             std::optional<dem::World> loaded;
             {
               py::gil_scoped_release release;

@@ -73,3 +73,17 @@ def test_bad_files_are_errors(tmp_path):
         delta.dem.World.load(str(path))
     with pytest.raises(delta.Error, match="missing"):
         delta.dem.World.load(str(tmp_path / "missing.delta"))
+
+
+def test_paths_are_paths_and_an_embedded_nul_is_refused(tmp_path, monkeypatch):
+    # A string with a NUL went to the C calls whole, which stopped at the NUL: 'a\0b.delta' wrote
+    # ./a and 'a\0zzz' read it back, without an error.
+    monkeypatch.chdir(tmp_path)
+    world = settled(10)
+    with pytest.raises(TypeError):
+        world.save("a\x00b.delta")
+    world.save(tmp_path / "run.delta")  # an os.PathLike too
+    assert_same(world, delta.dem.World.load(tmp_path / "run.delta"))
+    with pytest.raises(TypeError):
+        delta.dem.World.load("run.delta\x00zzz")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.delta"]

@@ -95,6 +95,23 @@ TEST(DemCheckpointCli, AStoppedAndRestartedRunEndsBitForBitWhereTheWholeRunEnds)
   EXPECT_EQ(jsonNumber(elsewhere.out, "steps"), 50.0) << elsewhere.out;
 }
 
+TEST(DemCheckpointCli, ARestartsTotalIsTheOneItsCheckpointsCarryOn) {
+  // A restart to --steps 60 wrote checkpoints that still said 20 steps (the first run's total):
+  // a restart of that restart stopped at step 20, with exit 0, or refused a checkpoint beyond it.
+  const TemporaryFolder folder("checkpoint_total");
+  const std::filesystem::path run = folder.path / "run";
+  ASSERT_EQ(
+      runDelta(kSettle + " --steps 20 --checkpoint-every 10 --out '" + run.string() + "'").exitCode,
+      0);
+  const std::string checkpoint = (run / "checkpoint.delta").string();
+  const CliRun longer = runDelta("dem --restart '" + checkpoint + "' --steps 60 --json --quiet");
+  ASSERT_EQ(longer.exitCode, 0) << longer.err;
+  const CliRun again = runDelta("dem --restart '" + checkpoint + "' --json --quiet");
+  ASSERT_EQ(again.exitCode, 0) << again.err;
+  EXPECT_EQ(jsonNumber(again.out, "steps"), 0.0) << again.out;
+  EXPECT_EQ(jsonString(again.out, "state_digest"), jsonString(longer.out, "state_digest"));
+}
+
 TEST(DemCheckpointCli, ARestartTakesNoStartEnergyThatIsNotANumber) {
   // The log's first row gives energy_change its start; a log edited by hand with "nan" there
   // made every later row's energy_change NaN. The restart's own energy stands in.
@@ -135,6 +152,10 @@ TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
   expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --particles 5"), "--particles");
   expectOneLineError(runDelta("dem settle --restart '" + checkpoint + "'"), "SCENARIO");
   expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --steps 10"), "fewer than");
+  // What a restart takes from its checkpoint is not silently replaced: --frames, and
+  // --overwrite of the folder it continues.
+  expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --frames triangles"), "--frames");
+  expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --overwrite"), "--overwrite");
   std::string cut = slurp(checkpoint);
   cut.resize(cut.size() / 2);
   { std::ofstream(folder.path / "cut.delta", std::ios::binary) << cut; }
@@ -205,6 +226,11 @@ TEST(DemCheckpointCli, SigintFinishesTheStepWritesACheckpointAndExits130) {
 
 TEST(DemCheckpointCli, SigtermFinishesTheStepWritesACheckpointAndExits143) {
   stopAndRestart(SIGTERM, 143);
+}
+
+TEST(DemCheckpointCli, SighupFinishesTheStepWritesACheckpointAndExits129) {
+  // A closed terminal or a dropped connection: the run was killed without a checkpoint.
+  stopAndRestart(SIGHUP, 129);
 }
 
 #ifdef DELTA_MPIEXEC
