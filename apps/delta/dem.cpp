@@ -623,6 +623,7 @@ DemRunNote noteOf(const DemOptions& options, const Prepared& prepared) {
   note.outputEvery = prepared.outputEvery;
   note.frames = options.frames;
   note.checkpointEvery = options.checkpointEvery;
+  note.run = newRunId();
   return note;
 }
 
@@ -680,12 +681,27 @@ RestartPlan planRestart(const DemOptions& options) {
                    Continuation{nullptr, true, false, {}}};
   plan.options.frames = note.frames;
   if (plan.options.out.empty()) plan.options.out = folder.string();
+  // Its output goes on where the folder holds this run's (its marker names the run; a note of a
+  // version without run identities trusts the folder, as that version did).
   std::error_code error;
-  plan.options.continuing = std::filesystem::equivalent(plan.options.out, folder, error);
-  if (plan.options.continuing && options.overwrite)
+  const bool ownFolder = std::filesystem::equivalent(plan.options.out, folder, error);
+  plan.options.continuing =
+      ownFolder && (note.run.empty() || runMarkerOf(plan.options.out) == note.run);
+  if (ownFolder && options.overwrite)
     throw Error(
-        "--restart into the checkpoint's folder continues its output: --overwrite would "
-        "remove it (give another --out to start a new series there)");
+        "--restart into the checkpoint's own folder: --overwrite would remove its output "
+        "(give another --out to start a new series there)");
+  if (ownFolder && !plan.options.continuing) {
+    std::vector<std::filesystem::path> others = demOutputFiles(plan.options.out);
+    std::erase_if(others, [&](const std::filesystem::path& path) {
+      return std::filesystem::equivalent(path, file, error);
+    });
+    if (!others.empty())
+      throw Error("'" + plan.options.out + "' holds the output of another run than the one '" +
+                  file.string() + "' continues (its " + kRunMarkerName +
+                  " names another run, or none): give --out NEWDIR to start a new series from "
+                  "the checkpoint");
+  }
   plan.continuation.resumeOutput = plan.options.continuing;
   plan.continuation.frameTimes = note.frameTimes;
   Prepared& prepared = plan.prepared;
@@ -706,6 +722,7 @@ void restart(const DemOptions& given) {
   if (!lock.note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock.note().c_str());
   prepareOutputFolder(options.out, earlierOutput(options));
   DemOutput output(options.out, framesOf(options));
+  writeRunMarker(options.out, plan.note.run);
   DemCheckpoints checkpoints(options.out, plan.checkpointEvery, plan.note);
   plan.continuation.checkpoints = &checkpoints;
   const RunSummary summary =
@@ -753,9 +770,11 @@ void runDistributed(const DemOptions& given) {
     }
     Prepared prepared = restarting ? std::move(restarting->prepared) : prepare(*settings);
     dem::DistributedWorld world(MPI_COMM_WORLD, prepared.scenario.world);
-    DemCheckpoints checkpoints(options.out,
-                               restarting ? restarting->checkpointEvery : options.checkpointEvery,
-                               restarting ? restarting->note : noteOf(options, prepared));
+    // Rank 0's note is the one its checkpoints and the folder's marker carry.
+    const DemRunNote note = restarting ? restarting->note : noteOf(options, prepared);
+    if (root && output) orAbort([&] { writeRunMarker(options.out, note.run); });
+    DemCheckpoints checkpoints(
+        options.out, restarting ? restarting->checkpointEvery : options.checkpointEvery, note);
     Continuation continuation;
     if (restarting) continuation = restarting->continuation;
     continuation.checkpoints = &checkpoints;
@@ -799,7 +818,9 @@ void run(const DemOptions& options) {
     output = std::make_unique<DemOutput>(options.out, frames);
   }
   Prepared prepared = prepare(settings);
-  DemCheckpoints checkpoints(options.out, options.checkpointEvery, noteOf(options, prepared));
+  const DemRunNote note = noteOf(options, prepared);
+  if (output) writeRunMarker(options.out, note.run);
+  DemCheckpoints checkpoints(options.out, options.checkpointEvery, note);
   const RunSummary summary = simulate(prepared.scenario, prepared.steps, prepared.outputEvery,
                                       output.get(), showProgress(options.quiet || options.json),
                                       Continuation{&checkpoints, false, false, {}});

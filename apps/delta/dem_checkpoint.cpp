@@ -1,8 +1,13 @@
 #include "dem_checkpoint.h"
 
+#include <algorithm>
 #include <atomic>
 #include <charconv>
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <fstream>
+#include <random>
 #include <sstream>
 #include <utility>
 
@@ -34,12 +39,41 @@ std::size_t sizeOf(const std::string& text, const std::string& key, const std::s
   return value;
 }
 
+/// Whether `text` is a run identity: 16 lowercase hex digits.
+bool isRunId(const std::string& text) noexcept {
+  return text.size() == 16 && std::all_of(text.begin(), text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
 }  // namespace
+
+std::string newRunId() {
+  std::random_device device;
+  std::uint64_t bits =
+      (std::uint64_t{device()} << 32) ^ device() ^
+      static_cast<std::uint64_t>(std::chrono::system_clock::now().time_since_epoch().count());
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(bits));
+  return text;
+}
+
+std::string runMarkerOf(const std::filesystem::path& directory) {
+  std::ifstream file(directory / kRunMarkerName, std::ios::binary);
+  std::string line;
+  if (!file || !std::getline(file, line) || !isRunId(line)) return "";
+  return line;
+}
+
+void writeRunMarker(const std::filesystem::path& directory, const std::string& run) {
+  if (!run.empty()) io::writeFileAtomically(directory / kRunMarkerName, run + "\n");
+}
 
 std::string DemRunNote::text() const {
   std::string text = "delta dem\nscenario = " + scenario + "\nsteps = " + std::to_string(steps) +
                      "\noutput_every = " + std::to_string(outputEvery) + "\nframes = " + frames +
-                     "\ncheckpoint_every = " + std::to_string(checkpointEvery) + "\nframe_times =";
+                     "\ncheckpoint_every = " + std::to_string(checkpointEvery) +
+                     (run.empty() ? "" : "\nrun = " + run) + "\nframe_times =";
   for (const double time : frameTimes) {
     char number[40];
     std::snprintf(number, sizeof number, " %.17g", time);
@@ -68,7 +102,12 @@ DemRunNote DemRunNote::parse(const std::string& text, const std::string& origin)
       note.frames = value;
     else if (key == "checkpoint_every")
       note.checkpointEvery = sizeOf(value, key, origin);
-    else if (key == "frame_times") {
+    else if (key == "run") {
+      if (!isRunId(value))
+        throw Error("'" + origin + "': the checkpoint's note has run = '" + printable(value) +
+                    "', not 16 hex digits");
+      note.run = value;
+    } else if (key == "frame_times") {
       std::istringstream times(line.substr(key.size() + 2));
       std::string number;
       while (times >> number) {

@@ -28,12 +28,28 @@ struct DemRunNote {
   std::string frames = "state";  ///< --frames
   std::size_t checkpointEvery = 0;
   std::vector<double> frameTimes;  ///< the frames written so far (--out), their simulated times
+  /// 16 hex digits drawn when the run began, kept by its restarts, and written beside its output
+  /// (kRunMarkerName): a restart continues a folder's series only where the two agree. Empty in
+  /// the notes of Δ versions that had none.
+  std::string run;
 
   /// As text: one `key = value` a line, the times at full precision (%.17g).
   std::string text() const;
   /// Reads text(); throws delta::Error naming `origin` for a note that is not one.
   static DemRunNote parse(const std::string& text, const std::string& origin);
 };
+
+/// The file in a run's --out folder that names the run its output belongs to (DemRunNote::run).
+inline constexpr const char* kRunMarkerName = ".delta.run";
+
+/// A new run's identity: 16 hex digits from std::random_device and the clock.
+std::string newRunId();
+
+/// The run `directory`'s marker names (kRunMarkerName), "" where it has none or it is not one.
+std::string runMarkerOf(const std::filesystem::path& directory);
+
+/// Writes `directory`'s marker for `run` (atomically); nothing for an empty `run`.
+void writeRunMarker(const std::filesystem::path& directory, const std::string& run);
 
 /// Thrown out of a run stopped by SIGINT or SIGTERM once its checkpoint is written and its files
 /// are closed; `delta dem` then exits with 128 + the signal (130, 143).

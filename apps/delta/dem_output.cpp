@@ -264,14 +264,25 @@ void DemOutput::resume(const dem::World& world, std::span<const double> frameTim
                        std::size_t step) {
   for (const dem::Obstacle& obstacle : world.obstacles())
     obstaclesMove_ = obstaclesMove_ || moves(obstacle);
+  // Each earlier frame by the file that holds it: the run before may have written it on another
+  // number of processes (.pvtp of pieces, or one .vtp). A frame that is in neither form is not
+  // this run's output: the series would list a file that does not exist.
+  const auto earlierFile = [&](const char* name, std::size_t frame, bool pieced) {
+    const std::string first = frameFileName(name, frame, pieced && pieces_ > 0 ? ".pvtp" : ".vtp");
+    if (std::filesystem::exists(directory_ / first)) return first;
+    const std::string other = frameFileName(name, frame, pieces_ > 0 ? ".vtp" : ".pvtp");
+    if (pieced && std::filesystem::exists(directory_ / other)) return other;
+    throw Error("'" + directory_.string() + "' lacks " + first + " (frame " +
+                std::to_string(frame) +
+                " of the series the checkpoint continues): give --out NEWDIR to start a new "
+                "series from the checkpoint");
+  };
   const auto series = [&](std::vector<io::VtkSeriesEntry>& entries, const char* name, bool pieced) {
     entries.clear();
-    for (std::size_t frame = 0; frame < frameTimes.size(); ++frame) {
-      const std::string file = pieced && pieces_ > 0 ? frameFileName(name, frame, ".pvtp")
-                                                     : frameFileName(name, frame, ".vtp");
+    for (std::size_t frame = 0; frame < frameTimes.size(); ++frame)
       entries.push_back(
-          {frameTimes[frame], piece_ == 0 ? std::filesystem::path(file) : std::filesystem::path()});
-    }
+          {frameTimes[frame], piece_ == 0 ? std::filesystem::path(earlierFile(name, frame, pieced))
+                                          : std::filesystem::path()});
     if (piece_ == 0) io::writePvd(entries, directory_ / (std::string(name) + ".pvd"));
   };
   if (frames_ != DemFrames::Triangles) series(stateSeries_, "particles_state", true);

@@ -107,7 +107,7 @@ void RunLock::release() noexcept {
 std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& directory) {
   // The names DemOutput writes (dem_output.h) and AtomicFile's temporaries (".NAME.delta-…").
   static const std::regex kNames(
-      R"((log\.csv|obstacles\.vtp|shape_[0-9]+\.vtp|checkpoint\.delta|)"
+      R"((log\.csv|obstacles\.vtp|shape_[0-9]+\.vtp|checkpoint\.delta|\.delta\.run|)"
       R"((particles_state|particles|contacts|obstacles)(\.pvd|_[0-9]{6,}(_[0-9]+)?\.(vtp|pvtp))|)"
       R"(\..+\.delta-[A-Za-z0-9]+))");
   std::vector<std::filesystem::path> files;
@@ -128,9 +128,14 @@ void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput e
   const std::vector<std::filesystem::path> files = demOutputFiles(directory);
   if (files.empty()) return;
   if (earlier == EarlierOutput::Refuse) {
+    // Named by what a user sees first: the hidden files (the run marker, temporaries) last.
+    std::vector<std::filesystem::path> shown = files;
+    std::stable_partition(shown.begin(), shown.end(), [](const std::filesystem::path& file) {
+      return !file.filename().string().starts_with('.');
+    });
     std::string names;
-    for (std::size_t k = 0; k < std::min<std::size_t>(files.size(), 3); ++k)
-      names += (k ? ", " : "") + files[k].filename().string();
+    for (std::size_t k = 0; k < std::min<std::size_t>(shown.size(), 3); ++k)
+      names += (k ? ", " : "") + shown[k].filename().string();
     if (files.size() > 3) names += ", … " + std::to_string(files.size()) + " files";
     throw Error("--out '" + directory.string() + "' holds the output of an earlier run (" + names +
                 "): --overwrite replaces it, --restart continues it");

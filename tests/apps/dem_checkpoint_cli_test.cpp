@@ -112,6 +112,59 @@ TEST(DemCheckpointCli, ARestartsTotalIsTheOneItsCheckpointsCarryOn) {
   EXPECT_EQ(jsonString(again.out, "state_digest"), jsonString(longer.out, "state_digest"));
 }
 
+/// Every file `pvd` lists exists beside it.
+void expectSeriesComplete(const std::filesystem::path& pvd) {
+  const std::vector<std::string> files = seriesFiles(pvd);
+  EXPECT_FALSE(files.empty()) << pvd;
+  for (const std::string& file : files)
+    EXPECT_TRUE(std::filesystem::exists(pvd.parent_path() / file)) << pvd << " lists " << file;
+}
+
+TEST(DemCheckpointCli, ARestartContinuesOnlyTheOutputOfItsOwnRun) {
+  // A checkpoint kept aside, its folder then used by another run: the restart went on with that
+  // run's log rows, frames and shapes, with exit 0. Each run's folder now names the run
+  // (.delta.run), and its checkpoints carry the same identity.
+  const TemporaryFolder folder("checkpoint_own_run");
+  const std::filesystem::path first = folder.path / "first", second = folder.path / "second";
+  ASSERT_EQ(runDelta(kSettle + " --steps 100 --checkpoint-every 50 --out '" + first.string() + "'")
+                .exitCode,
+            0);
+  ASSERT_EQ(runDelta("dem two-particles --steps 150 --output-every 50 --quiet --out '" +
+                     second.string() + "'")
+                .exitCode,
+            0);
+  std::filesystem::copy_file(first / "checkpoint.delta", second / "kept.delta");
+  const std::string log = slurp(second / "log.csv");
+  expectOneLineError(
+      runDelta("dem --restart '" + (second / "kept.delta").string() + "' --steps 200 --quiet"),
+      "holds the output of another run");
+  EXPECT_EQ(slurp(second / "log.csv"), log);
+  // Into a new folder it goes on, and the run it continues is the first one's, bit for bit.
+  const CliRun whole = runDelta(kSettle + " --steps 200");
+  const CliRun moved =
+      runDelta("dem --restart '" + (second / "kept.delta").string() + "' --steps 200 --out '" +
+               (folder.path / "third").string() + "' --json --quiet");
+  ASSERT_EQ(moved.exitCode, 0) << moved.err;
+  EXPECT_EQ(jsonString(moved.out, "state_digest"), jsonString(whole.out, "state_digest"));
+  expectSeriesComplete(folder.path / "third" / "particles_state.pvd");
+  // A checkpoint alone in a folder starts a new series there, listing only frames that exist.
+  const std::filesystem::path alone = folder.path / "alone";
+  std::filesystem::create_directories(alone);
+  std::filesystem::copy_file(first / "checkpoint.delta", alone / "kept.delta");
+  const CliRun fresh = runDelta("dem --restart '" + (alone / "kept.delta").string() +
+                                "' --steps 200 --json --quiet");
+  ASSERT_EQ(fresh.exitCode, 0) << fresh.err;
+  EXPECT_EQ(jsonString(fresh.out, "state_digest"), jsonString(whole.out, "state_digest"));
+  expectSeriesComplete(alone / "particles_state.pvd");
+  expectSeriesComplete(alone / "contacts.pvd");
+  // The run's own folder is still continued.
+  const CliRun own = runDelta("dem --restart '" + (first / "checkpoint.delta").string() +
+                              "' --steps 200 --json --quiet");
+  ASSERT_EQ(own.exitCode, 0) << own.err;
+  EXPECT_EQ(logRows(first / "log.csv").size(), 202u);  // the header and steps 0 to 200
+  expectSeriesComplete(first / "particles_state.pvd");
+}
+
 TEST(DemCheckpointCli, ARestartTakesNoStartEnergyThatIsNotANumber) {
   // The log's first row gives energy_change its start; a log edited by hand with "nan" there
   // made every later row's energy_change NaN. The restart's own energy stands in.
@@ -261,6 +314,35 @@ TEST(DemCheckpointCli, ACheckpointOfTwoRanksRestartsOnFourAndOnOneBitForBit) {
   EXPECT_EQ(jsonString(onFour.out, "state_digest"), digest) << onFour.out;
   EXPECT_EQ(logRows(parts / "log.csv").size(),
             logRows(folder.path / "one" / "log.csv").size() + 200);
+}
+
+TEST(DemCheckpointCli, ASeriesGoesOnWhenTheProcessCountChanges) {
+  // The earlier frames were listed in the restart's own form (.vtp in one process, .pvtp under
+  // mpirun) whatever the run before wrote: the series named files that did not exist.
+  const TemporaryFolder folder("checkpoint_forms");
+  const std::filesystem::path ranked = folder.path / "ranked", single = folder.path / "single";
+  ASSERT_EQ(
+      delta::test::runDeltaUnder(
+          mpirun(2), kSettle + " --steps 100 --checkpoint-every 50 --out '" + ranked.string() + "'")
+          .exitCode,
+      0);
+  const CliRun onOne = runDelta("dem --restart '" + (ranked / "checkpoint.delta").string() +
+                                "' --steps 200 --json --quiet");
+  ASSERT_EQ(onOne.exitCode, 0) << onOne.err;
+  expectSeriesComplete(ranked / "particles_state.pvd");
+  expectSeriesComplete(ranked / "contacts.pvd");
+  EXPECT_EQ(seriesFiles(ranked / "particles_state.pvd").size(), 5u);
+
+  ASSERT_EQ(runDelta(kSettle + " --steps 100 --checkpoint-every 50 --out '" + single.string() + "'")
+                .exitCode,
+            0);
+  const CliRun onTwo = delta::test::runDeltaUnder(
+      mpirun(2),
+      "dem --restart '" + (single / "checkpoint.delta").string() + "' --steps 200 --json --quiet");
+  ASSERT_EQ(onTwo.exitCode, 0) << onTwo.err;
+  expectSeriesComplete(single / "particles_state.pvd");
+  expectSeriesComplete(single / "contacts.pvd");
+  EXPECT_EQ(jsonString(onTwo.out, "state_digest"), jsonString(onOne.out, "state_digest"));
 }
 #endif  // DELTA_MPIEXEC
 
