@@ -157,7 +157,11 @@ void DemCheckpoints::write(const dem::World& world, const DemOutput* output) {
   if (directory_.empty() || lastStep_ == world.stepCount()) return;
   const Stopwatch clock;
   DemRunNote note = note_;
-  if (output) note.frameTimes = output->frameTimes();
+  if (output) {
+    note.frameTimes = output->frameTimes();
+    output
+        ->syncLog();  // the rows up to this step on the disk before the checkpoint that needs them
+  }
   const std::string bytes = dem::checkpointBytes(world, note.text());
   io::writeFileAtomically(path(), bytes);
   lastStep_ = world.stepCount();

@@ -253,6 +253,13 @@ void DemOutput::finish() {
                 "' failed: " + std::generic_category().message(errno));
 }
 
+void DemOutput::syncLog() const {
+  if (log_ < 0) return;
+  if (::fdatasync(log_) != 0 && errno != EINVAL)  // EINVAL: a file system that cannot
+    throw Error("writing '" + (directory_ / "log.csv").string() +
+                "' failed: " + std::generic_category().message(errno));
+}
+
 std::vector<double> DemOutput::frameTimes() const {
   std::vector<double> times;
   for (const io::VtkSeriesEntry& entry : contactSeries_)

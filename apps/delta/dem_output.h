@@ -123,6 +123,10 @@ class DemOutput {
   void frame(const dem::World& part, std::span<const std::uint32_t> ids, double time);
   /// Closes log.csv; throws delta::Error when that fails.
   void finish();
+  /// Puts the rows of log.csv written so far on the disk (fdatasync): a checkpoint written after
+  /// them must not outlive them in a power loss, which would leave a gap in the log of the run
+  /// its restart continues. Throws delta::Error when that fails.
+  void syncLog() const;
 
   /// Continues the output of a run restarted from a checkpoint (`delta dem --restart`) instead
   /// of begin(): the series list the `frameTimes.size()` frames written before the checkpoint

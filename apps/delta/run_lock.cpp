@@ -104,12 +104,16 @@ void RunLock::release() noexcept {
   ::close(descriptor);
 }
 
-std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& directory) {
-  // The names DemOutput writes (dem_output.h) and AtomicFile's temporaries (".NAME.delta-…").
-  static const std::regex kNames(
-      R"((log\.csv|obstacles\.vtp|shape_[0-9]+\.vtp|checkpoint\.delta|\.delta\.run|)"
-      R"((particles_state|particles|contacts|obstacles)(\.pvd|_[0-9]{6,}(_[0-9]+)?\.(vtp|pvtp))|)"
-      R"(\..+\.delta-[A-Za-z0-9]+))");
+namespace {
+
+/// The names DemOutput and DemCheckpoints write (dem_output.h, dem_checkpoint.h).
+constexpr const char* kDemNames =
+    R"((log\.csv|obstacles\.vtp|shape_[0-9]+\.vtp|checkpoint\.delta|\.delta\.run|)"
+    R"((particles_state|particles|contacts|obstacles)(\.pvd|_[0-9]{6,}(_[0-9]+)?\.(vtp|pvtp))))";
+
+/// The files of `directory` (not folders) whose names match `names`, sorted.
+std::vector<std::filesystem::path> filesNamed(const std::filesystem::path& directory,
+                                              const std::regex& names) {
   std::vector<std::filesystem::path> files;
   std::error_code error;
   std::filesystem::directory_iterator entries(directory, error);
@@ -117,14 +121,32 @@ std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& d
     throw Error("--out '" + directory.string() + "': cannot list the folder: " + error.message());
   for (const std::filesystem::directory_entry& entry : entries) {
     const std::string name = entry.path().filename().string();
-    if (std::regex_match(name, kNames) && !entry.is_directory(error)) files.push_back(entry.path());
+    if (std::regex_match(name, names) && !entry.is_directory(error)) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   return files;
 }
 
+}  // namespace
+
+std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& directory) {
+  // And AtomicFile's temporaries (".NAME.delta-…") of any name.
+  static const std::regex kNames(std::string(kDemNames) + R"(|\..+\.delta-[A-Za-z0-9]+)");
+  return filesNamed(directory, kNames);
+}
+
 void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier) {
-  if (earlier == EarlierOutput::Continue) return;
+  if (earlier == EarlierOutput::Continue) {
+    // The temporary files of the run's own names that a run killed while writing left
+    // (AtomicFile's ".NAME.delta-" and 16 hex digits): no run of this folder writes them now
+    // (the lock is held), and they would stay for ever.
+    static const std::regex kStale("\\.(" + std::string(kDemNames) + ")\\.delta-[0-9a-f]{16}");
+    for (const std::filesystem::path& file : filesNamed(directory, kStale)) {
+      std::error_code error;
+      std::filesystem::remove(file, error);  // one left is no harm
+    }
+    return;
+  }
   const std::vector<std::filesystem::path> files = demOutputFiles(directory);
   if (files.empty()) return;
   if (earlier == EarlierOutput::Refuse) {

@@ -60,7 +60,8 @@ std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& d
 /// Readies `directory` (held with a RunLock) for a run: where demOutputFiles is not empty,
 /// EarlierOutput::Refuse throws delta::Error "--out 'DIR' holds the output of an earlier run
 /// (NAME, …): --overwrite replaces it, --restart continues it", Overwrite removes those files
-/// (throwing naming a file it cannot remove), Continue leaves them.
+/// (throwing naming a file it cannot remove), Continue leaves them (and removes the temporary
+/// files of those names that a killed run left).
 void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier);
 
 }  // namespace delta::cli

@@ -157,12 +157,19 @@ TEST(DemCheckpointCli, ARestartContinuesOnlyTheOutputOfItsOwnRun) {
   EXPECT_EQ(jsonString(fresh.out, "state_digest"), jsonString(whole.out, "state_digest"));
   expectSeriesComplete(alone / "particles_state.pvd");
   expectSeriesComplete(alone / "contacts.pvd");
-  // The run's own folder is still continued.
+  // The run's own folder is still continued, and the temporary files of its names that a run
+  // killed while writing left are removed (others' stay).
+  const std::filesystem::path stale = first / ".log.csv.delta-0123456789abcdef";
+  const std::filesystem::path foreign = first / ".notes.txt.delta-0123456789abcdef";
+  { std::ofstream(stale) << "1,2,3"; }
+  { std::ofstream(foreign) << "mine"; }
   const CliRun own = runDelta("dem --restart '" + (first / "checkpoint.delta").string() +
                               "' --steps 200 --json --quiet");
   ASSERT_EQ(own.exitCode, 0) << own.err;
   EXPECT_EQ(logRows(first / "log.csv").size(), 202u);  // the header and steps 0 to 200
   expectSeriesComplete(first / "particles_state.pvd");
+  EXPECT_FALSE(std::filesystem::exists(stale));
+  EXPECT_TRUE(std::filesystem::exists(foreign));
 }
 
 TEST(DemCheckpointCli, ARestartTakesNoStartEnergyThatIsNotANumber) {
