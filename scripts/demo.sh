@@ -17,7 +17,7 @@ scripts/setup.sh build
 # the same trajectories as one process
 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 \
   mpirun -np 2 --oversubscribe ./build/delta dem settle --particles 27 --overwrite --out build/dem_settle_mpi
-./build/delta ib data/meshes/fandisk.off --levels 6 --steps 5 --rotate 0,0,1,2 --out build/ib_fandisk
+./build/delta ib data/meshes/fandisk.off --levels 6 --steps 5 --rotate 0,0,1,2 --overwrite --out build/ib_fandisk
 ./build/delta info data/meshes/armadillo.off
 ./build/delta info builtin:granulate:1
 ./build/delta contact builtin:granulate:3 builtin:granulate:4 --translate-b 1.8,0.2,0.1 --eps 0.05 \

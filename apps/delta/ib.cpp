@@ -24,6 +24,7 @@
 #include "mesh_source.h"
 #include "motion_options.h"
 #include "progress.h"
+#include "run_lock.h"
 #include "stopwatch.h"
 
 namespace delta::cli {
@@ -43,6 +44,7 @@ struct IbOptions {
   int compression = 0;  ///< --compression: zlib's level for the files, 0 none
   bool json = false;
   bool quiet = false;
+  bool overwrite = false;  ///< --overwrite: replace an earlier run's output in --out
 };
 
 /// The motion of one step: --rotate about the centre of the mesh's box (a point that moves with
@@ -217,10 +219,20 @@ void printText(const std::string& source, const ib::AdaptiveGrid& grid, const Ib
 void run(const IbOptions& options) {
   validate(options);
   const std::size_t steps = parseStepCount(options.steps, "--steps", 0);
+  std::unique_ptr<RunLock> lock;  // held until the output is written (declared before it)
   std::unique_ptr<IbOutput> output;
-  if (!options.out.empty())
+  if (!options.out.empty()) {
+    // One run at a time in the folder, and none over an earlier run's files: a static grid's
+    // grid.vtu beside an earlier moving run's grid.pvd, which ParaView would open instead.
+    makeOutputFolder(options.out);
+    lock = std::make_unique<RunLock>(options.out, "delta ib");
+    if (!lock->note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock->note().c_str());
+    clearEarlierOutput(options.out,
+                       options.overwrite ? EarlierOutput::Overwrite : EarlierOutput::Refuse,
+                       ibOutputFiles(options.out), "--overwrite replaces it");
     output = std::make_unique<IbOutput>(options.out, steps > 0,
                                         io::VtkWriteOptions{options.compression});
+  }
   IbSummary summary;
   Stopwatch clock;
   const Mesh mesh = loadMeshSource(options.mesh).mesh;
@@ -275,7 +287,9 @@ that could have changed are computed again.
                         one file each for step 0 (the start) to T; the .pvd time is the step
 Distances and coordinates are Float64 as computed, levels UInt8, connectivity Int32. The data
 are not compressed by default, so that writing costs less than the queries (zlib takes about
-as long as they do); --compression 1 makes the files ~4x smaller.)";
+as long as they do); --compression 1 makes the files ~4x smaller. A run holds DIR/.delta.lock
+while it writes (a second run into DIR is refused meanwhile), and a folder that holds an earlier
+run's output is refused unless --overwrite (which removes only those files).)";
 
 }  // namespace
 
@@ -329,6 +343,8 @@ void addIbCommand(CLI::App& app) {
                  "zlib level of the files --out writes: 0 none (default, the fastest to write), "
                  "1 fastest to 9 smallest")
       ->type_name("LEVEL");
+  ib->add_flag("--overwrite", options->overwrite,
+               "Replace the output of an earlier run in --out (a run is refused otherwise)");
   ib->add_flag("--json", options->json, "Print one JSON object instead of text");
   ib->add_flag("--quiet", options->quiet, "No progress line");
   ib->callback([options] { run(*options); });

@@ -147,8 +147,21 @@ void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput e
     }
     return;
   }
-  const std::vector<std::filesystem::path> files = demOutputFiles(directory);
-  if (files.empty()) return;
+  clearEarlierOutput(directory, earlier, demOutputFiles(directory),
+                     "--overwrite replaces it, --restart continues it");
+}
+
+std::vector<std::filesystem::path> ibOutputFiles(const std::filesystem::path& directory) {
+  // The names `delta ib` writes, and AtomicFile's temporaries (".NAME.delta-…") of any name.
+  static const std::regex kNames(
+      R"(((grid|boundary)(\.pvd|_[0-9]{6,}\.(vtu|vtp))|grid\.vtu|boundary\.vtp|)"
+      R"(\..+\.delta-[A-Za-z0-9]+))");
+  return filesNamed(directory, kNames);
+}
+
+void clearEarlierOutput(const std::filesystem::path& directory, EarlierOutput earlier,
+                        const std::vector<std::filesystem::path>& files, const std::string& hint) {
+  if (files.empty() || earlier == EarlierOutput::Continue) return;
   if (earlier == EarlierOutput::Refuse) {
     // Named by what a user sees first: the hidden files (the run marker, temporaries) last.
     std::vector<std::filesystem::path> shown = files;
@@ -160,7 +173,7 @@ void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput e
       names += (k ? ", " : "") + shown[k].filename().string();
     if (files.size() > 3) names += ", … " + std::to_string(files.size()) + " files";
     throw Error("--out '" + directory.string() + "' holds the output of an earlier run (" + names +
-                "): --overwrite replaces it, --restart continues it");
+                "): " + hint);
   }
   for (const std::filesystem::path& file : files) {
     std::error_code error;

@@ -64,4 +64,15 @@ std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& d
 /// files of those names that a killed run left).
 void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier);
 
+/// The files in `directory` that a `delta ib --out` run writes (grid.vtu, boundary.vtp, the
+/// grid and boundary series and their .pvd, and temporary files a run killed while writing
+/// left), sorted. Throws delta::Error naming the folder when it cannot be listed.
+std::vector<std::filesystem::path> ibOutputFiles(const std::filesystem::path& directory);
+
+/// What prepareOutputFolder does with `files`, an earlier run's in `directory`: Refuse throws
+/// delta::Error "--out 'DIR' holds the output of an earlier run (NAME, …): `hint`", Overwrite
+/// removes them (throwing naming a file it cannot remove), Continue leaves them.
+void clearEarlierOutput(const std::filesystem::path& directory, EarlierOutput earlier,
+                        const std::vector<std::filesystem::path>& files, const std::string& hint);
+
 }  // namespace delta::cli

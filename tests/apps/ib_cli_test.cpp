@@ -151,6 +151,29 @@ TEST(IbCli, MovingBoundaryWritesASeries) {
       << "the last file is the grid the summary counts";
 }
 
+TEST(IbCli, AnEarlierRunsOutputIsRefusedUnlessOverwrite) {
+  // A static run into a folder that held a moving run's series left its grid.pvd beside the new
+  // grid.vtu: ParaView opened the old grid. The folder is now refused unless --overwrite, which
+  // removes only `delta ib`'s files.
+  const TemporaryFolder folder("ib_earlier");
+  const std::string out = " --out '" + folder.path.string() + "'";
+  ASSERT_EQ(runDelta("ib builtin:icosphere:2 --levels 3 --steps 2 --quiet" + out).exitCode, 0);
+  { std::ofstream(folder.path / "notes.txt") << "mine\n"; }
+  const std::string pvd = slurp(folder.path / "grid.pvd");
+  expectOneLineError(runDelta("ib builtin:icosphere:2 --levels 3 --quiet" + out),
+                     "holds the output of an earlier run (boundary.pvd");
+  EXPECT_EQ(slurp(folder.path / "grid.pvd"), pvd);
+  EXPECT_FALSE(fs::exists(folder.path / "grid.vtu"));
+  const CliRun again = runDelta("ib builtin:icosphere:2 --levels 3 --quiet --overwrite" + out);
+  ASSERT_EQ(again.exitCode, 0) << again.err;
+  EXPECT_TRUE(fs::exists(folder.path / "grid.vtu"));
+  EXPECT_TRUE(fs::exists(folder.path / "boundary.vtp"));
+  for (const char* earlier : {"grid.pvd", "boundary.pvd", "grid_000000.vtu", "boundary_000002.vtp"})
+    EXPECT_FALSE(fs::exists(folder.path / earlier)) << earlier;
+  EXPECT_EQ(slurp(folder.path / "notes.txt"), "mine\n");
+  EXPECT_FALSE(fs::exists(folder.path / ".delta.lock")) << "released at the end";
+}
+
 TEST(IbCli, OpenMeshNeedsUnsigned) {
   const TemporaryFolder folder("ib_open");
   const fs::path open = folder.path / "open box.off";
