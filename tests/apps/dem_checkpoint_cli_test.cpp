@@ -58,6 +58,12 @@ std::vector<std::string> logRows(const std::filesystem::path& log) {
 
 const std::string kSettle = "dem settle --particles 20 --output-every 50 --json --quiet";
 
+/// kSettle's arguments for `steps` steps with a checkpoint every `every` into `out`.
+std::string settleInto(const std::filesystem::path& out, int steps, int every) {
+  return kSettle + " --steps " + std::to_string(steps) + " --checkpoint-every " +
+         std::to_string(every) + " --out '" + out.string() + "'";
+}
+
 TEST(DemCheckpointCli, AStoppedAndRestartedRunEndsBitForBitWhereTheWholeRunEnds) {
   const TemporaryFolder folder("checkpoint_restart");
   const std::filesystem::path whole = folder.path / "whole", parts = folder.path / "parts";
@@ -66,8 +72,7 @@ TEST(DemCheckpointCli, AStoppedAndRestartedRunEndsBitForBitWhereTheWholeRunEnds)
   const std::string digest = jsonString(reference.out, "state_digest");
   EXPECT_EQ(digest.size(), 16u) << reference.out;
 
-  const CliRun first =
-      runDelta(kSettle + " --steps 200 --checkpoint-every 100 --out '" + parts.string() + "'");
+  const CliRun first = runDelta(settleInto(parts, 200, 100));
   ASSERT_EQ(first.exitCode, 0) << first.err;
   EXPECT_EQ(jsonNumber(first.out, "checkpoints"), 2.0) << "steps 100 and 200, the end";
   EXPECT_GT(jsonNumber(first.out, "checkpoint_bytes"), 0.0);
@@ -100,9 +105,7 @@ TEST(DemCheckpointCli, ARestartsTotalIsTheOneItsCheckpointsCarryOn) {
   // a restart of that restart stopped at step 20, with exit 0, or refused a checkpoint beyond it.
   const TemporaryFolder folder("checkpoint_total");
   const std::filesystem::path run = folder.path / "run";
-  ASSERT_EQ(
-      runDelta(kSettle + " --steps 20 --checkpoint-every 10 --out '" + run.string() + "'").exitCode,
-      0);
+  ASSERT_EQ(runDelta(settleInto(run, 20, 10)).exitCode, 0);
   const std::string checkpoint = (run / "checkpoint.delta").string();
   const CliRun longer = runDelta("dem --restart '" + checkpoint + "' --steps 60 --json --quiet");
   ASSERT_EQ(longer.exitCode, 0) << longer.err;
@@ -126,9 +129,7 @@ TEST(DemCheckpointCli, ARestartContinuesOnlyTheOutputOfItsOwnRun) {
   // (.delta.run), and its checkpoints carry the same identity.
   const TemporaryFolder folder("checkpoint_own_run");
   const std::filesystem::path first = folder.path / "first", second = folder.path / "second";
-  ASSERT_EQ(runDelta(kSettle + " --steps 100 --checkpoint-every 50 --out '" + first.string() + "'")
-                .exitCode,
-            0);
+  ASSERT_EQ(runDelta(settleInto(first, 100, 50)).exitCode, 0);
   ASSERT_EQ(runDelta("dem two-particles --steps 150 --output-every 50 --quiet --out '" +
                      second.string() + "'")
                 .exitCode,
@@ -177,9 +178,7 @@ TEST(DemCheckpointCli, ARestartTakesNoStartEnergyThatIsNotANumber) {
   // made every later row's energy_change NaN. The restart's own energy stands in.
   const TemporaryFolder folder("checkpoint_log_nan");
   const std::filesystem::path run = folder.path / "run";
-  ASSERT_EQ(
-      runDelta(kSettle + " --steps 20 --checkpoint-every 20 --out '" + run.string() + "'").exitCode,
-      0);
+  ASSERT_EQ(runDelta(settleInto(run, 20, 20)).exitCode, 0);
   std::string log = slurp(run / "log.csv");
   const std::size_t row = log.find('\n') + 1;  // the first row: step 0
   std::size_t column = row;
@@ -205,9 +204,7 @@ TEST(DemCheckpointCli, RefusesBadRestartsWithOneLine) {
   expectOneLineError(runDelta("dem settle --steps 5 --checkpoint-every 2"), "--out");
 
   const std::filesystem::path run = folder.path / "run";
-  ASSERT_EQ(
-      runDelta(kSettle + " --steps 20 --checkpoint-every 10 --out '" + run.string() + "'").exitCode,
-      0);
+  ASSERT_EQ(runDelta(settleInto(run, 20, 10)).exitCode, 0);
   const std::string checkpoint = (run / "checkpoint.delta").string();
   expectOneLineError(runDelta("dem --restart '" + checkpoint + "' --particles 5"), "--particles");
   expectOneLineError(runDelta("dem settle --restart '" + checkpoint + "'"), "SCENARIO");
@@ -306,8 +303,7 @@ TEST(DemCheckpointCli, ACheckpointOfTwoRanksRestartsOnFourAndOnOneBitForBit) {
   const CliRun whole = runDelta(kSettle + " --steps 400");
   ASSERT_EQ(whole.exitCode, 0) << whole.err;
   const std::string digest = jsonString(whole.out, "state_digest");
-  const CliRun first = delta::test::runDeltaUnder(
-      mpirun(2), kSettle + " --steps 200 --checkpoint-every 100 --out '" + parts.string() + "'");
+  const CliRun first = delta::test::runDeltaUnder(mpirun(2), settleInto(parts, 200, 100));
   ASSERT_EQ(first.exitCode, 0) << first.err;
   EXPECT_EQ(jsonNumber(first.out, "checkpoints"), 2.0) << first.out;
   const std::string checkpoint = (parts / "checkpoint.delta").string();
@@ -328,11 +324,7 @@ TEST(DemCheckpointCli, ASeriesGoesOnWhenTheProcessCountChanges) {
   // mpirun) whatever the run before wrote: the series named files that did not exist.
   const TemporaryFolder folder("checkpoint_forms");
   const std::filesystem::path ranked = folder.path / "ranked", single = folder.path / "single";
-  ASSERT_EQ(
-      delta::test::runDeltaUnder(
-          mpirun(2), kSettle + " --steps 100 --checkpoint-every 50 --out '" + ranked.string() + "'")
-          .exitCode,
-      0);
+  ASSERT_EQ(delta::test::runDeltaUnder(mpirun(2), settleInto(ranked, 100, 50)).exitCode, 0);
   const CliRun onOne = runDelta("dem --restart '" + (ranked / "checkpoint.delta").string() +
                                 "' --steps 200 --json --quiet");
   ASSERT_EQ(onOne.exitCode, 0) << onOne.err;
@@ -340,9 +332,7 @@ TEST(DemCheckpointCli, ASeriesGoesOnWhenTheProcessCountChanges) {
   expectSeriesComplete(ranked / "contacts.pvd");
   EXPECT_EQ(seriesFiles(ranked / "particles_state.pvd").size(), 5u);
 
-  ASSERT_EQ(runDelta(kSettle + " --steps 100 --checkpoint-every 50 --out '" + single.string() + "'")
-                .exitCode,
-            0);
+  ASSERT_EQ(runDelta(settleInto(single, 100, 50)).exitCode, 0);
   const CliRun onTwo = delta::test::runDeltaUnder(
       mpirun(2),
       "dem --restart '" + (single / "checkpoint.delta").string() + "' --steps 200 --json --quiet");

@@ -27,6 +27,20 @@ World sphereOverFloor(const Vec3& position, const Vec3& velocity) {
   return world;
 }
 
+/// `particles` icospheres 5 cm apart along x, falling along x under a gravity of 1e71 m/s²,
+/// stepped `steps` times by 1e-40 s: a step of 1e-5 s then carries them beyond the queries'
+/// coordinate range (they pass through nothing: the pass-through guard lets them go).
+World fallingBeyondTheRange(std::size_t particles, std::size_t steps) {
+  Parameters parameters = test::centimetreParameters(0.01, 1.0, 1.0, 0.5, {1e71, 0, 0});
+  parameters.timeStep = 1e-40;
+  World world(parameters);
+  world.addShape(primitives::icosphere(1, kRadius), kDensity);
+  for (std::size_t i = 0; i < particles; ++i)
+    world.addParticle(0, {{0.05 * static_cast<double>(i), 0, 0}, {}, {}, {}});
+  world.run(steps);
+  return world;
+}
+
 /// The error the next `steps` steps throw, or "" when they do not.
 std::string stepError(World& world, std::size_t steps = 1) {
   try {
@@ -226,16 +240,9 @@ TEST(DemGuards, AStepThatFailsLeavesTheWorldAsItWasAndItMayGoOn) {
 }
 
 TEST(DemGuards, AStepThatFailsBeforeItsEvaluationKeepsTheContactRecords) {
-  // Two particles 5 cm apart along x, falling along x under a gravity of 1e71 m/s², stepped by
-  // 1e-40 s; a step of 1e-5 s carries both beyond the queries' coordinate range, which the step
-  // refuses after the drift, before its evaluation: the last evaluation's records stay.
-  Parameters parameters = test::centimetreParameters(0.01, 1.0, 1.0, 0.5, {1e71, 0, 0});
-  parameters.timeStep = 1e-40;
-  World world(parameters);
-  world.addShape(primitives::icosphere(1, kRadius), kDensity);
-  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
-  world.addParticle(0, {{0.05, 0, 0}, {}, {}, {}});
-  world.run(5);
+  // A step that carries both particles beyond the queries' coordinate range is refused after
+  // the drift, before its evaluation: the last evaluation's records stay.
+  World world = fallingBeyondTheRange(2, 5);
   const World before = world;
   world.setTimeStep(1e-5);
   EXPECT_NE(stepError(world).find("particle 0's bounding sphere at step 6 reaches a coordinate"),
@@ -246,15 +253,9 @@ TEST(DemGuards, AStepThatFailsBeforeItsEvaluationKeepsTheContactRecords) {
 }
 
 TEST(DemGuards, ABodyLeavingTheCoordinateRangeIsRefusedWithNothingNearIt) {
-  // One particle under a gravity of 1e71 m/s², stepped by 1e-40 s, then by 1e-5 s: it flies
-  // beyond ±2^200 with nothing near it. No pair's query met it, and the step went on; the World
-  // then held a position every query refuses.
-  Parameters parameters = test::centimetreParameters(0.01, 1.0, 1.0, 0.5, {1e71, 0, 0});
-  parameters.timeStep = 1e-40;
-  World world(parameters);
-  world.addShape(primitives::icosphere(1, kRadius), kDensity);
-  world.addParticle(0, {{0, 0, 0}, {}, {}, {}});
-  world.run(3);
+  // One particle flies beyond ±2^200 with nothing near it. No pair's query met it, and the
+  // step went on; the World then held a position every query refuses.
+  World world = fallingBeyondTheRange(1, 3);
   const World before = world;
   world.setTimeStep(1e-5);
   const std::string message = stepError(world);
