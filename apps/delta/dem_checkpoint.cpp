@@ -159,8 +159,8 @@ void DemCheckpoints::write(const dem::World& world, const DemOutput* output) {
   DemRunNote note = note_;
   if (output) {
     note.frameTimes = output->frameTimes();
-    output
-        ->syncLog();  // the rows up to this step on the disk before the checkpoint that needs them
+    // The log's rows up to this step on the disk before the checkpoint that continues them.
+    output->syncLog();
   }
   const std::string bytes = dem::checkpointBytes(world, note.text());
   io::writeFileAtomically(path(), bytes);

@@ -255,7 +255,8 @@ void DemOutput::finish() {
 
 void DemOutput::syncLog() const {
   if (log_ < 0) return;
-  if (::fdatasync(log_) != 0 && errno != EINVAL)  // EINVAL: a file system that cannot
+  // EINVAL: a file (system) that cannot be synced, where the rows stand as they are.
+  if (::fdatasync(log_) != 0 && errno != EINVAL)
     throw Error("writing '" + (directory_ / "log.csv").string() +
                 "' failed: " + std::generic_category().message(errno));
 }
