@@ -90,6 +90,39 @@ TEST(Overlap, AMeshBeyondSinglePrecisionsRangeAroundAnother) {
   }
 }
 
+TEST(Overlap, ASmallBodyAgainstALargeOneKeepsItsAccuracy) {
+  // A box of side 10⁻³ pressed 10⁻⁴ into a face of a box of side S. The large face's piece was
+  // summed in fans from its triangle's corner, S/2 away: terms of S·10⁻³ into an area of 10⁻⁶.
+  // At S = 10⁶ the area vector came out zero (no volume-law force), the centroid 10⁴ away and
+  // the volume 12% off. What remains is the rounding of the small box's placed corners, an ulp
+  // of S/2 against a depth of 10⁻⁴.
+  for (const double size : {1e3, 1e5, 1e6, 1e7}) {
+    const QueryMesh big(primitives::box({size, size, size}));
+    const QueryMesh small =
+        placed(primitives::box({1e-3, 1e-3, 1e-3}), {Quaternion{}, {size / 2 + 4e-4, 0, 0}});
+    const double ulp = std::nextafter(size / 2, size) - size / 2;
+    const double relative = 64.0 * ulp / 1e-4;
+    for (const Overlap& o : {overlap(big, small), overlap(small, big)}) {
+      ASSERT_EQ(o.regions.size(), 1u) << size;
+      const OverlapRegion& region = o.regions[0];
+      EXPECT_NEAR(region.volume, 1e-10, 1e-10 * relative) << size;
+      EXPECT_NEAR(std::abs(region.areaVector.x), 1e-6, 1e-6 * relative) << size;
+      EXPECT_NEAR(region.areaVector.y, 0.0, 1e-6 * relative) << size;
+      EXPECT_NEAR(region.areaVector.z, 0.0, 1e-6 * relative) << size;
+      EXPECT_NEAR(length(region.centroid - Vec3{size / 2 - 5e-5, 0, 0}), 0.0, 1e-4 * relative)
+          << size;
+    }
+  }
+  // Its terms are then of the region's own size: two unit cubes overlapping by a slab 2⁻⁵⁰ deep
+  // make a region (its fans from a far corner made its volume look like rounding: "touching").
+  const QueryMesh unit(primitives::box({1, 1, 1}));
+  const QueryMesh slab = placed(primitives::box({1, 1, 1}), {Quaternion{}, {1 - 0x1p-50, 0, 0}});
+  const Overlap thin = overlap(unit, slab);
+  ASSERT_EQ(thin.regions.size(), 1u);
+  EXPECT_EQ(thin.touching, 0u);
+  EXPECT_NEAR(thin.total.volume, 0x1p-50, 0x1p-50 * 1e-9);
+}
+
 TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {
   const QueryMesh a(primitives::box({1, 1, 1}));
   for (const Vec3& offset : {Vec3{3, 0, 0}, Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0},

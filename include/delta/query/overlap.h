@@ -70,6 +70,10 @@ struct Overlap {
   /// here. Surfaces that only touch (faces lying on one another, a vertex on a face) give either
   /// such a piece or nothing, as the symbolic displacement of B (along +x first) moves B into A
   /// or away from it: two unit cubes side by side give 1 with B on A's −x side, 0 on its +x side.
+  /// A region whose volume is within 1024 ulps of the sum of its terms' magnitudes (Σ|o·a|/3 of
+  /// its fans, each about a face piece's area times the region's own extent) counts here too:
+  /// its sign would not be sure. Two unit cubes overlapping by a slab 2⁻⁵³ deep still give their
+  /// region (1.1e-16).
   std::size_t touching = 0;
   bool any() const noexcept { return !regions.empty(); }
 };
