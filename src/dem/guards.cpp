@@ -30,10 +30,11 @@ double reachFrom(const Aabb& box, const Vec3& pivot) noexcept {
   return farthest;
 }
 
-/// The power of two that brings `largest` (finite, positive) near 1: a scaling that rounds
-/// nothing, so that squares of finite values beyond 1e154 do not overflow.
-double unitScale(double largest) noexcept {
-  return std::ldexp(1.0, -std::ilogb(largest));
+/// The exponent of the power of two that brings `largest` (finite, positive) near 1: a scaling
+/// (by ldexp, which also takes subnormal values up) that rounds nothing, so that squares of finite
+/// values beyond 1e154 do not overflow.
+int unitExponent(double largest) noexcept {
+  return -std::ilogb(largest);
 }
 
 /// |v|, also where |v|² would overflow (a velocity beyond 1e154 is finite, and must not be
@@ -42,8 +43,8 @@ double unitScale(double largest) noexcept {
 double magnitude(const Vec3& v) noexcept {
   const double largest = maxAbs(v);
   if (!isFinite(v) || largest == 0.0) return length(v);
-  const double scale = unitScale(largest);
-  return length(v * scale) / scale;
+  const int exponent = unitExponent(largest);
+  return std::ldexp(length(ldexp(v, exponent)), -exponent);
 }
 
 /// The least distance from the origin to the segment from `a` to `a + d`, scaled so that no
@@ -54,8 +55,8 @@ double magnitude(const Vec3& v) noexcept {
 double closestApproach(const Vec3& a, const Vec3& d) noexcept {
   const double largest = std::max(maxAbs(a), maxAbs(d));
   if (!(largest > 0.0) || !std::isfinite(largest)) return magnitude(a);
-  const double scale = unitScale(largest);
-  const Vec3 as = a * scale, ds = d * scale;
+  const int exponent = unitExponent(largest);
+  const Vec3 as = ldexp(a, exponent), ds = ldexp(d, exponent);
   const double dd = dot(ds, ds);
   const double t = dd > 0.0 ? std::clamp(-dot(as, ds) / dd, 0.0, 1.0) : 0.0;
   return magnitude(a + d * t);

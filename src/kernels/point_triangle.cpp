@@ -1,8 +1,10 @@
 #include "delta/kernels/point_triangle.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 
 #include "detail/robust_geometry.h"
 
@@ -90,6 +92,30 @@ bool onBoundary(const Vec3& p, const Triangle& triangle) noexcept {
          exactlyOnSegment(p, triangle.b, triangle.c) || exactlyOnSegment(p, triangle.c, triangle.a);
 }
 
+/// closestPointOnTriangle for a tiny triangle (its edges from `triangle.a`, `u` and `v`, of
+/// squares below kTinyTriangleSquared): the kernel on `p` and the triangle less their first
+/// vertex scaled up by a power of two to about 1 (exact), and its answer scaled back. Nothing
+/// where the triangle is one point (its distances are between points) or where the point lies so
+/// far that even the scale its distance allows leaves the triangle tiny: a flat triangle's
+/// answer then differs by less than its size, far below an ulp of the distance.
+std::optional<PointTriangleResult> closestOnTinyTriangle(const Vec3& p, const Triangle& triangle,
+                                                         const Vec3& u, const Vec3& v) noexcept {
+  const double extent = std::fmax(maxAbs(u), maxAbs(v));
+  if (!(extent > 0.0)) return std::nullopt;
+  const Vec3 r = p - triangle.a;
+  int exponent = -std::ilogb(extent);
+  // The scaled point's squared distance must not overflow: |r|·2^exponent below 2⁵¹⁰.
+  if (const double reach = maxAbs(r); reach > 0.0)
+    exponent = std::min(exponent, 510 - std::ilogb(reach));
+  if (std::ldexp(extent, exponent) < 0x1p-140) return std::nullopt;
+  PointTriangleResult result = closestPointOnTriangle(
+      ldexp(r, exponent), {{}, ldexp(u, exponent), ldexp(v, exponent)});  // not tiny now
+  const bool onTriangle = result.distanceSquared == 0.0;
+  result.distanceSquared = std::ldexp(result.distanceSquared, -2 * exponent);
+  result.closest = onTriangle ? p : triangle.a + ldexp(result.closest, -exponent);
+  return result;
+}
+
 }  // namespace
 
 PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triangle) noexcept {
@@ -98,6 +124,10 @@ PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triang
   const Vec3& origin = triangle.a;
   const detail::LocalTriangle local =
       detail::makeLocalTriangle({}, triangle.b - origin, triangle.c - origin);
+  if (local.longestEdgeSquared < kTinyTriangleSquared) [[unlikely]]
+    if (const std::optional<PointTriangleResult> tiny =
+            closestOnTinyTriangle(p, triangle, local.vertex[1], local.vertex[2]))
+      return *tiny;
   PointTriangleResult result = detail::closestOnLocalTriangle(p - origin, local);
   result.closest += origin;
   // A point exactly on a vertex or an edge is at distance 0 from every triangle that has it, but
@@ -125,10 +155,12 @@ double distanceAtScale(const Vec3& p, const Triangle& triangle) noexcept {
     return std::sqrt(closestPointOnTriangle(p, triangle).distanceSquared);
   // The kernel on the differences it takes itself, scaled to about 1 (exact): the same
   // operations, each scaled, wherever nothing underflows.
+  // By ldexp on each coordinate: below 2⁻¹⁰²² (subnormal differences) the factor 2^−exponent
+  // itself would be beyond a double, and the distance came out +∞.
   const int exponent = std::ilogb(largest);
-  const double scale = std::ldexp(1.0, -exponent);
-  const PointTriangleResult scaled = closestPointOnTriangle(r * scale, {{}, u * scale, v * scale});
-  return std::ldexp(std::sqrt(scaled.distanceSquared), exponent);
+  const PointTriangleResult result =
+      closestPointOnTriangle(ldexp(r, -exponent), {{}, ldexp(u, -exponent), ldexp(v, -exponent)});
+  return std::ldexp(std::sqrt(result.distanceSquared), exponent);
 }
 
 }  // namespace delta::kernels

@@ -62,6 +62,27 @@ Aabb boundsOf(const TriangleSoA& mesh) noexcept {
 
 void checkMeshScale(const TriangleSoA& mesh, const std::string& what) {
   checkMeshScale(boundsOf(mesh), what);
+  for (std::size_t t = 0; t < mesh.size(); ++t)
+    checkTriangleExtent(mesh.triangle(t), t, what);
+}
+
+double triangleExtent(const Triangle& triangle) noexcept {
+  return std::max({maxAbs(triangle.b - triangle.a), maxAbs(triangle.c - triangle.a),
+                   maxAbs(triangle.c - triangle.b)});
+}
+
+void checkTriangleExtent(const Triangle& triangle, std::size_t index, const std::string& what) {
+  // Differences this small are of coordinates near the origin (elsewhere two corners either
+  // coincide or lie an ulp of theirs apart), where they are exact.
+  const double extent = triangleExtent(triangle);
+  if (extent == 0.0 || extent >= kSmallestTriangleExtent) return;
+  throw Error(what + "'s triangle " + std::to_string(index) + " spans only " + toString(extent) +
+              " (its corners " + toString(triangle.a) + ", " + toString(triangle.b) + ", " +
+              toString(triangle.c) + "): Δ needs a triangle to be one point or at least 2^-200 (" +
+              toString(kSmallestTriangleExtent) +
+              ") across, below which the kernels' products underflow and the mesh–mesh queries "
+              "would take it for flat; scale the mesh up by a power of two (exact) and the "
+              "answers down, or merge its corners");
 }
 
 void checkPointRange(const Vec3& point, const std::string& what) {

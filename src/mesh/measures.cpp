@@ -19,9 +19,9 @@ bool isDegenerate(const Triangle& triangle) noexcept {
   if (!(size > 0.0)) return true;  // the three vertices coincide
   // Rescale by a power of two near 1/size (exact) so that neither L² nor the cross product can
   // under- or overflow: the answer then depends only on the triangle's shape.
-  const double unit = std::ldexp(1.0, -std::ilogb(size));
-  ab *= unit;
-  ac *= unit;
+  // (By ldexp: for a subnormal triangle the factor itself is beyond a double.)
+  ab = ldexp(ab, -std::ilogb(size));
+  ac = ldexp(ac, -std::ilogb(size));
   const Vec3 bc = ac - ab;
   const double longestSquared =
       std::fmax(lengthSquared(ab), std::fmax(lengthSquared(ac), lengthSquared(bc)));

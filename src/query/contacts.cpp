@@ -624,6 +624,8 @@ struct PlacedPair {
 PlacedPair placedPair(const QueryMesh& first, const QueryMesh& second, double epsilon) {
   checkEpsilon(epsilon);
   const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "contacts");
+  detail::requireTrianglesSpan(first, "contacts: the first mesh");
+  detail::requireTrianglesSpan(second, "contacts: the second mesh");
   return {first.data(),
           second.data(),
           secondToFirst,

@@ -518,6 +518,8 @@ MinimumDistance minimumDistance(const QueryMesh& first, const QueryMesh& second,
   // its triangles are carried there. Serial: the search is short and its answer must not depend
   // on threads.
   const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "minimumDistance");
+  detail::requireTrianglesSpan(first, "minimumDistance: the first mesh");
+  detail::requireTrianglesSpan(second, "minimumDistance: the second mesh");
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   const bool moved = first.moved() || second.moved();
   const detail::MatrixMotion motion = detail::matrixMotion(secondToFirst);

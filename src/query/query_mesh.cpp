@@ -454,6 +454,11 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
     throw Error("QueryMesh: more triangles than 32-bit ids can name");
   checkMeshScale(mesh.bounds(), "QueryMesh: the mesh");
   auto data = std::make_shared<detail::QueryMeshData>();
+  // The first triangle the mesh–mesh queries refuse (checkTriangleExtent), if any.
+  for (std::size_t t = 0; t < mesh.triangleCount() && !data->tinyTriangle; ++t)
+    if (const double extent = triangleExtent(mesh.triangle(t));
+        extent > 0.0 && extent < kSmallestTriangleExtent)
+      data->tinyTriangle = std::pair{t, mesh.triangle(t)};
   data->bounds = mesh.bounds();
   data->order = treeOrder(mesh);
   // The corners in tree order, the vertices renumbered in the order they first appear there.

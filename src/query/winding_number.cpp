@@ -20,8 +20,10 @@ double solidAngle(const Triangle& t, const Vec3& point) noexcept {
       largest = std::max({maxAbs(a), maxAbs(b), maxAbs(c)});
     }
     if (largest > 0.0 && std::isfinite(largest)) {
-      const double scale = std::ldexp(1.0, -std::ilogb(largest));
-      a = a * scale, b = b * scale, c = c * scale;
+      // By ldexp: below 2⁻¹⁰²² (subnormal differences) the factor 2^−exponent is beyond a
+      // double, and a point inside a tetrahedron 1e-310 across was seen outside.
+      const int exponent = -std::ilogb(largest);
+      a = ldexp(a, exponent), b = ldexp(b, exponent), c = ldexp(c, exponent);
     }
   }
   const double la = length(a), lb = length(b), lc = length(c);

@@ -35,6 +35,13 @@ TEST(Measures, DegenerateIsScaleInvariant) {
     EXPECT_TRUE(isDegenerate(scaled(sliver, factor))) << factor;
     EXPECT_FALSE(isDegenerate(scaled(thin, factor))) << factor;
   }
+  // Subnormal: the factor 2^−exponent was beyond a double, and every such triangle was
+  // "degenerate".
+  const Triangle right{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  for (double factor : {1e-310, 1e-320}) {
+    EXPECT_FALSE(isDegenerate(scaled(right, factor))) << factor;
+    EXPECT_TRUE(isDegenerate(scaled(Triangle{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, factor))) << factor;
+  }
 }
 
 TEST(Measures, CoincidentAndCollinearVerticesAreDegenerate) {

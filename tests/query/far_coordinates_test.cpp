@@ -236,10 +236,11 @@ TEST(FarCoordinates, WindingNumberRescales) {
   EXPECT_NEAR(windingNumber(TriangleSoA(edge), {0, 0, 1e307}), 1.0, 1e-12);
 }
 
-/// A tetrahedron of size 1e-300 at the origin beside one of size 1 at (2, 2, 2), in one mesh (its
-/// scale is 3: in range); the big one's vertices follow the small one's.
-Mesh tinyBesideUnitTetrahedron() {
-  const Mesh small = scaled(kTetra, 1e-300);
+/// A tetrahedron of size `size` (1e-300 unless given) at the origin beside one of size 1 at
+/// (2, 2, 2), in one mesh (its scale is 3: in range); the big one's vertices follow the small
+/// one's.
+Mesh tinyBesideUnitTetrahedron(double size = 1e-300) {
+  const Mesh small = scaled(kTetra, size);
   Mesh big = kTetra;
   big.translate({2, 2, 2});
   std::vector<Vec3> vertices(small.vertices().begin(), small.vertices().end());
@@ -278,6 +279,48 @@ TEST(FarCoordinates, TinyGapsAreNotReportedZero) {
     EXPECT_EQ(kernels::distanceAtScale(p, unit),
               std::sqrt(kernels::closestPointOnTriangle(p, unit).distanceSquared));
   EXPECT_EQ(kernels::distanceAtScale(unit.b, unit), 0.0);
+}
+
+TEST(FarCoordinates, TinyTrianglesAreSolvedAtTheirOwnScale) {
+  // A triangle less than about 2⁻²⁴⁰ across has a normal whose square (degree 4) underflows: it
+  // was taken for flat, and a point over its face measured to its edges (1e-100: 2.7e-101 for
+  // 1e-101), the wrong triangle could win, the closest point was the point itself where the
+  // square underflowed, and below 2⁻¹⁰²² (subnormal) the distance came out +∞. The point queries
+  // now solve such a triangle scaled up by a power of two, on every ISA alike.
+  for (const double size : {1e-70, 1e-100, 1e-140, 1e-200, 1e-300, 1e-310}) {
+    const QueryMesh query(tinyBesideUnitTetrahedron(size));
+    const Vec3 point{size / 4, size / 4, -size / 10};  // over face 0 (z = 0, outward −z)
+    const double ulp = std::nextafter(size, 1.0) - size;
+    const double tolerance = 8 * ulp + 2 * std::numeric_limits<double>::denorm_min();
+    const PointDistance answer = distance(query, point, {.signedDistance = true});
+    EXPECT_EQ(answer.triangle, 0u) << size;
+    EXPECT_NEAR(answer.distance, size / 10, tolerance) << size;
+    EXPECT_NEAR(answer.closest.x, size / 4, tolerance) << size;
+    EXPECT_NEAR(answer.closest.y, size / 4, tolerance) << size;
+    EXPECT_NEAR(answer.closest.z, 0.0, tolerance) << size;
+    EXPECT_FALSE(answer.inside) << size;
+    EXPECT_TRUE(distance(query, {size / 4, size / 4, size / 10}, {.signedDistance = true}).inside)
+        << size;
+    // Every ISA's descent and exact lanes give the scalar kernel's bits.
+    const detail::Nearest scalar = detail::nearestTriangle(
+        query.data(), point, std::numeric_limits<double>::infinity(), kernels::Isa::Scalar);
+    for (const kernels::Isa isa : kernels::supportedIsas()) {
+      const detail::Nearest nearest = detail::nearestTriangle(
+          query.data(), point, std::numeric_limits<double>::infinity(), isa);
+      EXPECT_EQ(nearest.triangle, scalar.triangle) << size << ", " << kernels::name(isa);
+      EXPECT_EQ(nearest.distanceSquared, scalar.distanceSquared)
+          << size << ", " << kernels::name(isa);
+    }
+    // The batch (the grid's sieve with ε, and without) agrees.
+    const std::vector<Vec3> many(3000, point);
+    for (const double epsilon : {1e-3, std::numeric_limits<double>::infinity()})
+      EXPECT_EQ(distances(query, many, {.epsilon = epsilon})[2999].distance, answer.distance)
+          << size;
+    // The mesh–mesh kernels would still take it for flat: refused, saying what to do.
+    if (size < kSmallestTriangleExtent)
+      expectErrorSaying([&] { static_cast<void>(contacts(query, query, 1e-3)); },
+                        {"contacts: the first mesh's triangle 0 spans only", "scale the mesh up"});
+  }
 }
 
 TEST(FarCoordinates, AnEpsilonWhoseSquareUnderflowsStillFindsWhatIsCloser) {

@@ -35,6 +35,13 @@ struct PointTriangleResult {
 /// of the kernel's rounding error (a few ε·L) for such a point, so that none escapes the check.
 inline constexpr double kExactBoundaryCheck = 0x1p-80;
 
+/// A triangle whose longest edge's square is below this (edges below 2⁻¹⁵⁰: only near the origin,
+/// in a mesh that also has larger ones) is solved scaled up by a power of two
+/// (closestPointOnTriangle): its normal's square and the flatness bound's, of degree 4, underflow
+/// from about 2⁻²⁴⁰ on, and a triangle 1e-100 across was taken for flat (a point over its face
+/// measured to its edges, 2.7 times too far).
+inline constexpr double kTinyTriangleSquared = 0x1p-300;
+
 /// Closest point on a solid triangle to `p`, by Voronoi regions of the vertices, edges and face
 /// (Ericson, Real-Time Collision Detection, 5.1.5). A zero-area triangle degrades to its longest
 /// edge (a segment) or to a point; the result is never NaN for finite input.
@@ -59,6 +66,9 @@ inline constexpr double kExactBoundaryCheck = 0x1p-80;
 /// squared distance is at most kExactBoundaryCheck·L² (L the longest edge, far above the
 /// rounding), an exact test (Shewchuk's expansions) decides whether the point lies on one of the
 /// three edges. (A point exactly inside the face keeps the projection's rounding error.)
+/// A tiny triangle (longest edge's square below kTinyTriangleSquared) is solved scaled up by a
+/// power of two (exact) to about 1, the point with it, and the answer scaled back: as accurate
+/// relative to its size as any other (its squared distance may underflow, not its closest point).
 /// Coordinates must be finite and, for the accuracy above, within ±kLargestCoordinate
 /// (mesh/coordinate_range.h: 2²⁰⁰; the queries check it): distanceSquared overflows to +∞ for
 /// distances beyond about 1e154, and the edge tests, of degree 4, beyond 1e77. A square below about

@@ -44,6 +44,12 @@ namespace delta {
 inline constexpr double kLargestCoordinate = 0x1p200;
 /// The least largest |coordinate| of a mesh the queries accept (see kLargestCoordinate).
 inline constexpr double kSmallestMeshScale = 0x1p-200;
+/// The least extent a triangle may have in the mesh–mesh queries (contacts, minimumDistance),
+/// unless its corners are one point: the same bound, for a triangle near the origin of a larger
+/// mesh, whose products of degree 4 underflow as a small mesh's do (a triangle 1e-100 across was
+/// taken for flat). The point queries solve such a triangle scaled up instead
+/// (kernels::kTinyTriangleSquared).
+inline constexpr double kSmallestTriangleExtent = 0x1p-200;
 
 /// Whether every coordinate of `point` lies within ±kLargestCoordinate (false for NaN or ±∞).
 inline bool inCoordinateRange(const Vec3& point) noexcept {
@@ -77,8 +83,17 @@ void checkMeshScale(const Aabb& box, const std::string& what);
 /// not finite (which every check here refuses).
 Aabb boundsOf(const TriangleSoA& mesh) noexcept;
 
-/// checkMeshScale(boundsOf(mesh), what).
+/// checkMeshScale(boundsOf(mesh), what), and checkTriangleExtent for every triangle (the
+/// flattened forms serve the mesh–mesh queries only).
 void checkMeshScale(const TriangleSoA& mesh, const std::string& what);
+
+/// The largest |difference| of two corners of `triangle` along an axis (0 for one point).
+double triangleExtent(const Triangle& triangle) noexcept;
+
+/// Throws delta::Error unless `triangle` (index `index` of the mesh `what` names) is one point or
+/// spans at least kSmallestTriangleExtent along an axis (between two of its corners); the
+/// message gives its extent and what to do.
+void checkTriangleExtent(const Triangle& triangle, std::size_t index, const std::string& what);
 
 /// Throws delta::Error for a point outside the range: "`what` (x, y, z) has a coordinate
 /// beyond ±2^200 …" (`what` names the point, "point distances: point 7").

@@ -120,8 +120,11 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   // The scalar kernel's exact boundary test (a point exactly on a vertex or an edge gets 0): it
   // runs where the square is positive and within kExactBoundaryCheck·L², the lanes that pass
   // take the scalar kernel's value (rare: a point within rounding of a triangle's boundary).
-  const unsigned nearBoundary = bits(both(
-      greater(squared, zero), lessOrEqual(squared, splat(kernels::kExactBoundaryCheck) * longest)));
+  // So do the lanes of a tiny triangle, which the scalar kernel solves scaled up.
+  const unsigned nearBoundary =
+      bits(both(greater(squared, zero),
+                lessOrEqual(squared, splat(kernels::kExactBoundaryCheck) * longest))) |
+      bits(less(longest, splat(kernels::kTinyTriangleSquared)));
   alignas(64) double result[kWidth];
   store(result, squared);
   for (std::size_t i = 0; i < count; ++i)

@@ -2,6 +2,8 @@
 
 #include "delta/mesh/coordinate_range.h"
 
+#include "query_mesh_data.h"
+
 namespace delta::detail {
 
 Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
@@ -42,6 +44,11 @@ RigidTransform checkPlacedPair(const QueryMesh& first, const QueryMesh& second, 
     if (!boxInCoordinateRange(placed[i]))
       checkCoordinateRange(placed[i], std::string(query) + kWhich[i]);
   return secondToFirst;
+}
+
+void requireTrianglesSpan(const QueryMesh& mesh, const std::string& what) {
+  if (const auto& tiny = mesh.data().tinyTriangle) [[unlikely]]
+    checkTriangleExtent(tiny->second, tiny->first, what);
 }
 
 }  // namespace delta::detail

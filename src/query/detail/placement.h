@@ -25,4 +25,9 @@ bool surelyInRange(const Aabb& box, const RigidTransform& motion) noexcept;
 /// first.inversePose() * second.pose(). Throws delta::Error starting with `query`.
 RigidTransform checkPlacedPair(const QueryMesh& first, const QueryMesh& second, const char* query);
 
+/// Throws delta::Error (checkTriangleExtent's, naming `what`) where `mesh` holds a triangle that
+/// is not one point and less than kSmallestTriangleExtent across: the mesh–mesh kernels would
+/// take it for flat.
+void requireTrianglesSpan(const QueryMesh& mesh, const std::string& what);
+
 }  // namespace delta::detail

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <limits>
 #include <mutex>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "delta/core/aabb.h"
@@ -220,6 +222,9 @@ struct QueryMeshData {
   /// ε-limited queries reject most points farther than ε with one read (bound_grid.h).
   BoundGrid boundGrid;
   Topology topology;
+  /// The first triangle (its index and corners) below kSmallestTriangleExtent across and not one
+  /// point, which the mesh–mesh queries refuse (detail::requireTrianglesSpan).
+  std::optional<std::pair<std::size_t, Triangle>> tinyTriangle;
   bool closed = false;
   double orientation = 1.0;  ///< −1 for an inside-out closed mesh
   Aabb bounds;
