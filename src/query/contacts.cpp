@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "delta/core/aabb.h"
@@ -501,6 +502,8 @@ void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsi
     const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
     if (!nearest.found()) return false;
     if (!(&mesh == &a ? aCrosses : bCrosses)) return detail::insideAt(mesh, x, nearest);
+    if (const std::optional<bool> exact = detail::insideNearSurface(mesh, x, nearest))
+      return *exact;
     return detail::distanceOf(mesh, x, nearest) > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
   };
   parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {

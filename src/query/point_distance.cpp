@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -182,10 +183,19 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   if (query.signedDistance) {
     if (query.sign == Sign::pseudonormal) {
       result.inside = detail::insideAt(data, point, nearest);
-    } else if (result.distance > 0.0) {  // on the surface: neither inside nor ambiguous
-      const detail::WindingSign sign = detail::windingSign(data, point, query.windingTolerance);
-      result.inside = sign.inside;
-      result.ambiguous = sign.ambiguous;
+    } else {
+      // Within rounding of a closed mesh's surface the solid angles of the nearest faces lose
+      // their sign, and a distance may round to 0 off it: decided exactly there (the winding
+      // number is an integer off the surface).
+      const std::optional<bool> exact =
+          data.closed ? detail::insideNearSurface(data, point, nearest) : std::nullopt;
+      if (exact) {
+        result.inside = *exact;
+      } else if (result.distance > 0.0) {  // on the surface: neither inside nor ambiguous
+        const detail::WindingSign sign = detail::windingSign(data, point, query.windingTolerance);
+        result.inside = sign.inside;
+        result.ambiguous = sign.ambiguous;
+      }
     }
   }
   return result;

@@ -2,9 +2,28 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
+#include "detail/exact_predicates.h"
+
 namespace delta {
+namespace {
+
+/// The exact sign of orient(point, t.a, t.b, t.c), its coordinates first scaled by a power of two
+/// (exact, the sign unchanged) where they are all below 2⁻¹⁰⁰: the expansions' products would
+/// underflow there (exact_predicates.h needs coordinates of 2⁻²⁵⁰ or more).
+int exactSign(const Triangle& t, const Vec3& point) {
+  const double largest = std::max({maxAbs(t.a), maxAbs(t.b), maxAbs(t.c), maxAbs(point)});
+  if (largest > 0.0 && largest < 0x1p-100) {
+    const int exponent = -std::ilogb(largest);
+    return detail::exactOrientSign(ldexp(point, exponent), ldexp(t.a, exponent),
+                                   ldexp(t.b, exponent), ldexp(t.c, exponent));
+  }
+  return detail::exactOrientSign(point, t.a, t.b, t.c);
+}
+
+}  // namespace
 
 double solidAngle(const Triangle& t, const Vec3& point) noexcept {
   Vec3 a = t.a - point, b = t.b - point, c = t.c - point;
@@ -28,7 +47,20 @@ double solidAngle(const Triangle& t, const Vec3& point) noexcept {
   }
   const double la = length(a), lb = length(b), lc = length(c);
   // tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|)
-  const double numerator = dot(a, cross(b, c));
+  double numerator = dot(a, cross(b, c));
+  // a·(b×c) is orient(point, t.a, t.b, t.c): within its rounding of 0 (the point within rounding
+  // of the triangle's plane) its sign, which puts Ω near +2π or −2π where the point sees the
+  // triangle from in front or behind, is decided exactly (exact_predicates.h), so that a point
+  // within rounding of a closed mesh's face is counted on its side. (Its rounding is below
+  // Shewchuk's bound, 7.8e-16 times the permanent, itself at most √3·|a||b||c|.)
+  if (std::abs(numerator) <= 0x1p-48 * la * lb * lc) [[unlikely]] {
+    int sign = detail::filteredOrientSign(a, b, c);
+    if (sign == 0) sign = exactSign(t, point);
+    numerator = sign == 0 ? 0.0
+                          : std::copysign(std::max(std::abs(numerator),
+                                                   std::numeric_limits<double>::denorm_min()),
+                                          static_cast<double>(sign));
+  }
   const double denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
   return 2.0 * std::atan2(numerator, denominator);
 }

@@ -79,7 +79,13 @@ struct PointQuery {
   /// not cross itself): by the angle-weighted pseudonormal of the feature (vertex, edge or face)
   /// the closest point lies on, which is exact for any point off the surface, with the
   /// generalized winding number where rounding leaves that in doubt. Sign::winding: by the
-  /// winding number, for any mesh. A point on the surface (distance 0) is not inside.
+  /// winding number, for any mesh. Within rounding of a closed mesh's surface (a distance below
+  /// 2⁻⁴⁰ of the closest point's magnitude and the triangle's size, 0 included), where the
+  /// closest point's own rounding turns the offset from it and the solid angles lose their sign,
+  /// either rule decides exactly: a ray's crossings counted with exact orientation predicates.
+  /// A point exactly on the surface is not inside; one off it by less than the distance's
+  /// rounding (distance 0) is signed by its exact side. (Where a coordinate involved is below
+  /// 2⁻²⁵⁰ but not 0 the exact predicates do not hold, and the rules above decide as they can.)
   bool signedDistance = false;
   /// How signedDistance decides (ignored without it). Sign::pseudonormal, the default, refuses
   /// a mesh that is not closed and one that crosses itself (selfIntersections() > 0: there the

@@ -5,8 +5,10 @@
 
 #include "delta/kernels/isa.h"
 #include "delta/kernels/point_triangle.h"
+#include "delta/mesh/coordinate_range.h"
 #include "delta/query/winding_number.h"
 
+#include "exact_predicates.h"
 #include "isa_list.h"  // generated: DELTA_ISAS (src/CMakeLists.txt)
 #include "point_kernels.h"
 #include "query_mesh_data.h"
@@ -145,11 +147,115 @@ Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
   return resolved;
 }
 
+namespace {
+
+/// Whether the exact predicates hold at `p`: every coordinate 0 or at least 2⁻²⁵⁰ in magnitude
+/// (overlap.cpp's rule: below, their products of three differences underflow).
+bool predicatesExactAt(const Vec3& p) noexcept {
+  const auto exact = [](double c) { return c == 0.0 || !(std::abs(c) < 0x1p-250); };
+  return exact(p.x) && exact(p.y) && exact(p.z);
+}
+
+/// Whether `p` lies on the closed triangle `t` exactly: in its plane and within its edges, as
+/// the line from p to a point w off the plane sees them (all three orientations of one sign or
+/// 0). w is p moved along the axis of the normal's largest component (computed: of an exact
+/// normal that is not zero, that component is not zero either).
+bool exactlyOnTriangle(const Triangle& t, const Vec3& p) {
+  if (orientSign(t.a, t.b, t.c, p) != 0) return false;
+  const Vec3 normal = cross(t.b - t.a, t.c - t.a);
+  std::size_t axis = 0;
+  for (std::size_t k = 1; k < 3; ++k)
+    if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
+  if (!(std::abs(normal[axis]) > 0.0)) return false;  // zero area: its edges are its neighbours'
+  Vec3 w = p;
+  w[axis] += std::max(1.0, std::abs(p[axis]));
+  const int e0 = orientSign(p, w, t.a, t.b), e1 = orientSign(p, w, t.b, t.c),
+            e2 = orientSign(p, w, t.c, t.a);
+  return !((e0 > 0 || e1 > 0 || e2 > 0) && (e0 < 0 || e1 < 0 || e2 < 0));
+}
+
+/// What a ray from a point meets (insideNearSurface).
+enum class RaySide { inside, outside, onSurface, degenerate, inexact };
+
+/// The ray from `p` along `axis` (0, 1, 2), towards +∞ where `up`, else −∞, to a point `q` beyond
+/// the mesh's box: the signed sum of its crossings (exact orientation signs).
+RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool up) {
+  const double edge = up ? mesh.bounds.upper[axis] : mesh.bounds.lower[axis];
+  Vec3 q = p;
+  q[axis] = edge + (up ? 1.0 : -1.0) * (std::abs(edge) + 1.0);  // strictly beyond the box
+  const std::size_t u = (axis + 1) % 3, v = (axis + 2) % 3;
+  int winding = 0;
+  for (std::size_t k = 0; k < mesh.size(); ++k) {
+    const Triangle t = mesh.triangle(k);
+    // Only a triangle whose box holds the ray's line (and reaches p's side) can meet it.
+    const double lowU = std::min({t.a[u], t.b[u], t.c[u]}),
+                 highU = std::max({t.a[u], t.b[u], t.c[u]});
+    const double lowV = std::min({t.a[v], t.b[v], t.c[v]}),
+                 highV = std::max({t.a[v], t.b[v], t.c[v]});
+    if (p[u] < lowU || p[u] > highU || p[v] < lowV || p[v] > highV) continue;
+    const double lowA = std::min({t.a[axis], t.b[axis], t.c[axis]});
+    const double highA = std::max({t.a[axis], t.b[axis], t.c[axis]});
+    if (up ? highA < p[axis] : lowA > p[axis]) continue;
+    if (!predicatesExactAt(t.a) || !predicatesExactAt(t.b) || !predicatesExactAt(t.c))
+      return RaySide::inexact;
+    const int atP = orientSign(t.a, t.b, t.c, p), atQ = orientSign(t.a, t.b, t.c, q);
+    if (atP == 0 && atQ == 0) return RaySide::degenerate;  // the ray in the triangle's plane
+    if (atP == atQ || atQ == 0) continue;  // one side, or q's plane (q lies beyond the box)
+    const int e0 = orientSign(p, q, t.a, t.b), e1 = orientSign(p, q, t.b, t.c),
+              e2 = orientSign(p, q, t.c, t.a);
+    const bool positive = e0 > 0 || e1 > 0 || e2 > 0, negative = e0 < 0 || e1 < 0 || e2 < 0;
+    if (positive && negative) continue;       // the line passes beside the triangle
+    if (atP == 0) return RaySide::onSurface;  // p in the triangle's plane, within its edges
+    if (e0 == 0 || e1 == 0 || e2 == 0) return RaySide::degenerate;  // through an edge or vertex
+    winding += atQ;  // leaving through the face's front: +1
+  }
+  const double signedWinding = winding * mesh.orientation;
+  return signedWinding > 0.5 ? RaySide::inside : RaySide::outside;
+}
+
+}  // namespace
+
+std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
+                                      const Nearest& nearest) noexcept {
+  const double distance = distanceOf(mesh, point, nearest);
+  const Triangle triangle = mesh.triangle(nearest.sorted);
+  const double scale = maxAbs(nearest.closest.closest) + triangleExtent(triangle);
+  if (!(distance <= 0x1p-40 * scale)) return std::nullopt;
+  if (!predicatesExactAt(point) || !predicatesExactAt(triangle.a) ||
+      !predicatesExactAt(triangle.b) || !predicatesExactAt(triangle.c))
+    return std::nullopt;
+  try {
+    // On the nearest triangle (the kernel's distance 0 on an edge, or a rounding error's on the
+    // face): on the surface, found at once.
+    if (exactlyOnTriangle(triangle, point)) return false;
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      for (const bool up : {true, false}) {
+        switch (castRay(mesh, point, axis, up)) {
+          case RaySide::inside:
+            return true;
+          case RaySide::outside:
+          case RaySide::onSurface:
+            return false;
+          case RaySide::inexact:
+            return std::nullopt;
+          case RaySide::degenerate:
+            break;  // the next ray
+        }
+      }
+  } catch (...) {  // the expansions' memory
+  }
+  return std::nullopt;
+}
+
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {
   // Outside the box of the vertices is outside the solid. (Far from the mesh, beyond about 1e16
   // of its size, the squared distances of all its triangles round alike and the nearest is the
   // smallest id among them, whose feature's normal may face away: its side is no answer there.)
   if (!mesh.bounds.contains(point)) return false;
+  // Within rounding of the surface the offset from the closest point turns with the closest
+  // point's own rounding (a point 3e-17 outside a unit sphere's mesh was inside), and a distance
+  // may round to 0 off the surface: decided exactly there.
+  if (const std::optional<bool> exact = insideNearSurface(mesh, point, nearest)) return *exact;
   if (!(distanceOf(mesh, point, nearest) > 0.0)) return false;  // on the surface
   // The features VertexA … EdgeCA are the pseudonormal slots 0 … 5, in that order; a face point
   // takes the face's own normal.
