@@ -82,8 +82,7 @@ void requireFinite(const Vec3& value, const std::string& what) {
 /// The box of a particle's bounding sphere, radius `radius` about its centre of mass at
 /// `position`: it holds the particle's mesh wherever it turns.
 Aabb sphereBox(const Vec3& position, double radius) noexcept {
-  const Vec3 reach{radius, radius, radius};
-  return {position - reach, position + reach};
+  return Aabb{position, position}.grown(radius);
 }
 
 ContactLaw contactLawOf(const Parameters& parameters) {

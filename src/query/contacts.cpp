@@ -502,9 +502,10 @@ void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsi
     const detail::Nearest nearest = detail::nearestTriangle(mesh, x, limit);
     if (!nearest.found()) return false;
     if (!(&mesh == &a ? aCrosses : bCrosses)) return detail::insideAt(mesh, x, nearest);
-    if (const std::optional<bool> exact = detail::insideNearSurface(mesh, x, nearest))
+    const double distance = detail::distanceOf(mesh, x, nearest);
+    if (const std::optional<bool> exact = detail::insideNearSurface(mesh, x, nearest, distance))
       return *exact;
-    return detail::distanceOf(mesh, x, nearest) > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
+    return distance > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
   };
   parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)

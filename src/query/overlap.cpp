@@ -305,16 +305,8 @@ class Side {
     const Aabb box = moved_ ? movedBox(world, inverseMotion_) : world;
     return box.grown(0x1p-40 * (maxAbs(box.lower) + maxAbs(box.upper)) + margin_);
   }
-  /// The least non-zero |coordinate| a placed vertex may have, 2⁻²⁵⁰: the exact predicates'
-  /// products of three coordinate differences are then multiples of 2⁻⁹⁰⁶, normal doubles, so
-  /// the filters' relative error bounds and the expansions' error-free products hold. Below it
-  /// (a mesh of size 1 moved by 1e-300) they would round by underflow, and a sign could be
-  /// wrong: the query gave "inconsistent crossing (internal error)" or called a closed mesh open.
-  static constexpr double kSmallestCoordinate = 0x1p-250;
-  static bool predicatesExactAt(const Vec3& p) noexcept {
-    const auto exact = [](double c) { return c == 0.0 || !(std::abs(c) < kSmallestCoordinate); };
-    return exact(p.x) && exact(p.y) && exact(p.z);
-  }
+  // A placed vertex must hold detail::predicatesExactAt: below 2⁻²⁵⁰ the query gave
+  // "inconsistent crossing (internal error)" or called a closed mesh open.
   [[noreturn, gnu::cold]] void throwCoordinateTooSmall(const Vec3& p) const {
     throw Error(std::string("overlap: a vertex of the ") + (isA_ ? "first" : "second") +
                 " mesh lies at " + toString(p) + (moved_ ? " (where its pose puts it)" : "") +
@@ -330,7 +322,7 @@ class Side {
       vertexSlot_.used(v);
       slot = static_cast<std::int32_t>(vertices_.size());
       const Vec3 world = moved_ ? motion_.apply(data_.vertices[v]) : data_.vertices[v];
-      if (!predicatesExactAt(world)) [[unlikely]]
+      if (!detail::predicatesExactAt(world)) [[unlikely]]
         throwCoordinateTooSmall(world);
       vertices_.push_back({world, world - reference_, -1});
     }

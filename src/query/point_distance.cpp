@@ -188,7 +188,8 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
       // their sign, and a distance may round to 0 off it: decided exactly there (the winding
       // number is an integer off the surface).
       const std::optional<bool> exact =
-          data.closed ? detail::insideNearSurface(data, point, nearest) : std::nullopt;
+          data.closed ? detail::insideNearSurface(data, point, nearest, result.distance)
+                      : std::nullopt;
       if (exact) {
         result.inside = *exact;
       } else if (result.distance > 0.0) {  // on the surface: neither inside nor ambiguous

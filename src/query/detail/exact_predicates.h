@@ -26,6 +26,18 @@
 
 namespace delta::detail {
 
+/// The least non-zero |coordinate| the predicates take, 2⁻²⁵⁰: their products of three coordinate
+/// differences are then multiples of 2⁻⁹⁰⁶, normal doubles, so the filters' relative error bounds
+/// and the expansions' error-free products hold. Below it (a mesh of size 1 moved by 1e-300) they
+/// would round by underflow, and a sign could be wrong.
+inline constexpr double kSmallestExactCoordinate = 0x1p-250;
+
+/// Whether every coordinate of `p` is 0 or at least kSmallestExactCoordinate in magnitude.
+inline bool predicatesExactAt(const Vec3& p) noexcept {
+  const auto exact = [](double c) { return c == 0.0 || !(std::abs(c) < kSmallestExactCoordinate); };
+  return exact(p.x) && exact(p.y) && exact(p.z);
+}
+
 /// The exact sign of orient(p, q, r, s) (−1, 0, +1), always by expansion arithmetic.
 int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 

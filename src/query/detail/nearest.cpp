@@ -149,13 +149,6 @@ Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
 
 namespace {
 
-/// Whether the exact predicates hold at `p`: every coordinate 0 or at least 2⁻²⁵⁰ in magnitude
-/// (overlap.cpp's rule: below, their products of three differences underflow).
-bool predicatesExactAt(const Vec3& p) noexcept {
-  const auto exact = [](double c) { return c == 0.0 || !(std::abs(c) < 0x1p-250); };
-  return exact(p.x) && exact(p.y) && exact(p.z);
-}
-
 /// Whether `p` lies on the closed triangle `t` exactly: in its plane and within its edges, as
 /// the line from p to a point w off the plane sees them (all three orientations of one sign or
 /// 0). w is p moved along the axis of the normal's largest component (computed: of an exact
@@ -216,8 +209,7 @@ RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool
 }  // namespace
 
 std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
-                                      const Nearest& nearest) noexcept {
-  const double distance = distanceOf(mesh, point, nearest);
+                                      const Nearest& nearest, double distance) noexcept {
   const Triangle triangle = mesh.triangle(nearest.sorted);
   const double scale = maxAbs(nearest.closest.closest) + triangleExtent(triangle);
   if (!(distance <= 0x1p-40 * scale)) return std::nullopt;
@@ -255,8 +247,10 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
   // Within rounding of the surface the offset from the closest point turns with the closest
   // point's own rounding (a point 3e-17 outside a unit sphere's mesh was inside), and a distance
   // may round to 0 off the surface: decided exactly there.
-  if (const std::optional<bool> exact = insideNearSurface(mesh, point, nearest)) return *exact;
-  if (!(distanceOf(mesh, point, nearest) > 0.0)) return false;  // on the surface
+  const double distance = distanceOf(mesh, point, nearest);
+  if (const std::optional<bool> exact = insideNearSurface(mesh, point, nearest, distance))
+    return *exact;
+  if (!(distance > 0.0)) return false;  // on the surface
   // The features VertexA … EdgeCA are the pseudonormal slots 0 … 5, in that order; a face point
   // takes the face's own normal.
   static_assert(static_cast<int>(kernels::TriangleFeature::VertexA) == 0 &&

@@ -366,7 +366,8 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
 /// off the surface (times the orientation: 1 inside). O(n), for such points only. Nothing where
 /// the point is not that close, or a coordinate involved is below 2⁻²⁵⁰ but not 0 (the
 /// expansions' products would underflow), or every ray is degenerate.
+/// `distance` is the point's, distanceOf(mesh, point, nearest), which the callers have.
 std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
-                                      const Nearest& nearest) noexcept;
+                                      const Nearest& nearest, double distance) noexcept;
 
 }  // namespace delta::detail
