@@ -456,27 +456,11 @@ template <class Visit>
 void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
   const QueryMeshData& data = side.data();
   const Aabb box = side.toPrepared(worldBox);
-  struct Entry {
-    std::size_t level, index;
-  };
-  std::vector<Entry>& stack = recycled<Entry, 0>();  // its capacity kept: no allocation a call
-  stack.assign(1, {data.levels.size() - 1, 0});
-  while (!stack.empty()) {
-    const Entry entry = stack.back();
-    stack.pop_back();
-    if (!meet(data.levels[entry.level][entry.index], box)) continue;
-    if (entry.level == 0) {
-      const std::size_t from = entry.index * detail::kFanout;
-      const std::size_t to = std::min(from + detail::kFanout, data.size());
-      for (std::size_t k = from; k < to; ++k)
-        visit(static_cast<std::uint32_t>(k));
-      continue;
-    }
-    const std::size_t first = entry.index * detail::kFanout;
-    const std::size_t last = std::min(first + detail::kFanout, data.levels[entry.level - 1].size());
-    for (std::size_t child = first; child < last; ++child)
-      stack.push_back({entry.level - 1, child});
-  }
+  // The stack's capacity kept: no allocation a call.
+  detail::forTrianglesMeeting(data, box, recycled<detail::TreeEntry, 0>(), [&](std::uint32_t k) {
+    visit(k);
+    return true;
+  });
 }
 
 /// Where the segment p0 → p1 (an edge, given in the order of its vertex ids so that both

@@ -171,37 +171,49 @@ bool exactlyOnTriangle(const Triangle& t, const Vec3& p) {
 enum class RaySide { inside, outside, onSurface, degenerate, inexact };
 
 /// The ray from `p` along `axis` (0, 1, 2), towards +∞ where `up`, else −∞, to a point `q` beyond
-/// the mesh's box: the signed sum of its crossings (exact orientation signs).
-RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool up) {
+/// the mesh's box: the signed sum of its crossings (exact orientation signs). Only the triangles
+/// whose leaf boxes the segment p → q meets are tested: O(log n) for a mesh whose few triangles
+/// lie on any one line.
+RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool up,
+                std::vector<TreeEntry>& stack) {
   const double edge = up ? mesh.bounds.upper[axis] : mesh.bounds.lower[axis];
   Vec3 q = p;
   q[axis] = edge + (up ? 1.0 : -1.0) * (std::abs(edge) + 1.0);  // strictly beyond the box
-  const std::size_t u = (axis + 1) % 3, v = (axis + 2) % 3;
+  Aabb segment;
+  segment.extend(p);
+  segment.extend(q);
   int winding = 0;
-  for (std::size_t k = 0; k < mesh.size(); ++k) {
+  RaySide ended = RaySide::outside;  // what stopped the walk, where something did
+  const bool walked = forTrianglesMeeting(mesh, segment, stack, [&](std::uint32_t k) {
     const Triangle t = mesh.triangle(k);
-    // Only a triangle whose box holds the ray's line (and reaches p's side) can meet it.
-    const double lowU = std::min({t.a[u], t.b[u], t.c[u]}),
-                 highU = std::max({t.a[u], t.b[u], t.c[u]});
-    const double lowV = std::min({t.a[v], t.b[v], t.c[v]}),
-                 highV = std::max({t.a[v], t.b[v], t.c[v]});
-    if (p[u] < lowU || p[u] > highU || p[v] < lowV || p[v] > highV) continue;
-    const double lowA = std::min({t.a[axis], t.b[axis], t.c[axis]});
-    const double highA = std::max({t.a[axis], t.b[axis], t.c[axis]});
-    if (up ? highA < p[axis] : lowA > p[axis]) continue;
-    if (!predicatesExactAt(t.a) || !predicatesExactAt(t.b) || !predicatesExactAt(t.c))
-      return RaySide::inexact;
+    // Only a triangle whose box meets the segment can meet it.
+    if (intersection(t.bounds(), segment).empty()) return true;
+    if (!predicatesExactAt(t.a) || !predicatesExactAt(t.b) || !predicatesExactAt(t.c)) {
+      ended = RaySide::inexact;
+      return false;
+    }
     const int atP = orientSign(t.a, t.b, t.c, p), atQ = orientSign(t.a, t.b, t.c, q);
-    if (atP == 0 && atQ == 0) return RaySide::degenerate;  // the ray in the triangle's plane
-    if (atP == atQ || atQ == 0) continue;  // one side, or q's plane (q lies beyond the box)
+    if (atP == 0 && atQ == 0) {  // the ray in the triangle's plane
+      ended = RaySide::degenerate;
+      return false;
+    }
+    if (atP == atQ || atQ == 0) return true;  // one side, or q's plane (q lies beyond the box)
     const int e0 = orientSign(p, q, t.a, t.b), e1 = orientSign(p, q, t.b, t.c),
               e2 = orientSign(p, q, t.c, t.a);
     const bool positive = e0 > 0 || e1 > 0 || e2 > 0, negative = e0 < 0 || e1 < 0 || e2 < 0;
-    if (positive && negative) continue;       // the line passes beside the triangle
-    if (atP == 0) return RaySide::onSurface;  // p in the triangle's plane, within its edges
-    if (e0 == 0 || e1 == 0 || e2 == 0) return RaySide::degenerate;  // through an edge or vertex
+    if (positive && negative) return true;  // the line passes beside the triangle
+    if (atP == 0) {                         // p in the triangle's plane, within its edges
+      ended = RaySide::onSurface;
+      return false;
+    }
+    if (e0 == 0 || e1 == 0 || e2 == 0) {  // through an edge or vertex
+      ended = RaySide::degenerate;
+      return false;
+    }
     winding += atQ;  // leaving through the face's front: +1
-  }
+    return true;
+  });
+  if (!walked) return ended;
   const double signedWinding = winding * mesh.orientation;
   return signedWinding > 0.5 ? RaySide::inside : RaySide::outside;
 }
@@ -220,9 +232,10 @@ std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& poi
     // On the nearest triangle (the kernel's distance 0 on an edge, or a rounding error's on the
     // face): on the surface, found at once.
     if (exactlyOnTriangle(triangle, point)) return false;
+    std::vector<TreeEntry> stack;
     for (std::size_t axis = 0; axis < 3; ++axis)
       for (const bool up : {true, false}) {
-        switch (castRay(mesh, point, axis, up)) {
+        switch (castRay(mesh, point, axis, up, stack)) {
           case RaySide::inside:
             return true;
           case RaySide::outside:

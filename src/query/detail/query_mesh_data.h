@@ -295,6 +295,37 @@ struct QueryMeshData {
   mutable std::atomic<bool> componentsMade_{false};
 };
 
+/// A node of QueryMeshData's tree: `index` of levels[`level`].
+struct TreeEntry {
+  std::size_t level, index;
+};
+
+/// Calls visit(k) for each sorted triangle k whose leaf box meets `box` (closed boxes, the
+/// mesh's frame), leaf by leaf, in the same order on every call, until a call returns false;
+/// returns whether none did. `stack` is the caller's scratch (its capacity kept between calls).
+template <class Visit>
+bool forTrianglesMeeting(const QueryMeshData& mesh, const Aabb& box, std::vector<TreeEntry>& stack,
+                         const Visit& visit) {
+  if (mesh.levels.empty()) return true;
+  stack.assign(1, {mesh.levels.size() - 1, 0});
+  while (!stack.empty()) {
+    const TreeEntry entry = stack.back();
+    stack.pop_back();
+    if (intersection(mesh.levels[entry.level][entry.index], box).empty()) continue;
+    const std::size_t first = entry.index * kFanout;
+    if (entry.level == 0) {
+      const std::size_t last = std::min(first + kFanout, mesh.size());
+      for (std::size_t k = first; k < last; ++k)
+        if (!visit(static_cast<std::uint32_t>(k))) return false;
+      continue;
+    }
+    const std::size_t last = std::min(first + kFanout, mesh.levels[entry.level - 1].size());
+    for (std::size_t child = last; child-- > first;)  // popped in ascending order
+      stack.push_back({entry.level - 1, child});
+  }
+  return true;
+}
+
 /// The closest triangle to a point.
 struct Nearest {
   double distanceSquared = std::numeric_limits<double>::infinity();
@@ -363,7 +394,9 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
 /// exactly on the surface. Counts a ray's crossings with exact orientation predicates
 /// (exact_predicates.h), the ray along ±x, ±y or ±z, the first that meets no edge or vertex of
 /// the mesh and lies in no triangle's plane: their signed sum is the winding number of a point
-/// off the surface (times the orientation: 1 inside). O(n), for such points only. Nothing where
+/// off the surface (times the orientation: 1 inside); a ray tests only the triangles of the
+/// leaves whose boxes its segment meets (forTrianglesMeeting), a few where it crosses the surface
+/// a few times. Nothing where
 /// the point is not that close, or a coordinate involved is below 2⁻²⁵⁰ but not 0 (the
 /// expansions' products would underflow), or every ray is degenerate.
 /// `distance` is the point's, distanceOf(mesh, point, nearest), which the callers have.
