@@ -220,18 +220,9 @@ RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool
 
 }  // namespace
 
-std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
-                                      const Nearest& nearest, double distance) noexcept {
-  const Triangle triangle = mesh.triangle(nearest.sorted);
-  const double scale = maxAbs(nearest.closest.closest) + triangleExtent(triangle);
-  if (!(distance <= 0x1p-40 * scale)) return std::nullopt;
-  if (!predicatesExactAt(point) || !predicatesExactAt(triangle.a) ||
-      !predicatesExactAt(triangle.b) || !predicatesExactAt(triangle.c))
-    return std::nullopt;
+std::optional<bool> insideByExactRays(const QueryMeshData& mesh, const Vec3& point) noexcept {
+  if (!predicatesExactAt(point)) return std::nullopt;
   try {
-    // On the nearest triangle (the kernel's distance 0 on an edge, or a rounding error's on the
-    // face): on the surface, found at once.
-    if (exactlyOnTriangle(triangle, point)) return false;
     std::vector<TreeEntry> stack;
     for (std::size_t axis = 0; axis < 3; ++axis)
       for (const bool up : {true, false}) {
@@ -250,6 +241,24 @@ std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& poi
   } catch (...) {  // the expansions' memory
   }
   return std::nullopt;
+}
+
+std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
+                                      const Nearest& nearest, double distance) noexcept {
+  const Triangle triangle = mesh.triangle(nearest.sorted);
+  const double scale = maxAbs(nearest.closest.closest) + triangleExtent(triangle);
+  if (!(distance <= 0x1p-40 * scale)) return std::nullopt;
+  if (!predicatesExactAt(point) || !predicatesExactAt(triangle.a) ||
+      !predicatesExactAt(triangle.b) || !predicatesExactAt(triangle.c))
+    return std::nullopt;
+  // On the nearest triangle (the kernel's distance 0 on an edge, or a rounding error's on the
+  // face): on the surface, found at once.
+  try {
+    if (exactlyOnTriangle(triangle, point)) return false;
+  } catch (...) {  // the expansions' memory
+    return std::nullopt;
+  }
+  return insideByExactRays(mesh, point);
 }
 
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept {
@@ -277,8 +286,10 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
   const double side = dot(offset, normal) * mesh.orientation;
   // Exactly, the side is positive outside and negative inside (Bærentzen and Aanæs); where it
   // is within rounding of zero (a degenerate triangle's zero normal, a point almost tangent to
-  // the surface) the winding number, O(n) but robust, decides.
+  // the surface) the exact rays decide, or where each of them is degenerate the winding number,
+  // O(n) but robust.
   if (std::abs(side) > 1e-9 * length(offset) * length(normal)) return side < 0.0;
+  if (const std::optional<bool> exact = insideByExactRays(mesh, point)) return *exact;
   const auto triangleAt = [&mesh](std::size_t k) { return mesh.triangle(k); };
   return windingNumber(mesh.size(), triangleAt, point) * mesh.orientation > 0.5;
 }

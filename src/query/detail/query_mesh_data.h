@@ -384,21 +384,26 @@ Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
 /// Whether `point` lies inside the closed mesh, given its nearest triangle: within rounding of the
 /// surface insideNearSurface's exact answer; elsewhere the sign of the offset from the closest
 /// point along the pseudonormal of the feature it lies on, or, where that is too close to zero
-/// to trust, the generalized winding number. False on the surface. The mesh must be closed.
+/// to trust, insideByExactRays, or where they give nothing the generalized winding number. False
+/// on the surface. The mesh must be closed.
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept;
+
+/// Whether `point` lies inside the closed mesh, exactly: the signed sum of a ray's crossings
+/// with exact orientation predicates (exact_predicates.h), the ray along ±x, ±y or ±z, the first
+/// that meets no edge or vertex of the mesh and lies in no triangle's plane: the winding number
+/// of a point off the surface (times the orientation: 1 inside). False where the ray starts on
+/// the surface. A ray tests only the triangles of the leaves whose boxes its segment meets
+/// (forTrianglesMeeting), a few where it crosses the surface a few times. Nothing where a
+/// coordinate involved is below 2⁻²⁵⁰ but not 0 (the expansions' products would underflow), or
+/// every ray is degenerate.
+std::optional<bool> insideByExactRays(const QueryMeshData& mesh, const Vec3& point) noexcept;
 
 /// Where `point` lies within rounding of the closed mesh's surface (its distance below 2⁻⁴⁰ of
 /// the closest point's magnitude and the nearest triangle's extent: there the closest point's own
 /// rounding can turn the offset from it, and the winding number's solid angles near the nearest
 /// faces lose their sign), whether it lies inside, decided exactly: true inside; false outside or
-/// exactly on the surface. Counts a ray's crossings with exact orientation predicates
-/// (exact_predicates.h), the ray along ±x, ±y or ±z, the first that meets no edge or vertex of
-/// the mesh and lies in no triangle's plane: their signed sum is the winding number of a point
-/// off the surface (times the orientation: 1 inside); a ray tests only the triangles of the
-/// leaves whose boxes its segment meets (forTrianglesMeeting), a few where it crosses the surface
-/// a few times. Nothing where
-/// the point is not that close, or a coordinate involved is below 2⁻²⁵⁰ but not 0 (the
-/// expansions' products would underflow), or every ray is degenerate.
+/// exactly on the surface: on its nearest triangle exactly, else insideByExactRays. Nothing
+/// where the point is not that close, or where insideByExactRays gives nothing.
 /// `distance` is the point's, distanceOf(mesh, point, nearest), which the callers have.
 std::optional<bool> insideNearSurface(const QueryMeshData& mesh, const Vec3& point,
                                       const Nearest& nearest, double distance) noexcept;
