@@ -14,6 +14,7 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/kernels/pair_results.h"
+#include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/coordinate_range.h"
 
 #include "detail/dual_traversal.h"
@@ -61,17 +62,36 @@ Vec3 faceDirection(const Triangle& first, const Triangle& second) noexcept {
   return {0, 0, 1};
 }
 
-ContactPoint contactPoint(const Triangle& first, const Triangle& second, const Vec3& p,
-                          const Vec3& q, bool intersect, bool converged, std::size_t i,
+/// The contact of the pair `k` of `results`, triangles `first` (id i) and `second` (id j). The
+/// kernels take the squared distance in a frame near the pair, P and Q rounded to the world's
+/// coordinates: at an offset far beyond the pair's size P − Q is mostly that rounding (at 1e8 a
+/// distance of 0.37 came out 6e-8 short). The distance is the kernel's, and where the rounding
+/// of P − Q may exceed 2⁻³⁰ of it the direction is that of the pair's closest points found again
+/// near P (the brute force on the triangles less P; exact translations where the coordinates
+/// exceed the pair's size).
+ContactPoint contactPoint(const Triangle& first, const Triangle& second,
+                          const kernels::PairResults& results, std::size_t k, std::size_t i,
                           std::size_t j) {
+  const Vec3 p = results.p(k), q = results.q(k);
+  const double squared = results.distanceSquared(k);
   ContactPoint contact;
   contact.x = (p + q) * 0.5;
-  contact.normal = p - contact.x;
-  contact.distance = distance(p, q);
-  contact.direction = normalized(p - q);
+  // A square below 2⁻⁹⁶⁰ may have underflowed: a distance below 2⁻⁴⁸⁰, which P and Q give
+  // where they are that small, and which bounds it where they are not.
+  contact.distance = squared >= detail::kUnderflowingSquare ? std::sqrt(squared)
+                                                            : std::min(distance(p, q), 0x1p-480);
+  Vec3 along = p - q;
+  const bool rounded = std::max(maxAbs(p), maxAbs(q)) * 0x1p-50 > 0x1p-30 * length(along);
+  if (rounded) {
+    const kernels::TriangleDistanceResult local = kernels::triangleDistanceBruteForce(
+        {first.a - p, first.b - p, first.c - p}, {second.a - p, second.b - p, second.c - p});
+    along = local.p - local.q;
+  }
+  contact.direction = normalized(along);
   if (!(lengthSquared(contact.direction) > 0.5)) contact.direction = faceDirection(first, second);
-  contact.overlap = intersect;
-  contact.converged = converged;
+  contact.normal = rounded ? contact.direction * (0.5 * contact.distance) : p - contact.x;
+  contact.overlap = results.intersect(k);
+  contact.converged = results.converged(k);
   contact.first = static_cast<std::uint32_t>(i);
   contact.second = static_cast<std::uint32_t>(j);
   return contact;
@@ -240,9 +260,8 @@ void contactsOf(const Task& task, const TriangleSoA& first, const TriangleSoA& s
   kernels::distances(solver, one, second, begin, end, results);
   for (std::size_t k = 0; k < results.size(); ++k)
     if (results.distanceSquared(k) < reach * reach)
-      out.push_back(contactPoint(one, second.triangle(begin + k), results.p(k), results.q(k),
-                                 results.intersect(k), results.converged(k), task.triangle,
-                                 begin + k));
+      out.push_back(
+          contactPoint(one, second.triangle(begin + k), results, k, task.triangle, begin + k));
 }
 
 }  // namespace
@@ -376,8 +395,7 @@ void appendWithin(const RunScratch& work, std::size_t begin, std::size_t end, do
   const kernels::PairResults& results = work.results;
   for (std::size_t k = begin; k < end; ++k)
     if (results.distanceSquared(k) < reach * reach)
-      out.push_back(contactPoint(work.firsts[k], work.seconds[k], results.p(k), results.q(k),
-                                 results.intersect(k), results.converged(k), work.firstIds[k],
+      out.push_back(contactPoint(work.firsts[k], work.seconds[k], results, k, work.firstIds[k],
                                  work.secondIds[k]));
 }
 

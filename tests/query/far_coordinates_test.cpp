@@ -15,10 +15,12 @@
 #include "delta/io/mesh_io.h"
 #include "delta/kernels/isa.h"
 #include "delta/kernels/point_triangle.h"
+#include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/coordinate_range.h"
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/measures.h"
 #include "delta/mesh/primitives.h"
+#include "delta/mesh/triangle_soa.h"
 #include "delta/query/contacts.h"
 #include "delta/query/minimum_distance.h"
 #include "delta/query/point_distance.h"
@@ -214,6 +216,44 @@ TEST(FarCoordinates, MovedPairsNearTheEdgeOfTheRangeAreDecidedByTheirExactBoxes)
       boxInCoordinateRange(Aabb{{0, 0, 0}, {1, std::nextafter(kLargestCoordinate, 1e300), 1}}));
   EXPECT_FALSE(
       boxInCoordinateRange(Aabb{{0, std::numeric_limits<double>::quiet_NaN(), 0}, {1, 1, 1}}));
+}
+
+TEST(FarCoordinates, ContactsFarFromTheOriginKeepTheKernelsDistance) {
+  // Found by an audit: two granulates 0.37 apart at an offset of 1e8 had contacts whose distance,
+  // taken from P and Q rounded to the world's coordinates, came out 6e-8 short of the exact
+  // 0.3710971948411078 that minimumDistance gave (and above 2ε where ε was just above it). The
+  // oracle: the brute force on each pair moved back by the offset, exactly (Sterbenz).
+  const double offset = 0x1p27;  // 1.3e8: every coordinate within [offset / 2, 2 · offset]
+  const Vec3 shift{offset, offset, offset};
+  const Mesh a = primitives::granulate(11).translate(shift);
+  const Mesh b = primitives::granulate(12).translate(Vec3{1.7, 0.1, 0.0} + shift);
+  const QueryMesh qa(a), qb(b);
+  const TriangleSoA sa(a), sb(b);
+  const double epsilon = 0.1;
+  const auto back = [&shift](const Triangle& t) {
+    return Triangle{t.a - shift, t.b - shift, t.c - shift};
+  };
+  for (const kernels::Solver solver : {kernels::Solver::Hybrid, kernels::Solver::BruteForce}) {
+    for (const std::vector<ContactPoint>& found :
+         {contacts(qa, qb, epsilon, solver), contacts(sa, sb, epsilon, solver)}) {
+      ASSERT_GT(found.size(), 10u);
+      std::size_t apart = 0;
+      for (const ContactPoint& c : found) {
+        const kernels::TriangleDistanceResult exact = kernels::triangleDistanceBruteForce(
+            back(a.triangle(c.first)), back(b.triangle(c.second)));
+        const double d = std::sqrt(exact.distanceSquared);
+        EXPECT_NEAR(c.distance, d, 1e-15) << c.first << " " << c.second;
+        EXPECT_LT(c.distance, 2.0 * epsilon);
+        EXPECT_NEAR(length(c.normal), 0.5 * c.distance, 1e-15);
+        if (d > 0.0) {
+          ++apart;
+          EXPECT_LT(length(c.direction - (exact.p - exact.q) / d), 1e-14);
+          EXPECT_LT(length(c.normal - c.direction * (0.5 * c.distance)), 1e-15);
+        }
+      }
+      EXPECT_GT(apart, 10u);
+    }
+  }
 }
 
 TEST(FarCoordinates, SpheresOutOfRangeNameTheirIndex) {
