@@ -29,6 +29,9 @@ struct HybridTolerances {
   /// kThick·L). A plain cross product tilts a sliver's normal by ε·L/height, which would move the
   /// crossing point across the sliver's width; slivers go to the brute force (accurate normals).
   static constexpr double kThick = 1e-3;
+  /// The least L² of a pair certified intersecting (L ≥ 2⁻¹²⁰): the piercing test's products,
+  /// of degree 7 in L, stay normal numbers above it.
+  static constexpr double kSmallestPiercedSquared = 0x1p-240;
   /// Edges whose cross product is below kParallel of |d1|²|d2|² count as parallel.
   static constexpr double kParallel = 1e-20;
 };
@@ -278,7 +281,11 @@ inline PairOutputLanes<W> certify(const PairGeometry<W>& g, const Candidate<W>& 
                                           pair.e1, pair.e2, g.m.e1e1, g.m.e1e2, g.m.e2e2);
   const Piercing<W> aThroughB = pierce<W>(g.a[0], g.a[1], g.a[2], sa0, sa1, sa2, marginB, pair.r,
                                           pair.f1, pair.f2, g.m.f1f1, g.m.f1f2, g.m.f2f2);
-  const Mask<W> intersect = bThroughA.found | aThroughB.found;
+  // The piercing test's products are of degree 7 in the pair's size: below about 2⁻¹⁴² they
+  // underflow, and its inequalities hold at 0 ≥ 0 (granulates scaled by 2⁻¹⁶⁰ were certified
+  // intersecting 0.13 of their size apart). Such pairs go to the brute force.
+  const Mask<W> intersect =
+      (bThroughA.found | aThroughB.found) & (size2 >= HybridTolerances::kSmallestPiercedSquared);
   const Vec3Lanes<W> touch =
       pair.origin + select<W>(bThroughA.found, bThroughA.point, aThroughB.point);
   out.intersect = intersect;
