@@ -73,6 +73,8 @@ inline Quaternion normalizedOrIdentity(double w, double x, double y, double z) n
 
 /// A quaternion's components in any number type with +, − and × (two quaternions to a vector
 /// register in the DEM's turns, src/dem/world.cpp).
+///
+/// Threading: a value type; no shared state.
 template <class T>
 struct QuaternionParts {
   T w, x, y, z;

@@ -37,8 +37,12 @@ struct LoadStatistics {
   /// Vertices of the kept triangles as the file gives them (assimp's readers: as assimp
   /// delivered them), before joining (an STL facet brings its own three).
   std::size_t sourceVertices = 0;
-  std::size_t pointsSkipped = 0;  ///< point primitives, and the vertices of meshes without faces
-  std::size_t linesSkipped = 0;   ///< line primitives
+  /// Point primitives (OBJ's `p`, faces of one corner), and the vertices of a file or mesh that
+  /// declares no faces at all: a PLY without a face element, an OBJ without `f`, `p` or `l`, a
+  /// mesh assimp delivers without faces. A PLY whose face element is empty (`element face 0`)
+  /// adds none of its vertices here; an OFF file without faces is refused before counting.
+  std::size_t pointsSkipped = 0;
+  std::size_t linesSkipped = 0;  ///< line primitives (OBJ's `l`, faces of two corners)
   /// Whether the coordinates are the file's numbers or were rounded to single precision.
   CoordinatePrecision precision = CoordinatePrecision::exact;
 };

@@ -19,6 +19,8 @@ namespace delta::contactdetection {
 /// triangle `triangleB` of the second (ids in the meshes' triangle order), from `start` to `end`
 /// (world frame). Oriented so that, seen from outside the first mesh, the part of its triangle
 /// inside the second mesh lies to the left (along n_A × n_B).
+///
+/// Threading: a value type; no shared state.
 struct IntersectionSegment {
   Vec3 start;
   Vec3 end;
@@ -28,6 +30,8 @@ struct IntersectionSegment {
 
 /// A chain of segments, end to start: an intersection curve. `points` has one more entry than
 /// `segments` has ids; a closed curve's last point repeats its first.
+///
+/// Threading: a value type; no shared state.
 struct IntersectionCurve {
   std::vector<Vec3> points;
   std::vector<std::uint32_t> trianglesA;  ///< per segment, the first mesh's triangle
@@ -46,6 +50,8 @@ struct IntersectionCurve {
 /// areaVector. For a volume-based contact law with energy w(V): the force on B is w′(V)·
 /// areaVector, the torque on B about its centre c is w′(V)·(moment + (centroid − c) ×
 /// areaVector), and A gets the opposites (both are derivatives of V under a rigid motion of B).
+///
+/// Threading: a value type; no shared state.
 struct OverlapRegion {
   double volume = 0.0;
   Vec3 centroid;  ///< of the solid (world frame)
@@ -58,6 +64,8 @@ struct OverlapRegion {
 
 /// What overlap() finds. `total` sums the regions (its centroid is the volume-weighted mean, its
 /// moment about that centroid).
+///
+/// Threading: a value type; no shared state.
 struct Overlap {
   OverlapRegion total;
   /// Largest volume first. A region is bounded by one connected set of surface pieces: the
@@ -79,6 +87,8 @@ struct Overlap {
 };
 
 /// What overlap() computes beyond the integrals.
+///
+/// Threading: a value type; no shared state.
 struct OverlapOptions {
   /// Chain the segments into curves (Overlap::curves). The integrals do not need them; a DEM
   /// step turns this off.
