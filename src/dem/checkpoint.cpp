@@ -431,9 +431,10 @@ class CheckpointCodec {
                   " particles and " + std::to_string(obstacles) + " obstacles");
 
     in.tag("CONT");
-    world.contactsPending_ = false;
-    world.contacts_.resize(in.count(8 * 14 + 2 + 16 + 1 + (version >= 2 ? 8 * 4 : 0), "contact"));
-    for (Contact& contact : world.contacts_) {
+    world.records_.pending = false;
+    world.records_.contacts.resize(
+        in.count(8 * 14 + 2 + 16 + 1 + (version >= 2 ? 8 * 4 : 0), "contact"));
+    for (Contact& contact : world.records_.contacts) {
       contact.point.x = in.vec();
       contact.point.normal = in.vec();
       contact.point.direction = in.vec();
@@ -465,7 +466,7 @@ class CheckpointCodec {
   /// numbers are finite, as every contact a World reports (they are handed on as they are: to
   /// Python's arrays, the contact files).
   static void checkContact(Reader& in, const World& world, const Contact& contact) {
-    const std::size_t c = static_cast<std::size_t>(&contact - world.contacts_.data());
+    const std::size_t c = static_cast<std::size_t>(&contact - world.records_.contacts.data());
     const std::string what = "contact " + std::to_string(c);
     const ContactPoint& point = contact.point;
     if (!isFinite(point.x) || !isFinite(point.normal) || !isFinite(point.direction) ||

@@ -994,7 +994,7 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
   // for any number of processes a DistributedWorld splits the particles over.
   for (Particle& particle : particles_)
     particle.force = particle.torque = Vec3{};
-  contactsPending_ = true;  // the records wait for contacts()
+  records_.pending = true;  // the records wait for contacts()
   particleSprings_.clear();
   obstacleSprings_.clear();
   // Tallied in locals and stored once (as members, each pair's tallies were stored and loaded
@@ -1048,28 +1048,28 @@ void World::sumForces(std::span<const Interaction> pairs, std::span<const PairOu
 }
 
 std::span<const Contact> World::contacts() const {
-  const std::lock_guard<std::mutex> lock(contactsLock_.mutex);
+  const std::lock_guard<std::mutex> lock(records_.mutex);
   if (contactsLost_)
     throw Error(
         "dem: contacts: the records of the last force evaluation went with the step that "
         "failed after it (the World is as that evaluation left it); the next step makes "
         "them anew");
-  if (contactsPending_) {
+  if (records_.pending) {
     makeContacts();
-    contactsPending_ = false;
+    records_.pending = false;
   }
-  return contacts_;
+  return records_.contacts;
 }
 
 void World::makeContacts() const {
-  contacts_.clear();
+  records_.contacts.clear();
   const std::span<const PairOutcome> outcomes(outcomes_.data(), pairs_.size());
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     const Interaction& pair = pairs_[p];
     for (const PointForce& point : pointForces(p, outcomes)) {
       // Field by field into a value-initialised record: its padding bytes are zeros, so that
       // copies of the contacts (Python's arrays, checkpoints read back) compare byte for byte.
-      Contact& contact = contacts_.emplace_back();
+      Contact& contact = records_.contacts.emplace_back();
       contact.point = point.point;
       // The ids from the pair's key, made with the ids of its evaluation: a DistributedWorld
       // renumbers its particles at the start of the next step.
@@ -1263,7 +1263,7 @@ void World::keepStepStart() {
   stepStart_.elasticEnergy = elasticEnergy_;
   stepStart_.evaluations = evaluations_;
   stepStart_.forcesCurrent = forcesCurrent_;
-  stepStart_.contactsPending = contactsPending_;
+  stepStart_.contactsPending = records_.pending;
   stepStart_.contactsLost = contactsLost_;
 }
 
@@ -1284,7 +1284,7 @@ void World::restoreStepStart() noexcept {
   // (Lost at the start, by a step that failed before, they stay lost.)
   contactsLost_ = stepStart_.contactsLost ||
                   (stepStart_.contactsPending && evaluations_ != stepStart_.evaluations);
-  contactsPending_ = stepStart_.contactsPending && !contactsLost_;
+  records_.pending = stepStart_.contactsPending && !contactsLost_;
   // The neighbour list and the pairs' caches were made for the moved bodies: the list is made
   // anew; the caches hold for any pose (they bound the move since they were made).
   neighbours_.valid = false;

@@ -509,7 +509,7 @@ class World {
   /// imported ghost forces in their places), the contact records, springs and statistics.
   void sumForces(std::span<const Interaction> pairs, std::span<const PairOutcome> outcomes,
                  std::span<const GhostForce> imported);
-  /// The contact records of the last evaluation's pairs into contacts_ (contacts()).
+  /// The contact records of the last evaluation's pairs into records_ (contacts()).
   void makeContacts() const;
   /// Pair p's point forces of this evaluation, wherever its route keeps them.
   std::span<const PointForce> pointForces(std::size_t p,
@@ -619,18 +619,39 @@ class World {
   std::vector<OnePointForces> onePoints_;  ///< the onePoint pairs' (scratch)
   /// Each pair's contacts and forces of this evaluation (scratch, kept for its buffers).
   std::vector<PairOutcome> outcomes_;
-  /// The last evaluation's contact records, made by contacts() when contactsPending_ (then
-  /// from pairs_, routes_, onePoints_ and outcomes_, which stay as that evaluation left them).
-  mutable std::vector<Contact> contacts_;
-  mutable bool contactsPending_ = false;
-  /// Guards the making of contacts_; a copied World gets its own.
-  struct ContactsLock {
-    std::mutex mutex;
-    ContactsLock() = default;
-    ContactsLock(const ContactsLock&) noexcept {}
-    ContactsLock& operator=(const ContactsLock&) noexcept { return *this; }
+  /// The last evaluation's contact records, made by contacts() when `pending` (then from
+  /// pairs_, routes_, onePoints_ and outcomes_, which stay as that evaluation left them), under
+  /// `mutex`. A copy of the World reads them under the source's mutex, so copying may run beside
+  /// contacts() as any const use may (a copy made while they were pending makes them itself);
+  /// it gets its own mutex.
+  struct ContactRecords {
+    std::vector<Contact> contacts;
+    bool pending = false;
+    mutable std::mutex mutex;
+
+    ContactRecords() = default;
+    ContactRecords(const ContactRecords& other) {
+      const std::lock_guard<std::mutex> lock(other.mutex);
+      contacts = other.contacts;
+      pending = other.pending;
+    }
+    ContactRecords(ContactRecords&& other) noexcept
+        : contacts(std::move(other.contacts)), pending(other.pending) {}
+    ContactRecords& operator=(const ContactRecords& other) {
+      if (this != &other) {
+        const std::scoped_lock lock(mutex, other.mutex);
+        contacts = other.contacts;
+        pending = other.pending;
+      }
+      return *this;
+    }
+    ContactRecords& operator=(ContactRecords&& other) noexcept {
+      contacts = std::move(other.contacts);
+      pending = other.pending;
+      return *this;
+    }
   };
-  mutable ContactsLock contactsLock_;
+  mutable ContactRecords records_;
   /// Tangential springs of touching pairs, keyed (first id << 32 | second id or obstacle),
   /// sorted.
   std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings_;

@@ -303,8 +303,8 @@ DistributedWorld::DistributedWorld(MPI_Comm communicator, const World& share,
 void DistributedWorld::start() {
   for (const ParticleShape& shape : part_.shapes())
     largestRadius_ = std::max(largestRadius_, shape.boundingRadius());
-  part_.contacts_.clear();
-  part_.contactsPending_ = false;
+  part_.records_.contacts.clear();
+  part_.records_.pending = false;
   part_.forcesCurrent_ = false;  // the first step evaluates with the ghosts
   try {
     rebalance();
@@ -579,8 +579,8 @@ std::optional<World> DistributedWorld::gatherWorld(int root) const {
   for (const SpringRecord& record : springs)
     (record.withObstacle ? whole.obstacleSprings_ : whole.particleSprings_)
         .push_back({record.key, record.spring});
-  whole.contacts_ = std::move(contacts);
-  whole.contactsPending_ = false;
+  whole.records_.contacts = std::move(contacts);
+  whole.records_.pending = false;
   whole.elasticEnergy_ = elastic;
   whole.placed_.clear();
   return whole;
