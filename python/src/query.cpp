@@ -191,9 +191,12 @@ py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<
     if (given) {
       scratch.resize(query.size());
       cd::distances(mesh.prepare(), query, request, scratch);
+      clearPadding(scratch);
     } else {
-      cd::distances(mesh.prepare(), query, request,
-                    {static_cast<cd::PointDistance*>(answers.mutable_data()), query.size()});
+      const std::span<cd::PointDistance> records(
+          static_cast<cd::PointDistance*>(answers.mutable_data()), query.size());
+      cd::distances(mesh.prepare(), query, request, records);
+      clearPadding(records);
     }
   }
   if (given && !scratch.empty())

@@ -1,6 +1,7 @@
 #include "records.h"
 
 #include <cstddef>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -56,6 +57,15 @@ py::list contactFieldOffsets(std::size_t offset) {
 py::dtype contactDtype() {
   return py::dtype(contactFieldNames(), contactFieldFormats(), contactFieldOffsets(0),
                    static_cast<py::ssize_t>(sizeof(ContactPoint)));
+}
+
+void clearPadding(std::span<contactdetection::PointDistance> records) noexcept {
+  using contactdetection::PointDistance;
+  constexpr std::size_t kUsed = offsetof(PointDistance, ambiguous) + sizeof(bool);
+  static_assert(kUsed <= sizeof(PointDistance));
+  for (PointDistance& record : records)
+    std::memset(reinterpret_cast<unsigned char*>(&record) + kUsed, 0,
+                sizeof(PointDistance) - kUsed);
 }
 
 py::dtype distanceDtype() {

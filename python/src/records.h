@@ -5,6 +5,7 @@
 #include <pybind11/numpy.h>
 
 #include <cstddef>
+#include <span>
 #include <string>
 
 #include "delta/query/point_distance.h"
@@ -20,6 +21,10 @@ py::dtype contactDtype();
 /// delta.distance_dtype, over contactdetection::PointDistance: distance (float64), closest
 /// ((3,) float64), triangle (uint32), inside (bool), ambiguous (bool).
 py::dtype distanceDtype();
+/// Zeros the padding bytes after `ambiguous` in each record, which the queries' struct copies
+/// leave as they find them: so that the arrays' bytes (tobytes, hashes) are a function of the
+/// answers alone.
+void clearPadding(std::span<contactdetection::PointDistance> records) noexcept;
 
 /// The sign mode named `name` ("pseudonormal" or "winding"); ValueError for any other.
 contactdetection::Sign signNamed(const std::string& name);

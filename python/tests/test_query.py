@@ -162,6 +162,22 @@ def test_distance_writes_into_out_without_copying_the_points(fandisk, rng):
     assert peak < out.nbytes + points.nbytes // 10
 
 
+def test_distance_records_are_the_same_bytes_every_time(fandisk, rng):
+    # The records' two padding bytes were left as the queries' struct copies found them, so
+    # tobytes() (and a hash of it) differed from run to run for the same answers.
+    mesh = delta.QueryMesh(fandisk)
+    points = points_around(fandisk, 5_000, rng)
+    expected = delta.distance(mesh, points, signed=True).tobytes()
+    for _ in range(3):
+        out = np.empty(len(points), dtype=delta.distance_dtype)
+        out.view(np.uint8)[:] = 0xAB  # what the padding held before
+        delta.distance(mesh, points, signed=True, out=out)
+        assert out.tobytes() == expected
+        assert delta.distance(mesh, points, signed=True).tobytes() == expected
+    padding = np.frombuffer(expected, np.uint8).reshape(len(points), -1)[:, 38:]
+    assert padding.shape[1] == delta.distance_dtype.itemsize - 38 and not padding.any()
+
+
 def test_moved_query_mesh_answers_where_it_is(fandisk, rng):
     motion = delta.RigidTransform(delta.Quaternion.from_axis_angle((0, 1, 1), 0.4), (0.3, -0.2, 0.1))
     prepared = delta.QueryMesh(fandisk)
