@@ -100,20 +100,113 @@ std::vector<CandidatePair> pairsOnGrid(std::span<const Sphere> spheres, double m
   return detail::joined<CandidatePair>(perChunk);
 }
 
+/// A cell of one level of levelledPairs' grids.
+struct LevelCell {
+  Cell cell;
+  std::uint32_t level;
+  friend constexpr bool operator==(const LevelCell&, const LevelCell&) = default;
+};
+
+std::size_t bucketOf(const LevelCell& key, std::uint64_t mask) noexcept {
+  return bucketOf(Cell{key.cell.x, key.cell.y, key.cell.z + (std::int64_t{key.level} << 40)}, mask);
+}
+
+/// nearbyPairs for spheres of very different sizes, on a hierarchy of grids (Ericson, Real-Time
+/// Collision Detection 7.2.6): level l has cells of edge baseEdge·2^l, and a sphere lives on the
+/// lowest level whose edge holds 2r + margin. For two spheres on levels a ≤ b, rᵢ + rⱼ + margin
+/// ≤ edge_a / 2 + edge_b / 2 ≤ edge_b: the pair lies in neighbouring cells of level b, where the
+/// sphere of level a looks for it. Each sphere looks on its own level (for larger indices) and on
+/// every occupied level above (for all): O(n · levels) for any mix of sizes. The cells of all
+/// levels are hashed into one table; the pairs, found from either end, are sorted at the end.
+std::vector<CandidatePair> levelledPairs(std::span<const Sphere> spheres, double margin,
+                                         const Aabb& box, double baseEdge) {
+  const std::size_t count = spheres.size();
+  std::vector<std::uint32_t> levels(count);
+  std::uint32_t top = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double needed = 2.0 * spheres[i].radius + margin;
+    std::uint32_t level = 0;
+    while (std::ldexp(baseEdge, static_cast<int>(level)) < needed)
+      ++level;
+    levels[i] = level;
+    top = std::max(top, level);
+  }
+  std::vector<bool> occupied(top + 1, false);
+  for (const std::uint32_t level : levels)
+    occupied[level] = true;
+  const auto cellAt = [&](const Vec3& centre, std::uint32_t level) {
+    const Vec3 offset = (centre - box.lower) / std::ldexp(baseEdge, static_cast<int>(level));
+    return Cell{static_cast<std::int64_t>(offset.x), static_cast<std::int64_t>(offset.y),
+                static_cast<std::int64_t>(offset.z)};
+  };
+  std::vector<LevelCell> keys(count);
+  for (std::size_t i = 0; i < count; ++i)
+    keys[i] = {cellAt(spheres[i].center, levels[i]), levels[i]};
+  const std::uint64_t mask = std::bit_ceil(2 * count) - 1;
+  std::vector<std::size_t> bucketStart(mask + 2, 0);
+  for (const LevelCell& key : keys)
+    ++bucketStart[bucketOf(key, mask) + 1];
+  for (std::size_t b = 1; b < bucketStart.size(); ++b)
+    bucketStart[b] += bucketStart[b - 1];
+  std::vector<std::uint32_t> members(count);
+  {
+    std::vector<std::size_t> fill(bucketStart.begin(), bucketStart.end() - 1);
+    for (std::size_t i = 0; i < count; ++i)
+      members[fill[bucketOf(keys[i], mask)]++] = static_cast<std::uint32_t>(i);
+  }
+  std::vector<std::vector<CandidatePair>> perChunk((count + kSphereGrain - 1) / kSphereGrain);
+  parallelFor(0, count, kSphereGrain, [&](std::size_t begin, std::size_t end) {
+    std::vector<CandidatePair>& found = perChunk[begin / kSphereGrain];
+    for (std::size_t i = begin; i < end; ++i) {
+      const Sphere& one = spheres[i];
+      for (std::uint32_t level = levels[i]; level <= top; ++level) {
+        if (!occupied[level]) continue;
+        const Cell home = level == levels[i] ? keys[i].cell : cellAt(one.center, level);
+        for (std::int64_t dx = -1; dx <= 1; ++dx)
+          for (std::int64_t dy = -1; dy <= 1; ++dy)
+            for (std::int64_t dz = -1; dz <= 1; ++dz) {
+              const LevelCell neighbour{{home.x + dx, home.y + dy, home.z + dz}, level};
+              const std::size_t bucket = bucketOf(neighbour, mask);
+              for (std::size_t k = bucketStart[bucket]; k < bucketStart[bucket + 1]; ++k) {
+                const std::uint32_t j = members[k];
+                if (!(keys[j] == neighbour) || (level == levels[i] && j <= i)) continue;
+                const double reach = one.radius + spheres[j].radius + margin;
+                if (distanceSquared(one.center, spheres[j].center) < reach * reach)
+                  found.push_back({static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
+                                   static_cast<std::uint32_t>(std::max<std::size_t>(i, j))});
+              }
+            }
+      }
+    }
+  });
+  std::vector<CandidatePair> pairs = detail::joined<CandidatePair>(perChunk);
+  std::sort(pairs.begin(), pairs.end(), [](const CandidatePair& a, const CandidatePair& b) {
+    return a.first != b.first ? a.first < b.first : a.second < b.second;
+  });
+  return pairs;
+}
+
 }  // namespace
 
 std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double margin) {
   validate(spheres, margin);
   if (spheres.size() < 2) return {};
   Aabb box;
-  double largestRadius = 0.0;
+  double largestRadius = 0.0, smallestRadius = spheres[0].radius;
   for (const Sphere& sphere : spheres) {
     box.extend(sphere.center);
     largestRadius = std::max(largestRadius, sphere.radius);
+    smallestRadius = std::min(smallestRadius, sphere.radius);
   }
   const double extent = maxAbs(box.extent());
   const double edge = std::max(2.0 * largestRadius + margin, extent / kMostCellsPerAxis);
   if (!(edge > 0.0)) return {};  // every sphere a point at one place and no margin: no gap < 0
+  // Sizes more than a factor 2 apart: cells as large as the largest sphere would crowd the
+  // small ones (one sphere of radius 5 among 64,000 of 0.01 took 4.6 s, against 0.04 s without
+  // it), so each size gets cells of its own.
+  const double smallestEdge = std::max(2.0 * smallestRadius + margin, extent / kMostCellsPerAxis);
+  if (edge > 2.0 * smallestEdge && smallestEdge > 0.0)
+    return levelledPairs(spheres, margin, box, smallestEdge);
 
   const std::size_t count = spheres.size();
   std::vector<Cell> cells(count);

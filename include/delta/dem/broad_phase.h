@@ -29,8 +29,11 @@ struct CandidatePair {
 /// cells are hashed into a table of about twice as many buckets as spheres and filled by a
 /// counting sort. Either way the work is O(n) for spheres of similar size in any packing and the
 /// memory O(n) however far apart they are.
-/// Spheres of very different sizes make the cells as large as the largest and the work grow
-/// toward O(n²) in crowded cells.
+/// Where the cells of the largest sphere would be more than twice those of the smallest (cells as
+/// large as the largest crowd the small ones: one boulder among 64,000 grains took 4.6 s), each
+/// sphere lives on a level of hashed cells that holds its own size (edges doubling from the
+/// smallest's) and looks for partners around itself on its own level and every level above:
+/// O(n · levels) for any mix of sizes, the same pairs in the same order.
 ///
 /// Throws delta::Error when the margin is negative or not finite, a sphere's centre or radius
 /// is not finite or a radius is negative (naming the sphere), or there are 2³² or more spheres.
