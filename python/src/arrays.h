@@ -17,6 +17,8 @@
 #include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

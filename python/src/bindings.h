@@ -4,6 +4,8 @@
 
 #include <pybind11/pybind11.h>
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

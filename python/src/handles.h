@@ -11,6 +11,8 @@
 #include "delta/mesh/mesh.h"
 #include "delta/query/query_mesh.h"
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

@@ -10,6 +10,8 @@
 
 #include "delta/core/cancel.h"
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

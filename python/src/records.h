@@ -10,6 +10,8 @@
 
 #include "delta/query/point_distance.h"
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

@@ -9,6 +9,8 @@
 
 #include "delta/core/rotation.h"
 
+#include "strict_numbers.h"
+
 namespace delta::python {
 
 namespace py = pybind11;

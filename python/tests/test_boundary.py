@@ -397,3 +397,53 @@ def test_pickled_states_of_the_wrong_length_are_refused():
     with pytest.raises(delta.Error, match="not 1 values"):
         delta.Mesh.__new__(delta.Mesh).__setstate__((np.zeros((3, 3)),))
     assert pickle.loads(pickle.dumps(delta.Quaternion(1, 2, 3, 4))).w == delta.Quaternion(1, 2, 3, 4).w
+
+
+# Scalars follow the same rule (python/src/strict_numbers.h): pybind11's own casters took a bool
+# as 1 and anything with __float__ (numpy.longdouble, Fraction) as its rounded value.
+NOT_A_REAL = [
+    pytest.param(True, id="bool"),
+    pytest.param(np.bool_(True), id="numpy.bool_"),
+    pytest.param(np.longdouble("0.1"), id="longdouble"),
+    pytest.param(__import__("fractions").Fraction(1, 3), id="Fraction"),
+    pytest.param(0.5j, id="complex"),
+    pytest.param("0.5", id="string"),
+    pytest.param(np.array([0.5]), id="array of one"),
+]
+
+
+@pytest.mark.parametrize("value", NOT_A_REAL)
+def test_a_scalar_that_is_not_a_real_number_is_a_type_error(value):
+    mesh = delta.icosphere(1)
+    points = np.full((2, 3), 0.5)
+    with pytest.raises(TypeError):
+        delta.distance(mesh, points, eps=value)
+    with pytest.raises(TypeError):
+        delta.contacts(mesh, mesh, value)
+    with pytest.raises(TypeError):
+        mesh.copy().scale(value)
+    with pytest.raises(TypeError):
+        delta.dem.Parameters(time_step=1e-4, epsilon=0.01, filter_distance=0.01, stiffness=1e3,
+                             restitution=value)
+
+
+@pytest.mark.parametrize("value", [True, np.bool_(False), 2.0, np.float64(2.0), np.uint8(2) > 1])
+def test_an_integer_argument_takes_no_bool_or_float(value):
+    with pytest.raises(TypeError):
+        delta.icosphere(value)
+    with pytest.raises(TypeError):
+        delta.granulate(value)
+
+
+def test_scalars_of_real_numbers_are_read_exactly():
+    mesh = delta.QueryMesh(delta.icosphere(2))
+    points = np.full((3, 3), 0.5)
+    expected = delta.distance(mesh, points, eps=0.5)
+    for value in (0.5, np.float64(0.5), np.float32(0.5), np.float16(0.5), np.array(0.5)):
+        np.testing.assert_array_equal(delta.distance(mesh, points, eps=value), expected)
+    for value in (1, np.int64(1), np.uint16(1), np.array(1)):
+        np.testing.assert_array_equal(
+            delta.distance(mesh, points, eps=value), delta.distance(mesh, points, eps=1.0))
+    assert delta.icosphere(np.int32(2)).triangle_count == delta.icosphere(2).triangle_count
+    with pytest.raises(delta.Error, match="2\\^53"):
+        delta.distance(mesh, points, eps=2**53 + 1)
