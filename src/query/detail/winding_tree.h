@@ -67,7 +67,8 @@ struct WindingSign {
 
 /// The sign of the winding number at `point` (prepared frame; not on the surface), exactly as
 /// exactWindingNumber would give it: the hierarchy with β = 4, where its error bound leaves
-/// |w − ½| ≤ tolerance in doubt again with β = 10, and where still in doubt the exact sum.
+/// in doubt whether |w − ½| ≤ tolerance, or on which side of ½ w lies, again with β = 10, and
+/// where still in doubt the exact sum.
 /// (Measured on camel and armadillo: β = 3 leaves the bound above ½ at 40% of points in the
 /// box, β = 4 at none, for 1.5 times the cost; Barill's β = 2 is accurate in practice but its
 /// rigorous bound decides almost nothing.) The
