@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -156,6 +157,28 @@ TEST(BoundGrid, NeverAboveTheDistanceForAPlanarQuad) {
   const BoundGrid grid(triangles, boundsOf(triangles));
   EXPECT_EQ(grid.dims()[2], 1u);
   EXPECT_NEAR(grid.lowerBoundSquared({0.5, 0.5, 5.0}), 4.0, 1e-6);
+}
+
+TEST(BoundGrid, NeverAboveTheDistanceForFansOfThinTriangles) {
+  // The rows of cells a triangle marks come from its extent within each row (clipped), not from
+  // its box: a fan's thin triangles from a disc's centre to its rim, flat and tilted, and a
+  // cone's, whose boxes hold many cells the triangles miss.
+  for (const double tilt : {0.0, 0.3}) {
+    for (const double height : {0.0, 0.7}) {
+      std::vector<Triangle> fan;
+      const std::size_t spokes = 400;
+      for (std::size_t k = 0; k < spokes; ++k) {
+        const double a0 = 2.0 * std::numbers::pi * static_cast<double>(k) / spokes;
+        const double a1 = 2.0 * std::numbers::pi * static_cast<double>(k + 1) / spokes;
+        const auto rim = [tilt](double angle) {
+          return Vec3{std::cos(angle), std::sin(angle), tilt * std::cos(angle)};
+        };
+        fan.push_back({{0.0, 0.0, height}, rim(a0), rim(a1)});
+      }
+      SCOPED_TRACE("tilt " + toString(tilt) + ", height " + toString(height));
+      expectSafeAndUseful(soaOf(fan), 2000, 14);
+    }
+  }
 }
 
 TEST(BoundGrid, NeverAboveTheDistanceForDegenerateTriangles) {

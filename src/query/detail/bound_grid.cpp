@@ -1,5 +1,7 @@
 #include "bound_grid.h"
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -195,6 +197,53 @@ double sideFor(const Vec3& extent, double target) noexcept {
 /// Rounding: a coordinate maps to a cell by ⌊(x − lower)/h⌋, off by at most 3ε·n of a cell (n the
 /// most cells along an axis); `reach` is above that, and the plane test allows for its own
 /// rounding, so each triangle lies in the exact boxes of its marked cells.
+/// A point in cell units of a grid (cell c covers [c, c + 1) along each axis).
+struct CellPoint {
+  double x, y, z;
+};
+
+/// Keeps the part of the convex polygon `in` (`count` corners) on the side of the plane
+/// coordinate `axis` (1: y, 2: z) = `bound` that `keepAbove` names (Sutherland–Hodgman); the
+/// corners into `out` (room for count + 1), their number returned.
+int clipPolygon(const CellPoint* in, int count, CellPoint* out, int axis, double bound,
+                bool keepAbove) noexcept {
+  const auto offset = [axis, bound, keepAbove](const CellPoint& p) {
+    const double value = axis == 1 ? p.y : p.z;
+    return keepAbove ? value - bound : bound - value;
+  };
+  int kept = 0;
+  for (int k = 0; k < count; ++k) {
+    const CellPoint& from = in[k];
+    const CellPoint& to = in[(k + 1) % count];
+    const double a = offset(from), b = offset(to);
+    if (a >= 0.0) out[kept++] = from;
+    if ((a < 0.0 && b > 0.0) || (a > 0.0 && b < 0.0)) {
+      const double t = a / (a - b);
+      out[kept++] = {from.x + (to.x - from.x) * t, from.y + (to.y - from.y) * t,
+                     from.z + (to.z - from.z) * t};
+    }
+  }
+  return kept;
+}
+
+/// The x extent of the part of triangle `corners` (cell units) within the row of cells
+/// [y − pad, y + 1 + pad] × [z − pad, z + 1 + pad], widened by `pad`; empty (low > high) where
+/// it misses the row.
+std::array<double, 2> rowExtent(const CellPoint (&corners)[3], double y, double z,
+                                double pad) noexcept {
+  CellPoint first[8], second[8];
+  int count = clipPolygon(corners, 3, first, 1, y - pad, true);
+  count = clipPolygon(first, count, second, 1, y + 1.0 + pad, false);
+  count = clipPolygon(second, count, first, 2, z - pad, true);
+  count = clipPolygon(first, count, second, 2, z + 1.0 + pad, false);
+  std::array<double, 2> extent{kInfinity, -kInfinity};
+  for (int k = 0; k < count; ++k) {
+    extent[0] = std::min(extent[0], second[k].x - pad);
+    extent[1] = std::max(extent[1], second[k].x + pad);
+  }
+  return extent;
+}
+
 void markOccupied(const TriangleSoA& triangles, const Frame& frame,
                   std::vector<std::int32_t>& squared) {
   const auto most = static_cast<double>(std::max({frame.dims[0], frame.dims[1], frame.dims[2]}));
@@ -241,12 +290,35 @@ void markOccupied(const TriangleSoA& triangles, const Frame& frame,
       const auto centre = [&frame](std::size_t cell) {
         return (static_cast<double>(cell) + 0.5) * frame.side;
       };
+      // Each row of cells along x from the triangle's extent within it (clipped in cell
+      // units, widened by `pad`, far more than the clipping's rounding): a long thin triangle
+      // (a fan's, from a disc's centre to its rim) visits the cells along it, not every cell of
+      // its box (a fan of 200,000 took 13.6 s to build that way).
+      CellPoint corners[3];
+      const Vec3* vertices[3] = {&triangle.a, &triangle.b, &triangle.c};
+      for (std::size_t k = 0; k < 3; ++k)
+        corners[k] = {(vertices[k]->x - frame.lower[0]) * frame.inverseSide,
+                      (vertices[k]->y - frame.lower[1]) * frame.inverseSide,
+                      (vertices[k]->z - frame.lower[2]) * frame.inverseSide};
+      const double pad = 1e-6 + 64.0 * kEpsilon * (most + 1.0);
       for (std::size_t z = rangeZ[0]; z <= rangeZ[1]; ++z)
         for (std::size_t y = rangeY[0]; y <= rangeY[1]; ++y) {
+          const std::array<double, 2> along =
+              rowExtent(corners, static_cast<double>(y), static_cast<double>(z), pad);
+          if (!(along[0] <= along[1])) continue;
+          // ⌊x⌋ by truncating x + 1 (x > −1 within the clamp), as cellRange.
+          const auto firstX = static_cast<std::size_t>(std::clamp<std::int64_t>(
+              static_cast<std::int64_t>(std::max(along[0], -0.5) + 1.0) - 1,
+              static_cast<std::int64_t>(rangeX[0]), static_cast<std::int64_t>(rangeX[1])));
+          const auto lastX = static_cast<std::size_t>(std::clamp<std::int64_t>(
+              static_cast<std::int64_t>(std::min(along[1], static_cast<double>(rangeX[1]) + 1.0) +
+                                        1.0) -
+                  1,
+              static_cast<std::int64_t>(rangeX[0]), static_cast<std::int64_t>(rangeX[1])));
           const double partial =
               normal.y * (offset.y + centre(y)) + normal.z * (offset.z + centre(z));
           const std::size_t row = y * frame.strides[1] + z * frame.strides[2];
-          for (std::size_t x = rangeX[0]; x <= rangeX[1]; ++x)
+          for (std::size_t x = firstX; x <= lastX; ++x)
             if (std::abs(normal.x * (offset.x + centre(x)) + partial) <= tolerance) mark(row + x);
         }
     }
