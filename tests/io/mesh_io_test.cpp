@@ -250,6 +250,14 @@ TEST(IoLoad, NamesTheFileAndTheReason) {
   const fs::path points = dir.write("points.obj", "v 0 0 0\nv 1 0 0\np 1\np 2\n");
   EXPECT_EQ(loadError(points), "cannot load '" + points.string() +
                                    "': the file has no triangles, only 2 points and 0 lines");
+  // A PLY point cloud whose face element is declared empty (CGAL's b9.ply) said "only 0 points".
+  const fs::path cloud = dir.write("cloud.ply",
+                                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                   "property float y\nproperty float z\nelement face 0\n"
+                                   "property list uchar int vertex_indices\nend_header\n"
+                                   "0 0 0\n1 0 0\n0 1 0\n");
+  EXPECT_EQ(loadError(cloud), "cannot load '" + cloud.string() +
+                                  "': the file has no triangles, only 3 points and 0 lines");
 }
 
 TEST(IoLoad, RejectsCoordinatesThatAreNotFinite) {

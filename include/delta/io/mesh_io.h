@@ -38,9 +38,9 @@ struct LoadStatistics {
   /// delivered them), before joining (an STL facet brings its own three).
   std::size_t sourceVertices = 0;
   /// Point primitives (OBJ's `p`, faces of one corner), and the vertices of a file or mesh that
-  /// declares no faces at all: a PLY without a face element, an OBJ without `f`, `p` or `l`, a
-  /// mesh assimp delivers without faces. A PLY whose face element is empty (`element face 0`)
-  /// adds none of its vertices here; an OFF file without faces is refused before counting.
+  /// declares no faces at all: a PLY without a face element or with an empty one (`element face
+  /// 0`), an OBJ without `f`, `p` or `l`, a mesh assimp delivers without faces. An OFF file
+  /// without faces is refused before counting.
   std::size_t pointsSkipped = 0;
   std::size_t linesSkipped = 0;  ///< line primitives (OBJ's `l`, faces of two corners)
   /// Whether the coordinates are the file's numbers or were rounded to single precision.

@@ -217,7 +217,7 @@ class AsciiBody {
     }
     if (nextContentLine(lines_))
       failAtLine(lines_.lineNumber(), "more lines than the elements the header announces");
-    return soup_.finish(layout_.face == nullptr);
+    return soup_.finish(layout_.face == nullptr || layout_.face->count == 0);
   }
 
  private:
@@ -302,7 +302,7 @@ class BinaryBody {
     if (left() != 0)
       fail(std::to_string(left()) + " bytes follow the elements the header announces (" +
            std::to_string(offset_) + " bytes of binary data expected)");
-    return soup_.finish(layout_.face == nullptr);
+    return soup_.finish(layout_.face == nullptr || layout_.face->count == 0);
   }
 
  private:
