@@ -81,7 +81,9 @@ ContactPoint contactPoint(const Triangle& first, const Triangle& second,
   contact.distance = squared >= detail::kUnderflowingSquare ? std::sqrt(squared)
                                                             : std::min(distance(p, q), 0x1p-480);
   Vec3 along = p - q;
-  const bool rounded = std::max(maxAbs(p), maxAbs(q)) * 0x1p-50 > 0x1p-30 * length(along);
+  // (An intersecting pair has P = Q and takes its direction from the faces.)
+  const bool rounded =
+      !results.intersect(k) && std::max(maxAbs(p), maxAbs(q)) * 0x1p-50 > 0x1p-30 * length(along);
   if (rounded) {
     const kernels::TriangleDistanceResult local = kernels::triangleDistanceBruteForce(
         {first.a - p, first.b - p, first.c - p}, {second.a - p, second.b - p, second.c - p});

@@ -165,16 +165,31 @@ TEST(Hybrid, EveryIsaMatchesTheBruteForce) {
     }
 }
 
-TEST(Hybrid, TinyPairsMatchTheBruteForce) {
-  // Found by an audit: below about 2⁻¹⁴² the piercing test's products (degree 7 in the pair's
+TEST(Hybrid, TinyAndHugePairsMatchTheBruteForce) {
+  // Found by audits: below about 2⁻¹⁴² the piercing test's products (degree 7 in the pair's
   // size) underflowed to 0 and passed as 0 ≥ 0, so granulates scaled by 2⁻¹⁶⁰ were reported
-  // intersecting 0.13 of their size apart. Every family at such scales, on every ISA.
+  // intersecting 0.13 of their size apart; above about 2¹⁴⁶ they overflowed and ∞ ≥ margin
+  // passed. Every family at such scales, on every ISA.
   for (Isa isa : supportedIsas())
-    for (const int exponent : {-130, -150, -160, -175})
+    for (const int exponent : {-130, -150, -160, -175, 125, 140, 146, 147, 150, 170})
       for (auto family : kAllFamilies) {
         SCOPED_TRACE(std::string(name(isa)) + " 2^" + std::to_string(exponent));
         checkAgainstBruteForce(family, test::scaledCount(300), 97, isa, exponent);
       }
+  // The pair the review found at 2¹⁴⁶ (scalar and SSE2 reported it intersecting): an edge of B
+  // beside A's face, 0.028 of the size apart.
+  const double s = 0x1p146, c = 0.52 * s;
+  const Triangle a{{0, 0, 0}, {s, 0, 0}, {0, s, 0}};
+  const Triangle b{{c, c, 2 * s}, {c, c, -2 * s}, {c + 0.2 * s, c + 0.2 * s, -2 * s}};
+  const TriangleDistanceResult exact = triangleDistanceBruteForce(a, b);
+  ASSERT_FALSE(exact.intersect);
+  for (Isa isa : supportedIsas()) {
+    const PairBatch batch = makeBatch({{a, b}});
+    PairResults results(1);
+    hybridDistances(batch.firstSoa, batch.secondSoa, results, isa);
+    EXPECT_FALSE(results.intersect(0)) << name(isa);
+    EXPECT_NEAR(results.distance(0), std::sqrt(exact.distanceSquared), 1e-12 * s) << name(isa);
+  }
 }
 
 TEST(Hybrid, MatchesTheExactOracle) {

@@ -32,6 +32,8 @@ struct HybridTolerances {
   /// The least L² of a pair certified intersecting (L ≥ 2⁻¹²⁰): the piercing test's products,
   /// of degree 7 in L, stay normal numbers above it.
   static constexpr double kSmallestPiercedSquared = 0x1p-240;
+  /// The largest (L ≤ 2¹²⁰): its products stay finite below it.
+  static constexpr double kLargestPiercedSquared = 0x1p240;
   /// Edges whose cross product is below kParallel of |d1|²|d2|² count as parallel.
   static constexpr double kParallel = 1e-20;
 };
@@ -283,9 +285,11 @@ inline PairOutputLanes<W> certify(const PairGeometry<W>& g, const Candidate<W>& 
                                           pair.f1, pair.f2, g.m.f1f1, g.m.f1f2, g.m.f2f2);
   // The piercing test's products are of degree 7 in the pair's size: below about 2⁻¹⁴² they
   // underflow, and its inequalities hold at 0 ≥ 0 (granulates scaled by 2⁻¹⁶⁰ were certified
-  // intersecting 0.13 of their size apart). Such pairs go to the brute force.
-  const Mask<W> intersect =
-      (bThroughA.found | aThroughB.found) & (size2 >= HybridTolerances::kSmallestPiercedSquared);
+  // intersecting 0.13 of their size apart); above about 2¹⁴⁶ D·det overflows and ∞ ≥ margin
+  // holds (at 2¹⁴⁷, a pair 0.084 of its size apart). Such pairs go to the brute force.
+  const Mask<W> intersect = (bThroughA.found | aThroughB.found) &
+                            (size2 >= HybridTolerances::kSmallestPiercedSquared) &
+                            (size2 <= HybridTolerances::kLargestPiercedSquared);
   const Vec3Lanes<W> touch =
       pair.origin + select<W>(bThroughA.found, bThroughA.point, aThroughB.point);
   out.intersect = intersect;
