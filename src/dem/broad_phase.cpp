@@ -26,12 +26,21 @@ struct Cell {
 
 /// A bucket of a table of `mask + 1` buckets (a power of two), by the primes of Teschner et al.,
 /// "Optimized spatial hashing for collision detection of deformable objects" (VMV 2003).
-std::size_t bucketOf(const Cell& cell, std::uint64_t mask) noexcept {
-  const std::uint64_t hash = (static_cast<std::uint64_t>(cell.x) * 73856093u) ^
-                             (static_cast<std::uint64_t>(cell.y) * 19349663u) ^
-                             (static_cast<std::uint64_t>(cell.z) * 83492791u);
-  return static_cast<std::size_t>(hash & mask);
+std::uint64_t hashOf(const Cell& cell) noexcept {
+  return (static_cast<std::uint64_t>(cell.x) * 73856093u) ^
+         (static_cast<std::uint64_t>(cell.y) * 19349663u) ^
+         (static_cast<std::uint64_t>(cell.z) * 83492791u);
 }
+
+std::size_t bucketOf(const Cell& cell, std::uint64_t mask) noexcept {
+  return static_cast<std::size_t>(hashOf(cell) & mask);
+}
+
+/// Cells a little larger than the reach they must hold: two centres closer than the reach then
+/// map to neighbouring cells although (c − lower) / edge rounds (by at most 2⁻²¹ of a cell, a
+/// cell being at least 2⁻³⁰ of the extent). Without it two spheres 4.5e-14 inside each other's
+/// reach, 1022 from the box's corner, fell two cells apart.
+constexpr double kCellSlack = 1.0 + 0x1p-18;
 
 void validate(std::span<const Sphere> spheres, double margin) {
   if (!std::isfinite(margin) || margin < 0.0)
@@ -100,6 +109,18 @@ std::vector<CandidatePair> pairsOnGrid(std::span<const Sphere> spheres, double m
   return detail::joined<CandidatePair>(perChunk);
 }
 
+/// Whether the spheres in `cells` share their cells with more than 128 others on average (the
+/// sum of the squared counts of a hash of the cells, which collisions only raise): then each
+/// sphere's neighbourhood costs hundreds of tests.
+bool crowded(const std::vector<Cell>& cells) {
+  const std::uint64_t mask = std::bit_ceil(2 * cells.size()) - 1;
+  std::vector<std::uint32_t> counts(mask + 1, 0);
+  double sharing = 0.0;
+  for (const Cell& cell : cells)
+    sharing += 2.0 * counts[bucketOf(cell, mask)]++ + 1.0;  // (c + 1)² − c²
+  return sharing > 128.0 * static_cast<double>(cells.size());
+}
+
 /// A cell of one level of levelledPairs' grids.
 struct LevelCell {
   Cell cell;
@@ -108,7 +129,7 @@ struct LevelCell {
 };
 
 std::size_t bucketOf(const LevelCell& key, std::uint64_t mask) noexcept {
-  return bucketOf(Cell{key.cell.x, key.cell.y, key.cell.z + (std::int64_t{key.level} << 40)}, mask);
+  return static_cast<std::size_t>((hashOf(key.cell) ^ (key.level * 2654435761u)) & mask);
 }
 
 /// nearbyPairs for spheres of very different sizes, on a hierarchy of grids (Ericson, Real-Time
@@ -124,7 +145,7 @@ std::vector<CandidatePair> levelledPairs(std::span<const Sphere> spheres, double
   std::vector<std::uint32_t> levels(count);
   std::uint32_t top = 0;
   for (std::size_t i = 0; i < count; ++i) {
-    const double needed = 2.0 * spheres[i].radius + margin;
+    const double needed = (2.0 * spheres[i].radius + margin) * kCellSlack;
     std::uint32_t level = 0;
     while (std::ldexp(baseEdge, static_cast<int>(level)) < needed)
       ++level;
@@ -199,14 +220,9 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
     smallestRadius = std::min(smallestRadius, sphere.radius);
   }
   const double extent = maxAbs(box.extent());
-  const double edge = std::max(2.0 * largestRadius + margin, extent / kMostCellsPerAxis);
+  const double edge =
+      std::max((2.0 * largestRadius + margin) * kCellSlack, extent / kMostCellsPerAxis);
   if (!(edge > 0.0)) return {};  // every sphere a point at one place and no margin: no gap < 0
-  // Sizes more than a factor 2 apart: cells as large as the largest sphere would crowd the
-  // small ones (one sphere of radius 5 among 64,000 of 0.01 took 4.6 s, against 0.04 s without
-  // it), so each size gets cells of its own.
-  const double smallestEdge = std::max(2.0 * smallestRadius + margin, extent / kMostCellsPerAxis);
-  if (edge > 2.0 * smallestEdge && smallestEdge > 0.0)
-    return levelledPairs(spheres, margin, box, smallestEdge);
 
   const std::size_t count = spheres.size();
   std::vector<Cell> cells(count);
@@ -215,6 +231,14 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
     cells[i] = {static_cast<std::int64_t>(offset.x), static_cast<std::int64_t>(offset.y),
                 static_cast<std::int64_t>(offset.z)};
   }
+  // Sizes more than a factor 2 apart whose cells, as large as the largest sphere, crowd the
+  // small ones (one sphere of radius 5 among 64,000 of 0.01 took 4.6 s, against 0.04 s without
+  // it): each size gets cells of its own. Where the large cells hold few spheres each (a
+  // polydisperse pack) they are faster (the levels' hashed walk cost 7–15 times as much).
+  const double smallestEdge = std::max(2.0 * smallestRadius + margin, extent / kMostCellsPerAxis);
+  if (edge > 2.0 * smallestEdge && smallestEdge > 0.0 && crowded(cells))
+    return levelledPairs(spheres, margin, box, smallestEdge);
+
   // Packed spheres (a DEM pile or flow): a dense grid of cells where it holds at most a few
   // cells a sphere, each row of three neighbouring cells one run of the sorted spheres.
   Cell last{0, 0, 0};

@@ -90,6 +90,17 @@ TEST(DemBroadPhase, FarApartAndCoincidentSpheres) {
   EXPECT_TRUE(nearbyPairs(std::vector<Sphere>{}, 1.0).empty());
 }
 
+TEST(DemBroadPhase, SpheresJustWithinReachAreFoundWhereTheirCellsRound) {
+  // Found by a review: the reach equal to the cell's edge, (c − lower) / edge rounded the second
+  // and third spheres, 4.5e-14 inside each other's reach, into cells two apart.
+  const double r = 0.10145294357308786;
+  const std::vector<Sphere> spheres = {{{-3.249042560330531, 0, 0}, r},
+                                       {{1022.0344051892953, 0, 0}, r},
+                                       {{1022.2373110764414, 0, 0}, r}};
+  ASSERT_EQ(pairsByDefinition(spheres, 0.0).size(), 1u);
+  EXPECT_EQ(nearbyPairs(spheres, 0.0), pairsByDefinition(spheres, 0.0));
+}
+
 TEST(DemBroadPhase, SameForOneAndTwoThreads) {
   const std::vector<Sphere> spheres = randomSpheres(3000, 40.0, 7);
   const int threads = omp_get_max_threads();

@@ -29,11 +29,13 @@ struct CandidatePair {
 /// cells are hashed into a table of about twice as many buckets as spheres and filled by a
 /// counting sort. Either way the work is O(n) for spheres of similar size in any packing and the
 /// memory O(n) however far apart they are.
-/// Where the cells of the largest sphere would be more than twice those of the smallest (cells as
-/// large as the largest crowd the small ones: one boulder among 64,000 grains took 4.6 s), each
-/// sphere lives on a level of hashed cells that holds its own size (edges doubling from the
-/// smallest's) and looks for partners around itself on its own level and every level above:
-/// O(n · levels) for any mix of sizes, the same pairs in the same order.
+/// Where the cells of the largest sphere would be more than twice those of the smallest and
+/// hold more than 128 spheres a sphere's cell on average (cells as large as the largest crowd the
+/// small ones: one boulder among 64,000 grains took 4.6 s), each sphere lives on a level of
+/// hashed cells that holds its own size (edges doubling from the smallest's) and looks for
+/// partners around itself on its own level and every level above: O(n · levels) however the
+/// sizes crowd, the same pairs in the same order. Cells are 2⁻¹⁸ larger than the reach they
+/// hold, so that the rounding of a centre's cell never parts a pair.
 ///
 /// Throws delta::Error when the margin is negative or not finite, a sphere's centre or radius
 /// is not finite or a radius is negative (naming the sphere), or there are 2³² or more spheres.
