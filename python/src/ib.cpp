@@ -102,14 +102,14 @@ std::optional<Aabb> domainFrom(const std::optional<ArrayLike>& given) {
 }
 
 /// Builds without the GIL; Ctrl-C stops the build (KeyboardInterrupt, no grid made).
-PyGrid makeGrid(const Geometry& mesh, int levels, double refineFactor, bool signedDistance,
+PyGrid makeGrid(const Geometry& mesh, int levels, double refineFactor, Flag signedDistance,
                 std::optional<double> exactBand, double padding,
                 const std::optional<ArrayLike>& domain, const std::string& sign) {
   ib::GridOptions options;
   options.sign = signNamed(sign);
   options.levels = levels;
   options.refineFactor = refineFactor;
-  options.signedDistance = signedDistance;
+  options.signedDistance = signedDistance.value;
   options.exactBand = exactBand;
   options.padding = padding;
   options.domain = domainFrom(domain);

@@ -163,7 +163,7 @@ py::array checkedOutput(const py::array& out, const std::vector<py::ssize_t>& sh
 }
 
 py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<double> epsilon,
-                   bool signedDistance, std::optional<py::object> out,
+                   Flag signedDistance, std::optional<py::object> out,
                    const std::optional<std::string>& sign) {
   const std::optional<cd::Sign> how = sign ? std::optional(signNamed(*sign)) : std::nullopt;
   const DoubleArray coordinates = pointArray(points, "points", false);
@@ -179,7 +179,7 @@ py::array distance(const Geometry& mesh, const ArrayLike& points, std::optional<
   const std::span<const Vec3> query = asVec3(coordinates);
   cd::PointQuery request;
   if (epsilon) request.epsilon = *epsilon;
-  request.signedDistance = signedDistance || how.has_value();
+  request.signedDistance = signedDistance.value || how.has_value();
   if (how) request.sign = *how;
   // Into a new array, or for `out` into a scratch one copied at the end: a query stopped by an
   // error or Ctrl-C leaves `out` as it was, never half-written.
@@ -540,9 +540,9 @@ void bindOverlap(py::module_& module) {
 
   module.def(
       "overlap",
-      [](const Geometry& a, const Geometry& b, bool curves) {
+      [](const Geometry& a, const Geometry& b, Flag curves) {
         cd::OverlapOptions options;
-        options.curves = curves;
+        options.curves = curves.value;
         py::gil_scoped_release release;
         return cd::overlap(a.prepare(), b.prepare(), options);
       },

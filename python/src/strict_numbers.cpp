@@ -72,6 +72,14 @@ std::optional<double> exactReal(py::handle given, bool convert) {
   const long long whole = PyLong_AsLongLongAndOverflow(integer.ptr(), &overflow);
   if (overflow == 0 && whole >= -(1LL << 53) && whole <= (1LL << 53))
     return static_cast<double>(whole);
+  // Beyond 2^53 only some integers are float64s (2^60 is): those that come back unchanged.
+  const double rounded = PyLong_AsDouble(integer.ptr());
+  if (rounded == -1.0 && PyErr_Occurred())
+    PyErr_Clear();  // beyond float64's range
+  else if (const py::object back = py::reinterpret_steal<py::object>(PyLong_FromDouble(rounded));
+           back && PyObject_RichCompareBool(back.ptr(), integer.ptr(), Py_EQ) == 1)
+    return rounded;
+  PyErr_Clear();
   throw Error("the integer " + py::str(integer).cast<std::string>() +
               " is not a float64 exactly (beyond 2^53): it would be rounded; pass a float");
 }

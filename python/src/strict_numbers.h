@@ -18,8 +18,8 @@ namespace delta::python {
 /// or numpy.bool_, a complex number, a real wider than float64, an object). Taken: float (and
 /// numpy.float64), numpy.float16/float32 (widened exactly), int and numpy integers, and a 0-d
 /// array of those. Without `convert` only float (pybind11's first pass over the overloads).
-/// Throws delta::Error for an integer that
-/// float64 does not hold exactly (beyond 2^53) and for an integer beyond float64's range.
+/// Throws delta::Error for an integer that float64 does not hold exactly (beyond 2^53 some are
+/// not) or that lies beyond float64's range.
 std::optional<double> exactReal(pybind11::handle given, bool convert);
 
 /// `given` as an integer within [lowest, highest], or nothing where it is not an integer (a bool,
@@ -30,9 +30,33 @@ std::optional<long long> exactSigned(pybind11::handle given, bool convert, long 
 std::optional<unsigned long long> exactUnsigned(pybind11::handle given, bool convert,
                                                 unsigned long long highest);
 
+/// A truth-value argument: Python's bool or numpy.bool_ only. (pybind11's own caster of bool,
+/// which cannot be replaced, takes None as False and 2 or 0.5 as True: the bindings' truth-value
+/// parameters are Flags.)
+struct Flag {
+  bool value = false;
+};
+
 }  // namespace delta::python
 
 namespace pybind11::detail {
+
+template <>
+class type_caster<delta::python::Flag> {
+ public:
+  PYBIND11_TYPE_CASTER(delta::python::Flag, const_name("bool"));
+  bool load(handle source, bool) {
+    if (!source) return false;
+    static const handle numpyBool = object(module_::import("numpy").attr("bool_")).release();
+    if (!PyBool_Check(source.ptr()) && PyObject_IsInstance(source.ptr(), numpyBool.ptr()) != 1)
+      return false;
+    value.value = PyObject_IsTrue(source.ptr()) == 1;
+    return true;
+  }
+  static handle cast(delta::python::Flag flag, return_value_policy, handle) {
+    return handle(flag.value ? Py_True : Py_False).inc_ref();
+  }
+};
 
 template <>
 class type_caster<double> {

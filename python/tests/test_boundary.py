@@ -447,3 +447,26 @@ def test_scalars_of_real_numbers_are_read_exactly():
     assert delta.icosphere(np.int32(2)).triangle_count == delta.icosphere(2).triangle_count
     with pytest.raises(delta.Error, match="2\\^53"):
         delta.distance(mesh, points, eps=2**53 + 1)
+
+
+@pytest.mark.parametrize("value", [None, 2, 0, 0.5, "yes"])
+def test_a_truth_value_is_a_bool(value):
+    # pybind11's caster of bool took None as False and 2 or 0.5 as True.
+    mesh = delta.icosphere(1)
+    with pytest.raises(TypeError):
+        delta.distance(mesh, np.zeros((1, 3)), signed=value)
+    with pytest.raises(TypeError):
+        delta.overlap(mesh, mesh, curves=value)
+    with pytest.raises(TypeError):
+        delta.ib.AdaptiveGrid(mesh, levels=2, signed=value)
+
+
+def test_integers_beyond_2_53_that_float64_holds_are_taken():
+    mesh = delta.QueryMesh(delta.icosphere(1))
+    points = np.zeros((1, 3))
+    assert delta.distance(mesh, points, eps=2**60)["distance"] == delta.distance(mesh, points)["distance"]
+    with pytest.raises(delta.Error, match="2\\^53"):
+        delta.distance(mesh, points, eps=2**60 + 1)
+    with pytest.raises(delta.Error):
+        delta.distance(mesh, points, eps=10**400)
+    assert delta.distance(mesh, points, signed=np.bool_(True))["inside"]
