@@ -132,6 +132,26 @@ std::size_t bucketOf(const LevelCell& key, std::uint64_t mask) noexcept {
   return static_cast<std::size_t>((hashOf(key.cell) ^ (key.level * 2654435761u)) & mask);
 }
 
+/// The spheres by the bucket of their key (`keys[i]` sphere i's), by a counting sort: bucket b's
+/// run is members[start[b], start[b + 1]), in index order within it.
+struct Buckets {
+  std::vector<std::size_t> start;
+  std::vector<std::uint32_t> members;
+};
+
+template <class Key>
+Buckets byBucket(const std::vector<Key>& keys, std::uint64_t mask) {
+  Buckets buckets{std::vector<std::size_t>(mask + 2, 0), std::vector<std::uint32_t>(keys.size())};
+  for (const Key& key : keys)
+    ++buckets.start[bucketOf(key, mask) + 1];
+  for (std::size_t b = 1; b < buckets.start.size(); ++b)
+    buckets.start[b] += buckets.start[b - 1];
+  std::vector<std::size_t> fill(buckets.start.begin(), buckets.start.end() - 1);
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    buckets.members[fill[bucketOf(keys[i], mask)]++] = static_cast<std::uint32_t>(i);
+  return buckets;
+}
+
 /// nearbyPairs for spheres of very different sizes, on a hierarchy of grids (Ericson, Real-Time
 /// Collision Detection 7.2.6): level l has cells of edge baseEdge·2^l, and a sphere lives on the
 /// lowest level whose edge holds 2r + margin. For two spheres on levels a ≤ b, rᵢ + rⱼ + margin
@@ -164,17 +184,7 @@ std::vector<CandidatePair> levelledPairs(std::span<const Sphere> spheres, double
   for (std::size_t i = 0; i < count; ++i)
     keys[i] = {cellAt(spheres[i].center, levels[i]), levels[i]};
   const std::uint64_t mask = std::bit_ceil(2 * count) - 1;
-  std::vector<std::size_t> bucketStart(mask + 2, 0);
-  for (const LevelCell& key : keys)
-    ++bucketStart[bucketOf(key, mask) + 1];
-  for (std::size_t b = 1; b < bucketStart.size(); ++b)
-    bucketStart[b] += bucketStart[b - 1];
-  std::vector<std::uint32_t> members(count);
-  {
-    std::vector<std::size_t> fill(bucketStart.begin(), bucketStart.end() - 1);
-    for (std::size_t i = 0; i < count; ++i)
-      members[fill[bucketOf(keys[i], mask)]++] = static_cast<std::uint32_t>(i);
-  }
+  const Buckets buckets = byBucket(keys, mask);
   std::vector<std::vector<CandidatePair>> perChunk((count + kSphereGrain - 1) / kSphereGrain);
   parallelFor(0, count, kSphereGrain, [&](std::size_t begin, std::size_t end) {
     std::vector<CandidatePair>& found = perChunk[begin / kSphereGrain];
@@ -188,8 +198,8 @@ std::vector<CandidatePair> levelledPairs(std::span<const Sphere> spheres, double
             for (std::int64_t dz = -1; dz <= 1; ++dz) {
               const LevelCell neighbour{{home.x + dx, home.y + dy, home.z + dz}, level};
               const std::size_t bucket = bucketOf(neighbour, mask);
-              for (std::size_t k = bucketStart[bucket]; k < bucketStart[bucket + 1]; ++k) {
-                const std::uint32_t j = members[k];
+              for (std::size_t k = buckets.start[bucket]; k < buckets.start[bucket + 1]; ++k) {
+                const std::uint32_t j = buckets.members[k];
                 if (!(keys[j] == neighbour) || (level == levels[i] && j <= i)) continue;
                 const double reach = one.radius + spheres[j].radius + margin;
                 if (distanceSquared(one.center, spheres[j].center) < reach * reach)
@@ -248,19 +258,8 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
                            static_cast<double>(last.z + 1);
   if (gridCells <= 8.0 * static_cast<double>(count) + 4096.0)
     return pairsOnGrid(spheres, margin, cells, last);
-  // Counting sort of the spheres by bucket; within a bucket they stay in index order.
   const std::uint64_t mask = std::bit_ceil(2 * count) - 1;
-  std::vector<std::size_t> bucketStart(mask + 2, 0);
-  for (const Cell& cell : cells)
-    ++bucketStart[bucketOf(cell, mask) + 1];
-  for (std::size_t b = 1; b < bucketStart.size(); ++b)
-    bucketStart[b] += bucketStart[b - 1];
-  std::vector<std::uint32_t> members(count);
-  {
-    std::vector<std::size_t> fill(bucketStart.begin(), bucketStart.end() - 1);
-    for (std::size_t i = 0; i < count; ++i)
-      members[fill[bucketOf(cells[i], mask)]++] = static_cast<std::uint32_t>(i);
-  }
+  const Buckets buckets = byBucket(cells, mask);
 
   std::vector<std::vector<CandidatePair>> perChunk((count + kSphereGrain - 1) / kSphereGrain);
   parallelFor(0, count, kSphereGrain, [&](std::size_t begin, std::size_t end) {
@@ -273,8 +272,8 @@ std::vector<CandidatePair> nearbyPairs(std::span<const Sphere> spheres, double m
           for (std::int64_t dz = -1; dz <= 1; ++dz) {
             const Cell neighbour{cells[i].x + dx, cells[i].y + dy, cells[i].z + dz};
             const std::size_t bucket = bucketOf(neighbour, mask);
-            for (std::size_t k = bucketStart[bucket]; k < bucketStart[bucket + 1]; ++k) {
-              const std::uint32_t j = members[k];
+            for (std::size_t k = buckets.start[bucket]; k < buckets.start[bucket + 1]; ++k) {
+              const std::uint32_t j = buckets.members[k];
               // A sphere lies in one cell, so it is met once even when two neighbouring cells
               // share a bucket.
               if (j <= i || !(cells[j] == neighbour)) continue;
