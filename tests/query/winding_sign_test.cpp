@@ -129,7 +129,7 @@ TEST(WindingSign, BesideAnOpenSheetAmbiguousPointsAgreeWithTheExactWindingNumber
   // Beside an open sheet w is near ½ on one side: every such point is ambiguous, and each went
   // to the exact O(n) sum (a grid around a sheet of 33,000 triangles took 49 s). The hierarchy
   // now decides them where its bound puts w within the tolerance and on one side of ½.
-  const std::size_t n = 60;  // 7200 triangles, gently curved
+  constexpr std::size_t n = 60;  // 7200 triangles, gently curved
   std::vector<Vec3> vertices;
   std::vector<TriangleIndices> triangles;
   for (std::size_t j = 0; j <= n; ++j)
@@ -137,7 +137,7 @@ TEST(WindingSign, BesideAnOpenSheetAmbiguousPointsAgreeWithTheExactWindingNumber
       const double x = static_cast<double>(i) / n, y = static_cast<double>(j) / n;
       vertices.push_back({x, y, 0.05 * std::sin(3.0 * x) * std::cos(2.0 * y)});
     }
-  const auto at = [n](std::size_t i, std::size_t j) {
+  const auto at = [](std::size_t i, std::size_t j) {
     return static_cast<std::uint32_t>(j * (n + 1) + i);
   };
   for (std::size_t j = 0; j < n; ++j)
