@@ -15,7 +15,7 @@ Load or build meshes, move them, and find where two meshes, or points and a mesh
     print(r["distance"], r["closest"], r["triangle"], r["inside"])
 
 Every query, build, DEM step and grid move runs without the global interpreter lock, in parallel
-over the cores (OpenMP; OMP_NUM_THREADS), so Python threads run queries side by side. Bad input
+over the cores (Delta's thread pool; OMP_NUM_THREADS), so Python threads run queries side by side. Bad input
 raises delta.Error (a ValueError) naming what and where. Submodules: delta.dem (the Discrete
 Element Method) and delta.ib (immersed boundaries: an adaptive grid).
 """

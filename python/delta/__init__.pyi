@@ -664,9 +664,10 @@ def icosphere(subdivisions: int = ..., radius: float = ..., center: numpy.ndarra
 def load(path: os.PathLike) -> Mesh:
     """
     Loads every triangle of a file in any format assimp reads (OFF, OBJ, STL, PLY, glTF, ...):
-    meshes merged, polygons triangulated, identical vertices joined; coordinates arrive rounded to
-    single precision (Debian's assimp). delta.Error names the path and the reason for a missing or
-    malformed file.
+    meshes merged, polygons triangulated, identical vertices joined; coordinates are the file's
+    numbers exactly for OFF, PLY, OBJ and STL (Delta's own readers), rounded to single precision
+    for the formats only assimp reads (load_with_statistics says which). delta.Error names the
+    path and the reason for a missing or malformed file.
     """
     ...
 
@@ -718,7 +719,7 @@ def quad(size_x: float = ..., size_y: float = ..., center: numpy.ndarray = ...) 
 
 def save(mesh: Mesh, path: os.PathLike) -> None:
     """
-    Writes the mesh as .stl, .ply (binary), .obj or .vtp (VTK, for ParaView; coordinates in double), by the extension. Loading an .stl, .ply or .obj again gives the same triangles in the same order, coordinates rounded to single precision. The file is replaced whole or not at all.
+    Writes the mesh as .stl, .ply (binary), .obj (text, every coordinate exactly) or .vtp (VTK, for ParaView; coordinates in double), by the extension. Loading an .stl, .ply or .obj again gives the same triangles in the same order, coordinates rounded to single precision (.stl, .ply) or exactly (.obj). The file is replaced whole or not at all.
     """
     ...
 

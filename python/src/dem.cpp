@@ -308,7 +308,8 @@ void bindWorld(py::module_& dem) {
 World(parameters): rigid particles (closed triangle meshes or spheres) and obstacles (walls,
 floors, funnels: any mesh, with a prescribed motion), advanced by velocity Verlet with the seed's
 spring-dashpot contact law at Delta's mesh-mesh contact points. `step()` and `run(n)` run without
-the GIL and in parallel (OpenMP; OMP_NUM_THREADS), bitwise the same for any thread count.
+the GIL and in parallel (Delta's thread pool; OMP_NUM_THREADS), bitwise the same for any thread
+count.
 
 Reading: `particles` (a structured array copy: shape, position, orientation (w, x, y, z),
 velocity, angular_velocity, angular_momentum, force, torque), `positions`, `velocities`,

@@ -497,9 +497,10 @@ void bindPrimitivesAndFiles(py::module_& module) {
       },
       "path"_a,
       R"(Loads every triangle of a file in any format assimp reads (OFF, OBJ, STL, PLY, glTF, ...):
-meshes merged, polygons triangulated, identical vertices joined; coordinates arrive rounded to
-single precision (Debian's assimp). delta.Error names the path and the reason for a missing or
-malformed file.)");
+meshes merged, polygons triangulated, identical vertices joined; coordinates are the file's
+numbers exactly for OFF, PLY, OBJ and STL (Delta's own readers), rounded to single precision
+for the formats only assimp reads (load_with_statistics says which). delta.Error names the
+path and the reason for a missing or malformed file.)");
   module.def(
       "load_with_statistics",
       [](const std::filesystem::path& path) {
@@ -527,10 +528,10 @@ malformed file.)");
         io::save(*snapshot, path);
       },
       "mesh"_a, "path"_a,
-      "Writes the mesh as .stl, .ply (binary), .obj or .vtp (VTK, for ParaView; coordinates in "
-      "double), by the extension. Loading an .stl, .ply or .obj again gives the same triangles in "
-      "the same order, coordinates rounded to single precision. The file is replaced whole or "
-      "not at all.");
+      "Writes the mesh as .stl, .ply (binary), .obj (text, every coordinate exactly) or .vtp "
+      "(VTK, for ParaView; coordinates in double), by the extension. Loading an .stl, .ply or .obj "
+      "again gives the same triangles in the same order, coordinates rounded to single precision "
+      "(.stl, .ply) or exactly (.obj). The file is replaced whole or not at all.");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -295,7 +296,6 @@ const char* exportFormat(const fs::path& path) {
   const std::string extension = lowerCaseExtension(path);
   if (extension == ".stl") return "stlb";
   if (extension == ".ply") return "plyb";
-  if (extension == ".obj") return "objnomtl";  // "obj" would also write a .mtl file beside it
   throw Error("unknown extension '" + path.extension().string() +
               "': Δ writes .stl (binary), .ply (binary), .obj and .vtp");
 }
@@ -395,7 +395,41 @@ Mesh load(const fs::path& path) {
   return std::move(loaded.mesh);
 }
 
+/// An OBJ file of the mesh, each coordinate in the shortest decimal that reads back to the same
+/// double (std::to_chars): loading it again gives the mesh's coordinates exactly. (assimp's OBJ
+/// exporter wrote nine significant digits: 0.8183823522853823 came back as 0.818382323.)
+std::string objText(const Mesh& mesh) {
+  std::string text = "# delta: vertices, then triangles (1-based)\n";
+  char digits[32];
+  const auto append = [&text, &digits](double value) {
+    const std::to_chars_result result = std::to_chars(digits, digits + sizeof digits, value);
+    text.append(digits, result.ptr);
+  };
+  for (const Vec3& v : mesh.vertices()) {
+    text += "v ";
+    append(v.x);
+    text += ' ';
+    append(v.y);
+    text += ' ';
+    append(v.z);
+    text += '\n';
+  }
+  for (const TriangleIndices& t : mesh.triangles()) {
+    text += 'f';
+    for (const std::uint32_t corner : t) {
+      text += ' ';
+      text += std::to_string(std::uint64_t{corner} + 1);
+    }
+    text += '\n';
+  }
+  return text;
+}
+
 void save(const Mesh& mesh, const fs::path& path) {
+  if (lowerCaseExtension(path) == ".obj") {
+    writeFileAtomically(path, objText(mesh));
+    return;
+  }
   if (lowerCaseExtension(path) == ".vtp") {  // VTK, for ParaView: every coordinate in double
     try {
       writeVtp(VtkPolyData::fromMesh(mesh), path);

@@ -103,16 +103,17 @@ LoadedMesh loadWithStatistics(const std::filesystem::path& path);
 /// loadWithStatistics(path).mesh: the same contract, errors and threading.
 Mesh load(const std::filesystem::path& path);
 
-/// Writes the mesh to `path` in the format its extension names, case-insensitive: .stl (binary),
-/// .ply (binary) or .obj (no material file), through assimp's exporters, or .vtp (VTK XML
-/// PolyData for ParaView, io/vtk.h: coordinates in double, bit for bit). Loading an .stl, .ply or
-/// .obj file again gives the same triangles in the same order, with coordinates rounded to
-/// single precision (assimp's precision, and the formats'); vertices are joined on loading, so an
-/// STL comes back with shared vertices. Δ does not read .vtp.
+/// Writes the mesh to `path` in the format its extension names, case-insensitive: .stl (binary)
+/// or .ply (binary) through assimp's exporters, .obj (text, no material file: each coordinate in
+/// the shortest decimal that reads back to the same double), or .vtp (VTK XML PolyData for
+/// ParaView, io/vtk.h: coordinates in double, bit for bit). Loading an .stl, .ply or .obj file
+/// again gives the same triangles in the same order, with coordinates rounded to single
+/// precision (.stl, .ply: the formats' floats) or exactly (.obj); vertices are joined on loading,
+/// so an STL comes back with shared vertices. Δ does not read .vtp.
 ///
 /// Throws delta::Error, naming the path and the reason, for another extension, a coordinate
 /// beyond single precision or a mesh whose largest coordinate is below its normal range (about
-/// 1.2e-38, where the file would round the vertices to zero; .stl, .ply, .obj), or when writing
+/// 1.2e-38, where the file would round the vertices to zero; .stl, .ply), or when writing
 /// fails (a full disk, /dev/full). The
 /// file is written whole or not at all (io/atomic_file.h): an existing file is replaced only by a
 /// complete one, and left as it was when writing fails; a symlink at `path` is kept and its target
