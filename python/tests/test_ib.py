@@ -99,3 +99,40 @@ def test_a_refused_move_leaves_the_grid_as_it_was():
     assert np.array_equal(grid.distances, distances)
     grid.move_boundary_to(delta.RigidTransform())
     assert grid.leaf_count == leaves
+
+
+def test_a_move_far_from_the_origin_gives_the_cells_of_a_new_grid():
+    # Found by an audit: a domain at 1e6 of side 2^-10 and a face 40 ulp of 1e6 from its corner.
+    # The bounds on the remembered distances allowed for rounding relative to the domain's size
+    # only, while the poses' images round by ulps of 1e6: after two moves of 1e-8 rad the moved
+    # grid kept its root unsplit (the corner's distance 43 ulp, bound 3.2 ulp, exact 38.9 ulp)
+    # where a new grid at that pose splits it.
+    origin, side = 1e6, 2.0**-10
+    ulp = np.spacing(origin)
+    domain = [(origin,) * 3, (origin + side,) * 3]
+    face = origin - 40 * ulp
+    lower, upper = [origin - side] * 3, [face, origin + 2 * side, origin + 2 * side]
+    corners = np.array([[x, y, z] for z in (lower[2], upper[2]) for y in (lower[1], upper[1])
+                        for x in (lower[0], upper[0])])
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    box = delta.QueryMesh(delta.Mesh(corners, np.array(
+        [t for q in quads for t in ([q[0], q[1], q[2]], [q[0], q[2], q[3]])])))
+    factor = 39.7 * ulp / delta.ib.AdaptiveGrid(box, levels=5, domain=domain).cell_diagonal(0)
+    first = np.array([[0.9999999999999993, 2.1871083152538317e-08, 2.750654766092997e-08, -0.04937763046473265],
+                      [-2.1871083158328786e-08, 0.9999999999999998, 2.1051219663196263e-10, 0.02166057121939957],
+                      [-2.7506547656325836e-08, -2.105127982299538e-10, 0.9999999999999997, 0.02771706087514758],
+                      [0, 0, 0, 1.0]])
+    second = np.array([[1.0, 6.926188533749026e-10, -9.494904116189099e-10, 0.00025687168817967176],
+                       [-6.92618852848149e-10, 1.0, 5.547750604922273e-10, 0.00013784365728497505],
+                       [9.494904120031576e-10, -5.547750598345922e-10, 1.0, -0.0003947153454646468],
+                       [0, 0, 0, 1.0]])
+    moved = delta.ib.AdaptiveGrid(box, levels=5, domain=domain, refine_factor=factor, exact_band=0.0)
+    moved.move_boundary_to(first)
+    moved.move_boundary_to(second)
+    placed = box.copy()
+    placed.set_pose(second)
+    fresh = delta.ib.AdaptiveGrid(placed, levels=5, domain=domain, refine_factor=factor,
+                                  exact_band=0.0)
+    assert list(moved.leaves_per_level) == list(fresh.leaves_per_level) == [0, 8, 0, 0, 0, 0]
+    exact = delta.distance(placed, np.asarray(moved.positions))["distance"]
+    assert (np.abs(np.abs(moved.distances) - exact) <= moved.error_bounds).all()

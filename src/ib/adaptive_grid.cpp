@@ -23,6 +23,11 @@ constexpr std::uint32_t kNotOld = Cell::kLeaf;
 /// the distance computation, so that a decision the bound calls certain is the one an exact
 /// recomputation makes.
 constexpr double kRoundingAllowance = 1e-12;
+/// The same for the rounding that goes with the size of the coordinates rather than of the
+/// distance: a pose's image of a point and a query's distance round by ulps of the coordinates
+/// (a domain at 1e6 of side 2⁻¹⁰: the computed largest displacement fell an ulp of 1e6 short of
+/// the exact one, and a moved grid kept a cell a new grid splits).
+constexpr double kCoordinateRounding = 64.0 * std::numeric_limits<double>::epsilon();
 
 /// A vertex's integer position, 21 bits per axis.
 constexpr std::uint64_t packKey(std::uint32_t x, std::uint32_t y, std::uint32_t z) noexcept {
@@ -69,6 +74,17 @@ void requireQueryableAt(const QueryMesh& boundary, const RigidTransform& pose, c
                 toString(domain.upper) + " to " + toString(images.lower) + " to " +
                 toString(images.upper) + " in the boundary's frame, beyond the coordinate range " +
                 coordinateRangeText() + " the distance queries answer; the grid is unchanged");
+}
+
+/// The largest coordinate of a corner of `box` (prepared frame) placed by `pose`.
+double placedMagnitude(const Aabb& box, const RigidTransform& pose) {
+  double largest = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{corner & 1 ? box.upper.x : box.lower.x, corner & 2 ? box.upper.y : box.lower.y,
+                 corner & 4 ? box.upper.z : box.lower.z};
+    largest = std::max(largest, maxAbs(pose.apply(p)));
+  }
+  return largest;
 }
 
 /// The largest displacement of a point of `box` (prepared frame) between poses `from` and `to`.
@@ -346,11 +362,16 @@ void AdaptiveGrid::refine() {
 void AdaptiveGrid::updateSlacks(std::uint32_t now) {
   // How far each remembered distance may be off now (0 for this pose).
   const double roundingScale = kRoundingAllowance * length(domain_.extent());
+  const double domainMagnitude = std::max(maxAbs(domain_.lower), maxAbs(domain_.upper));
+  const double nowMagnitude = placedMagnitude(boundary_.bounds(), poses_[now]);
   slackOfEpoch_.resize(poses_.size());
-  for (std::uint32_t epoch = 0; epoch < now; ++epoch)
+  for (std::uint32_t epoch = 0; epoch < now; ++epoch) {
+    const double magnitude = std::max(
+        {domainMagnitude, nowMagnitude, placedMagnitude(boundary_.bounds(), poses_[epoch])});
     slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
                                (1.0 + kRoundingAllowance) +
-                           roundingScale;
+                           roundingScale + kCoordinateRounding * magnitude;
+  }
   slackOfEpoch_[now] = 0.0;
 }
 
