@@ -27,7 +27,9 @@ struct GridOptions {
   int levels = 7;
   /// A cell of level l < L is refined while the smallest |distance| at its eight corners is below
   /// refineFactor × its diagonal. Every point of a cell lies within half a diagonal of a corner,
-  /// so any factor ≥ ½ refines every cell the boundary passes through. > 0, finite.
+  /// so any factor above ½ refines every cell the boundary passes through (at exactly ½ a
+  /// boundary point at the cell's centre, half a diagonal from every corner, is not below it).
+  /// > 0, finite.
   double refineFactor = 1.0;
   /// Signed distances (negative inside; with Sign::pseudonormal the boundary must be closed and
   /// not cross itself, delta::Error otherwise) or unsigned.
@@ -50,7 +52,9 @@ struct GridOptions {
   /// boundary where it is now; further vertices keep their sign (exact) and a distance within
   /// errorBound() of the exact one, and are queried again only once that bound could bring them
   /// into the band or change a refinement decision. None (the default): the diagonal of a
-  /// level-L cell, so that every corner of every cell the boundary passes through is exact.
+  /// level-L cell, so that every corner of every cell the boundary passes through is exact where
+  /// refineFactor is above ½ (such cells are then of level L; with a smaller factor a coarser
+  /// cell the boundary passes through may keep corners outside the band).
   /// 0: only what refinement needs. +∞: every vertex exact after every move. ≥ 0 (NaN and
   /// negative values: delta::Error).
   std::optional<double> exactBand{};

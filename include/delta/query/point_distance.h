@@ -52,7 +52,12 @@ enum class Sign {
   /// delta::windingNumber), up to its rounding. On a closed mesh that does not cross itself
   /// (selfIntersections(), found by the first such query) the winding number off the surface is
   /// 0 or 1 and the pseudonormal sign is its sign, exactly also within rounding of a face, where
-  /// solid angles are not: that is what runs there, at the pseudonormal's cost.
+  /// solid angles are not: that is what runs there, at the pseudonormal's cost. (Not detected:
+  /// a closed mesh whose separate parts are oriented against each other — an inside-out part
+  /// outside the others, or a shell inside a shell of the same orientation — has winding
+  /// numbers −1 or 2 off its surface, and both signs answer there by pseudonormals, which name
+  /// the wrong side of such a part. Orient the parts of a solid as its boundary: outward, and
+  /// cavities inward.)
   winding,
 };
 
