@@ -86,4 +86,12 @@ Mat3 Quaternion::matrix() const noexcept {
            2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}};
 }
 
+Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
+  Aabb moved;
+  if (box.empty()) return moved;
+  for (int corner = 0; corner < 8; ++corner)
+    moved.extend(motion.apply(box.corner(corner)));
+  return moved;
+}
+
 }  // namespace delta

@@ -23,8 +23,7 @@ constexpr std::size_t kParticleGrain = 128;
 double reachFrom(const Aabb& box, const Vec3& pivot) noexcept {
   double farthest = 0.0;
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 x{(corner & 1) ? box.upper.x : box.lower.x, (corner & 2) ? box.upper.y : box.lower.y,
-                 (corner & 4) ? box.upper.z : box.lower.z};
+    const Vec3 x = box.corner(corner);
     farthest = std::max(farthest, length(x - pivot));
   }
   return farthest;
@@ -60,16 +59,6 @@ double closestApproach(const Vec3& a, const Vec3& d) noexcept {
   const double dd = dot(ds, ds);
   const double t = dd > 0.0 ? std::clamp(-dot(as, ds) / dd, 0.0, 1.0) : 0.0;
   return magnitude(a + d * t);
-}
-
-/// The box of `box`'s corners carried by `pose`.
-Aabb movedBox(const Aabb& box, const RigidTransform& pose) noexcept {
-  Aabb moved;
-  for (int corner = 0; corner < 8; ++corner)
-    moved.extend(pose.apply(Vec3{(corner & 1) ? box.upper.x : box.lower.x,
-                                 (corner & 2) ? box.upper.y : box.lower.y,
-                                 (corner & 4) ? box.upper.z : box.lower.z}));
-  return moved;
 }
 
 /// The obstacles' boxes where they are, and how fast their farthest points move (0 at rest).

@@ -224,16 +224,6 @@ void turnLanes(Particle* const (&lanes)[kTurnLanes], double timeStep) noexcept {
   }
 }
 
-/// The box of `box` after a rigid motion (its eight corners moved).
-Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
-  Aabb moved;
-  for (int corner = 0; corner < 8; ++corner)
-    moved.extend(motion.apply({(corner & 1) ? box.upper.x : box.lower.x,
-                               (corner & 2) ? box.upper.y : box.lower.y,
-                               (corner & 4) ? box.upper.z : box.lower.z}));
-  return moved;
-}
-
 bool isIdentity(const RigidTransform& motion) noexcept {
   const Quaternion& q = motion.rotation;
   return q.w == 1.0 && q.x == 0.0 && q.y == 0.0 && q.z == 0.0 && motion.translation == Vec3{};
@@ -429,9 +419,7 @@ bool World::neighbourListHolds() noexcept {
       continue;
     const Aabb& box = obstacles_[o].queryMesh.bounds();
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p{(corner & 1) ? box.upper.x : box.lower.x,
-                   (corner & 2) ? box.upper.y : box.lower.y,
-                   (corner & 4) ? box.upper.z : box.lower.z};
+      const Vec3 p = box.corner(corner);
       list.obstacleMoved[o] =
           std::max(list.obstacleMoved[o], distance(now.apply(p), then.apply(p)));
     }

@@ -40,13 +40,7 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 /// The box of the boundary where it is now.
 Aabb currentBounds(const QueryMesh& boundary) {
-  const Aabb& prepared = boundary.bounds();
-  Aabb box;
-  for (int corner = 0; corner < 8; ++corner)
-    box.extend(boundary.pose().apply({corner & 1 ? prepared.upper.x : prepared.lower.x,
-                                      corner & 2 ? prepared.upper.y : prepared.lower.y,
-                                      corner & 4 ? prepared.upper.z : prepared.lower.z}));
-  return box;
+  return movedBox(boundary.bounds(), boundary.pose());
 }
 
 /// Throws delta::Error where the distance queries of a move to `pose` would refuse a point
@@ -62,9 +56,7 @@ void requireQueryableAt(const QueryMesh& boundary, const RigidTransform& pose, c
   Aabb images;
   double largest = 0.0;
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p{corner & 1 ? domain.upper.x : domain.lower.x,
-                 corner & 2 ? domain.upper.y : domain.lower.y,
-                 corner & 4 ? domain.upper.z : domain.lower.z};
+    const Vec3 p = domain.corner(corner);
     images.extend(inverse.apply(p));
     largest = std::max(largest, length(p));
   }
@@ -76,25 +68,13 @@ void requireQueryableAt(const QueryMesh& boundary, const RigidTransform& pose, c
                 coordinateRangeText() + " the distance queries answer; the grid is unchanged");
 }
 
-/// The largest coordinate of a corner of `box` (prepared frame) placed by `pose`.
-double placedMagnitude(const Aabb& box, const RigidTransform& pose) {
-  double largest = 0.0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p{corner & 1 ? box.upper.x : box.lower.x, corner & 2 ? box.upper.y : box.lower.y,
-                 corner & 4 ? box.upper.z : box.lower.z};
-    largest = std::max(largest, maxAbs(pose.apply(p)));
-  }
-  return largest;
-}
-
 /// The largest displacement of a point of `box` (prepared frame) between poses `from` and `to`.
 /// The displacement (R₁ − R₀)p + t₁ − t₀ is affine in p, so its length is convex and largest at
 /// a corner of the box.
 double largestDisplacement(const Aabb& box, const RigidTransform& from, const RigidTransform& to) {
   double largest = 0.0;
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p{corner & 1 ? box.upper.x : box.lower.x, corner & 2 ? box.upper.y : box.lower.y,
-                 corner & 4 ? box.upper.z : box.lower.z};
+    const Vec3 p = box.corner(corner);
     largest = std::max(largest, length(to.apply(p) - from.apply(p)));
   }
   return largest;
@@ -362,15 +342,15 @@ void AdaptiveGrid::refine() {
 void AdaptiveGrid::updateSlacks(std::uint32_t now) {
   // How far each remembered distance may be off now (0 for this pose).
   const double roundingScale = kRoundingAllowance * length(domain_.extent());
-  const double domainMagnitude = std::max(maxAbs(domain_.lower), maxAbs(domain_.upper));
-  const double nowMagnitude = placedMagnitude(boundary_.bounds(), poses_[now]);
+  const double fixedMagnitude =
+      std::max(magnitude(domain_), magnitude(movedBox(boundary_.bounds(), poses_[now])));
   slackOfEpoch_.resize(poses_.size());
   for (std::uint32_t epoch = 0; epoch < now; ++epoch) {
-    const double magnitude = std::max(
-        {domainMagnitude, nowMagnitude, placedMagnitude(boundary_.bounds(), poses_[epoch])});
+    const double largest =
+        std::max(fixedMagnitude, magnitude(movedBox(boundary_.bounds(), poses_[epoch])));
     slackOfEpoch_[epoch] = largestDisplacement(boundary_.bounds(), poses_[epoch], poses_[now]) *
                                (1.0 + kRoundingAllowance) +
-                           roundingScale + kCoordinateRounding * magnitude;
+                           roundingScale + kCoordinateRounding * largest;
   }
   slackOfEpoch_[now] = 0.0;
 }

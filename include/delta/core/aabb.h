@@ -34,6 +34,10 @@ struct Aabb {
     lower = min(lower, box.lower);
     upper = max(upper, box.upper);
   }
+  /// Corner `k` (0–7): upper along x where bit 0 of k is set, along y bit 1, along z bit 2.
+  constexpr Vec3 corner(int k) const noexcept {
+    return {k & 1 ? upper.x : lower.x, k & 2 ? upper.y : lower.y, k & 4 ? upper.z : lower.z};
+  }
   /// The centre; NaN for an empty box.
   constexpr Vec3 center() const noexcept { return (lower + upper) * 0.5; }
   /// upper − lower per axis: 0 for a flat axis, −∞ for an empty box.

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "delta/core/aabb.h"
 #include "delta/core/mat3.h"
 #include "delta/core/vec3.h"
 
@@ -131,5 +132,12 @@ struct RigidTransform {
 inline RigidTransform operator*(const RigidTransform& a, const RigidTransform& b) noexcept {
   return {a.rotation * b.rotation, a.rotation.rotate(b.translation) + a.translation};
 }
+
+/// The box of `box`'s eight corners moved by `motion`: it holds every point of `box` moved (a
+/// rigid motion maps the box to a parallelepiped, the hull of its moved corners), up to the
+/// rounding of the motion. Empty for an empty box.
+///
+/// Threading: a pure function.
+Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept;
 
 }  // namespace delta

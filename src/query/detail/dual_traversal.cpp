@@ -64,10 +64,7 @@ double placedMagnitude(const Aabb& first, const Aabb& second,
                        const RigidTransform& secondToFirst) noexcept {
   double magnitude = std::max(maxAbs(first.lower), maxAbs(first.upper));
   for (int corner = 0; corner < 8; ++corner)
-    magnitude = std::max(
-        magnitude, maxAbs(secondToFirst.apply({(corner & 1) ? second.upper.x : second.lower.x,
-                                               (corner & 2) ? second.upper.y : second.lower.y,
-                                               (corner & 4) ? second.upper.z : second.lower.z})));
+    magnitude = std::max(magnitude, maxAbs(secondToFirst.apply(second.corner(corner))));
   return magnitude;
 }
 

@@ -6,16 +6,6 @@
 
 namespace delta::detail {
 
-Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept {
-  Aabb moved;
-  if (box.empty()) return moved;
-  for (int corner = 0; corner < 8; ++corner)
-    moved.extend(motion.apply({corner & 1 ? box.upper.x : box.lower.x,
-                               corner & 2 ? box.upper.y : box.lower.y,
-                               corner & 4 ? box.upper.z : box.lower.z}));
-  return moved;
-}
-
 /// A sufficient test, one rotation instead of movedBox's eight: every point of `box` moved by
 /// `motion` lies within the ball about the moved centre of the box's half diagonal, so within
 /// the range when that ball's reach from the origin is (with a factor of two to spare for the

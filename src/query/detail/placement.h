@@ -8,11 +8,6 @@
 
 namespace delta::detail {
 
-/// The box of `box`'s eight corners moved by `motion`: it holds every point of `box` moved (a
-/// rigid motion maps the box to a parallelepiped, the hull of its moved corners), up to the
-/// rounding of the motion.
-Aabb movedBox(const Aabb& box, const RigidTransform& motion) noexcept;
-
 /// A sufficient test that every point of `box` moved by `motion` lies within the coordinate
 /// range (one rotation: the ball about the moved centre), false also where it overflows or meets
 /// a NaN. QueryMesh makes it once a pose (QueryMesh::placedSurelyInRange).
