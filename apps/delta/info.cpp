@@ -6,6 +6,7 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/measures.h"
 #include "delta/mesh/topology.h"
+#include "delta/query/misoriented_parts.h"
 #include "delta/query/self_intersections.h"
 
 #include "commands.h"
@@ -31,6 +32,7 @@ struct MeshReport {
   double volume = 0.0;  // meaningful when topology.closed && topology.consistentlyOriented
   Topology topology;
   std::size_t selfIntersections = 0;  ///< crossing pairs of non-adjacent triangles
+  MisorientedParts parts;             ///< of a closed mesh: its parts, and those misoriented
   EdgeLengths edges;
   io::LoadStatistics statistics;
   std::size_t meshBytes = 0;
@@ -53,7 +55,9 @@ MeshReport analyse(const std::string& source) {
   report.topology = analyzeTopology(mesh);
   if (report.topology.closed && report.topology.consistentlyOriented)
     report.volume = signedVolume(mesh);
-  report.selfIntersections = selfIntersections(QueryMesh(mesh)).count;
+  const QueryMesh query(mesh);
+  report.selfIntersections = selfIntersections(query).count;
+  report.parts = misorientedParts(query);
   report.edges = edgeLengths(mesh);
   report.statistics = loaded.statistics;
   report.meshBytes = mesh.memoryBytes();
@@ -91,6 +95,8 @@ void printJson(const std::string& source, const MeshReport& r) {
       .value("boundary_edges", r.topology.boundaryEdges)
       .value("non_manifold_edges", r.topology.nonManifoldEdges)
       .value("self_intersections", r.selfIntersections)
+      .value("parts", r.parts.parts)
+      .value("misoriented_parts", r.parts.count)
       .beginObject("mesh_size")
       .value("min_edge", r.edges.min)
       .value("mean_edge", r.edges.mean)
@@ -133,6 +139,10 @@ void printText(const std::string& source, const MeshReport& r) {
               yesNo(r.topology.consistentlyOriented), r.topology.misorientedEdges);
   std::printf("self-intersections   %zu%s\n", r.selfIntersections,
               r.selfIntersections == 0 ? "" : " pairs of triangles cross (--sign winding)");
+  if (r.topology.closed && r.topology.consistentlyOriented)
+    std::printf(
+        "misoriented parts    %zu of %zu%s\n", r.parts.count, r.parts.parts,
+        r.parts.count == 0 ? "" : " oriented against the parts around them (--sign winding)");
   std::printf("mesh size h          min %.6g, mean %.6g, max %.6g (edge length)\n", r.edges.min,
               r.edges.mean, r.edges.max);
   std::printf("load                 %.3f s (analysis %.3f s)\n", r.loadSeconds, r.analyseSeconds);

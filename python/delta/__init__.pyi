@@ -480,9 +480,15 @@ class QueryMesh:
         """
         ...
     @property
+    def bounds_solid(self) -> bool:
+        """
+        Closed and consistently oriented, crossing itself nowhere, and no misoriented parts: the winding number off the surface is 0 or 1 and pseudonormal signs are exact.
+        """
+        ...
+    @property
     def closed(self) -> bool:
         """
-        Closed and consistently oriented: signed distances and inside tests are defined.
+        Closed and consistently oriented. Pseudonormal signs also need bounds_solid (no self-intersections, no misoriented parts); sign="winding" takes any mesh.
         """
         ...
     def copy(self) -> QueryMesh:
@@ -494,6 +500,12 @@ class QueryMesh:
     def memory_bytes(self) -> int:
         """
         Bytes held on the heap (triangles, tree, pseudonormals).
+        """
+        ...
+    @property
+    def misoriented_parts(self) -> int:
+        """
+        The number of parts of a closed mesh (its triangles joined across edges) oriented against the parts around them: an inside-out part outside the others, a shell inside a shell of the same orientation (winding number -1 or 2 there). Found on first use and kept; 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a mesh with any; sign="winding" answers it.
         """
         ...
     @property

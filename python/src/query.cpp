@@ -24,6 +24,7 @@
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"
+#include "delta/query/misoriented_parts.h"
 #include "delta/query/overlap.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
@@ -268,8 +269,9 @@ Python threads may query one QueryMesh at once.)")
           }))
       .def_property_readonly("triangle_count", &QueryMesh::size, "The number of triangles.")
       .def_property_readonly("closed", &QueryMesh::closed,
-                             "Closed and consistently oriented: signed distances and inside "
-                             "tests are defined.")
+                             "Closed and consistently oriented. Pseudonormal signs also need "
+                             "bounds_solid (no self-intersections, no misoriented parts); "
+                             "sign=\"winding\" takes any mesh.")
       .def_property_readonly(
           "bounds",
           [](const QueryMesh& mesh) {
@@ -284,6 +286,25 @@ Python threads may query one QueryMesh at once.)")
           },
           "The number of pairs of non-adjacent triangles that intersect (found on first use, "
           "O(n log n), and kept; as `delta info`). Pseudonormal signs refuse a mesh with any.")
+      .def_property_readonly(
+          "misoriented_parts",
+          [](const QueryMesh& mesh) {
+            py::gil_scoped_release release;
+            return misorientedParts(mesh).count;
+          },
+          "The number of parts of a closed mesh (its triangles joined across edges) oriented "
+          "against the parts around them: an inside-out part outside the others, a shell inside a "
+          "shell of the same orientation (winding number -1 or 2 there). Found on first use and "
+          "kept; 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a "
+          "mesh with any; sign=\"winding\" answers it.")
+      .def_property_readonly(
+          "bounds_solid",
+          [](const QueryMesh& mesh) {
+            py::gil_scoped_release release;
+            return boundsSolid(mesh);
+          },
+          "Closed and consistently oriented, crossing itself nowhere, and no misoriented parts: "
+          "the winding number off the surface is 0 or 1 and pseudonormal signs are exact.")
       .def_property_readonly("memory_bytes", &QueryMesh::memoryBytes,
                              "Bytes held on the heap (triangles, tree, pseudonormals).")
       .def(

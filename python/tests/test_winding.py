@@ -123,3 +123,32 @@ def test_real_open_mesh(meshes):
     certain = (r["distance"] > 0) & (np.abs(w - 0.5) > 1e-9)
     np.testing.assert_array_equal(r["inside"][certain], (w > 0.5)[certain])
     del rng
+
+
+def test_misoriented_parts_refuse_pseudonormals_and_sign_by_winding_number():
+    # A ball with a second, smaller shell of the same orientation inside it: closed, crossing
+    # nowhere, winding number 2 inside the inner shell and 1 between them.
+    outer, inner = delta.icosphere(2, radius=2.0), delta.icosphere(2)
+    vertices = np.vstack([np.asarray(outer.vertices), np.asarray(inner.vertices)])
+    triangles = np.vstack([np.asarray(outer.triangles),
+                           np.asarray(inner.triangles) + len(np.asarray(outer.vertices))])
+    shells = delta.Mesh(vertices, triangles)
+    query = delta.QueryMesh(shells)
+    assert shells.closed and query.self_intersections == 0
+    assert query.misoriented_parts == 1 and not query.bounds_solid
+    assert delta.QueryMesh(outer).misoriented_parts == 0 and delta.QueryMesh(outer).bounds_solid
+    with pytest.raises(delta.Error, match="1 of its 2 parts is oriented against"):
+        delta.distance(query, np.zeros((1, 3)), signed=True)
+    points = np.random.default_rng(5).uniform(-2.4, 2.4, (400, 3))
+    r = delta.distance(query, points, sign="winding")
+    w = exact_winding_numbers(shells, points)
+    certain = r["distance"] > 1e-6
+    np.testing.assert_array_equal(r["inside"][certain], (w > 0.5)[certain])
+    assert r["inside"][certain & (np.linalg.norm(points, axis=1) < 0.9)].all()
+    # Reversing the inner shell makes it a cavity: a solid, signed alike both ways.
+    cavity = delta.Mesh(vertices, np.vstack([np.asarray(outer.triangles),
+                                             np.asarray(inner.triangles)[:, ::-1]
+                                             + len(np.asarray(outer.vertices))]))
+    assert delta.QueryMesh(cavity).bounds_solid
+    np.testing.assert_array_equal(delta.distance(cavity, points, signed=True)["inside"],
+                                  delta.distance(cavity, points, sign="winding")["inside"])

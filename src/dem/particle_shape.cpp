@@ -11,6 +11,8 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/primitives.h"
 #include "delta/mesh/topology.h"
+#include "delta/query/misoriented_parts.h"
+#include "delta/query/self_intersections.h"
 
 namespace delta::detail {
 /// A particle's mesh, checked and moved to its centre of mass, and its mass properties.
@@ -41,6 +43,21 @@ detail::PreparedShape prepare(const Mesh& mesh, double density) {
   Mesh body = mesh;
   body.translate(-properties.centroid);
   return {std::move(body), properties, density};
+}
+
+/// Throws unless the closed `mesh` bounds a solid: where it crosses itself, or a part is oriented
+/// against the others, its mass properties would count a region twice or take it away.
+void requireSolid(const QueryMesh& mesh) {
+  const SelfIntersections& crossings = selfIntersections(mesh);
+  if (crossings.any())
+    throw Error("particle shape: the mesh crosses itself (" + std::to_string(crossings.count) +
+                " pairs of triangles intersect, such as " +
+                std::to_string(crossings.pairs.front().first) + " and " +
+                std::to_string(crossings.pairs.front().second) +
+                "): it bounds no solid, and its mass would count the overlap twice");
+  const MisorientedParts& parts = misorientedParts(mesh);
+  if (parts.any())
+    throw Error("particle shape: the mesh bounds no solid: " + describeMisorientedParts(parts));
 }
 
 double largestVertexDistance(const Mesh& mesh) noexcept {
@@ -108,7 +125,9 @@ ParticleShape::ParticleShape(const detail::PreparedShape& prepared)
       boundingRadius_(prepared.sphereRadius > 0.0 ? prepared.sphereRadius
                                                   : largestVertexDistance(mesh_)),
       centroid_(prepared.properties.centroid),
-      kind_(prepared.sphereRadius > 0.0 ? ParticleKind::Sphere : ParticleKind::Mesh) {}
+      kind_(prepared.sphereRadius > 0.0 ? ParticleKind::Sphere : ParticleKind::Mesh) {
+  if (kind_ == ParticleKind::Mesh) requireSolid(queryMesh_);
+}
 
 }  // namespace delta::dem
 

@@ -11,6 +11,7 @@
 #include "delta/core/format.h"
 #include "delta/core/memory.h"
 #include "delta/mesh/coordinate_range.h"
+#include "delta/query/misoriented_parts.h"
 #include "delta/query/self_intersections.h"
 
 namespace delta::ib {
@@ -192,9 +193,10 @@ AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options
   options_.domain = domain_;
   resolution_ = std::uint32_t{1} << options_.levels;
   exactBand_ = options_.exactBand ? *options_.exactBand : cellDiagonal(options_.levels);
-  // A winding sign of an open or self-intersecting boundary may change away from it as it moves.
+  // A winding sign of a boundary that bounds no solid (open, crossing itself, a misoriented part)
+  // may change away from it as it moves.
   if (options_.signedDistance && options_.sign == contactdetection::Sign::winding &&
-      !(boundary_.closed() && !selfIntersections(boundary_).any()))
+      !boundsSolid(boundary_))
     exactBand_ = std::numeric_limits<double>::infinity();
   rebuildTable(1024);
   poses_.push_back(boundary_.pose());

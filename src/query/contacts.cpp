@@ -16,6 +16,7 @@
 #include "delta/kernels/pair_results.h"
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/coordinate_range.h"
+#include "delta/query/misoriented_parts.h"
 
 #include "detail/dual_traversal.h"
 #include "detail/placement.h"
@@ -504,7 +505,8 @@ std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoi
 
 /// Phase 5, for two closed meshes: a contact whose triangles do not cross is marked overlapping
 /// where its x lies inside both (each mesh's nearest-triangle sign, or its winding number where
-/// it crosses itself); `toFirst` and `toSecond` carry x into each mesh's prepared frame.
+/// it bounds no solid: it crosses itself, or a part is oriented against the others); `toFirst`
+/// and `toSecond` carry x into each mesh's prepared frame.
 template <class ToFirst, class ToSecond>
 void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsilon,
                     std::span<ContactPoint> found, const ToFirst& toFirst,
@@ -512,9 +514,10 @@ void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsi
   const detail::QueryMeshData &a = first.data(), &b = second.data();
   // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
   const double limit = 4.0 * epsilon * epsilon;
-  // A closed mesh that crosses itself is signed by its winding number (pseudonormals are wrong
-  // near the crossings). Made here, where they may throw, not in the parallel loop.
-  const bool aCrosses = a.selfIntersections().any(), bCrosses = b.selfIntersections().any();
+  // A closed mesh that bounds no solid is signed by its winding number (pseudonormals are wrong
+  // near the crossings and a misoriented part). Made here, where they may throw, not in the
+  // parallel loop.
+  const bool aCrosses = !boundsSolid(first), bCrosses = !boundsSolid(second);
   aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
   bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();
   const auto inside = [limit, &a, aCrosses, bCrosses](const detail::QueryMeshData& mesh,

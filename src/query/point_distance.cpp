@@ -16,6 +16,7 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/mesh/coordinate_range.h"
+#include "delta/query/misoriented_parts.h"
 #include "delta/query/self_intersections.h"
 
 #include "detail/morton.h"
@@ -32,10 +33,10 @@ constexpr std::size_t kCoherentFrom = 4 * kGrain;
 /// A distance bound's square is searched with this growth (a few ulps of rounding allowed for).
 constexpr double kBoundGrowth = 1.0 + 1e-12;
 
-/// Checks the query and returns it as it runs: a winding sign on a closed mesh that does not
-/// cross itself is its pseudonormal sign, exactly (off the surface the winding number is 0 or 1
-/// there, and the pseudonormal decides its side exactly where the solid angles of a point
-/// within rounding of a face would not).
+/// Checks the query and returns it as it runs: a winding sign on a mesh that bounds a solid
+/// (closed, not crossing itself, no misoriented parts) is its pseudonormal sign, exactly (off the
+/// surface the winding number is 0 or 1 there, and the pseudonormal decides its side exactly
+/// where the solid angles of a point within rounding of a face would not).
 PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
   if (std::isnan(query.epsilon) || !(query.epsilon > 0.0))
     throw Error("point distances: epsilon = " + toString(query.epsilon) + " must be positive");
@@ -44,7 +45,7 @@ PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
                 " must be in [0, 0.5)");
   if (!query.signedDistance) return query;
   if (query.sign == Sign::winding) {
-    if (mesh.closed() && !selfIntersections(mesh).any()) {
+    if (boundsSolid(mesh)) {
       mesh.data().pseudonormals();  // made here, where it may throw
       PointQuery pseudonormal = query;
       pseudonormal.sign = Sign::pseudonormal;
@@ -67,6 +68,11 @@ PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
                 std::to_string(crossings.pairs.front().first) + " and " +
                 std::to_string(crossings.pairs.front().second) +
                 "), where pseudonormal signs are wrong; the winding-number sign is defined there "
+                "(C++ Sign::winding, Python sign=\"winding\", CLI --sign winding)");
+  const MisorientedParts& parts = misorientedParts(mesh);
+  if (parts.any())
+    throw Error("signed distance by pseudonormals: " + describeMisorientedParts(parts) +
+                ", where pseudonormal signs are wrong; the winding-number sign is defined there "
                 "(C++ Sign::winding, Python sign=\"winding\", CLI --sign winding)");
   mesh.data().pseudonormals();  // made here, where it may throw
   return query;
@@ -588,10 +594,10 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
                                    double epsilon) {
   if (!std::isfinite(epsilon) || !(epsilon > 0.0))
     throw Error("point contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
-  // A closed mesh that crosses itself has its overlaps by winding number, where pseudonormal
-  // signs are wrong.
+  // A closed mesh that bounds no solid (it crosses itself, or a part is oriented against the
+  // others) has its overlaps by winding number, where pseudonormal signs are wrong.
   const bool closed = mesh.closed();
-  const Sign sign = closed && selfIntersections(mesh).any() ? Sign::winding : Sign::pseudonormal;
+  const Sign sign = closed && !boundsSolid(mesh) ? Sign::winding : Sign::pseudonormal;
   const std::vector<PointDistance> near =
       distances(mesh, points, {.epsilon = epsilon, .signedDistance = closed, .sign = sign});
   const detail::QueryMeshData& data = mesh.data();

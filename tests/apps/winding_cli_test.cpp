@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "apps/cli_run.h"
@@ -23,6 +24,41 @@ TEST(WindingCli, InfoReportsSelfIntersections) {
   const CliRun text = runDelta("info " + quoted(kMeshes / "armadillo.off"));
   ASSERT_EQ(text.exitCode, 0) << text.err;
   EXPECT_NE(text.out.find("self-intersections   0\n"), std::string::npos) << text.out;
+}
+
+TEST(WindingCli, MisorientedPartsAreReportedRefusedByPseudonormalsAndSignedByWindingNumber) {
+  // Two cubes, ±2 and ±1, both outward: the inner one is a shell inside a shell of the same
+  // orientation (winding number 2 inside it), not a cavity.
+  const TemporaryFolder folder("misoriented");
+  const fs::path off = folder.path / "shells.off";
+  {
+    std::ofstream file(off);
+    file << "OFF\n16 24 0\n";
+    for (const int size : {2, 1})
+      for (int i = 0; i < 8; ++i)
+        file << (i & 1 ? size : -size) << ' ' << (i & 2 ? size : -size) << ' '
+             << (i & 4 ? size : -size) << '\n';
+    const int faces[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                              {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+    for (const int offset : {0, 8})
+      for (const auto& f : faces)
+        file << "3 " << f[0] + offset << ' ' << f[1] + offset << ' ' << f[2] + offset << '\n';
+  }
+  const CliRun info = runDelta("info --json " + quoted(off));
+  ASSERT_EQ(info.exitCode, 0) << info.err;
+  EXPECT_EQ(jsonNumber(info.out, "parts"), 2.0) << info.out;
+  EXPECT_EQ(jsonNumber(info.out, "misoriented_parts"), 1.0) << info.out;
+  const CliRun text = runDelta("info " + quoted(off));
+  ASSERT_EQ(text.exitCode, 0) << text.err;
+  EXPECT_NE(text.out.find("misoriented parts    1 of 2 oriented against"), std::string::npos)
+      << text.out;
+  expectOneLineError(runDelta("distance " + quoted(off) + " --points builtin:uniform:10 --signed"),
+                     "1 of its 2 parts is oriented against");
+  const fs::path csv = folder.path / "signs.csv";
+  const CliRun run = runDelta("distance " + quoted(off) +
+                              " --points builtin:uniform:10 --sign winding --out " + quoted(csv));
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_TRUE(fs::exists(csv));
 }
 
 TEST(WindingCli, DistanceSignsOpenAndCrossingMeshes) {

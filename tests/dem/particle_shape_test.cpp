@@ -5,6 +5,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
@@ -58,6 +61,39 @@ TEST(DemParticleShape, RejectsOpenMeshesAndBadDensities) {
   EXPECT_THROW(ParticleShape(primitives::icosphere(1), -2.0), Error);
   EXPECT_THROW(ParticleShape(primitives::icosphere(1), std::numeric_limits<double>::quiet_NaN()),
                Error);
+}
+
+TEST(DemParticleShape, RejectsMeshesThatBoundNoSolid) {
+  // An icosphere with a vertex pushed through it: closed, and crossing itself, its mass would
+  // count the overlap twice.
+  const Mesh sphere = primitives::icosphere(2);
+  std::vector<Vec3> vertices(sphere.vertices().begin(), sphere.vertices().end());
+  vertices[0] = vertices[0] * -1.3;
+  const Mesh crossing(vertices, {sphere.triangles().begin(), sphere.triangles().end()});
+  const auto messageOf = [](const Mesh& mesh) -> std::string {
+    try {
+      (void)ParticleShape(mesh, 1.0);
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "";
+  };
+  EXPECT_NE(messageOf(crossing).find("crosses itself"), std::string::npos);
+  // A ball with a smaller ball of the same orientation inside: its mass would be both volumes.
+  const Mesh inner = primitives::icosphere(2, 0.5);
+  vertices.assign(sphere.vertices().begin(), sphere.vertices().end());
+  vertices.insert(vertices.end(), inner.vertices().begin(), inner.vertices().end());
+  std::vector<TriangleIndices> triangles(sphere.triangles().begin(), sphere.triangles().end());
+  const auto offset = static_cast<std::uint32_t>(sphere.vertexCount());
+  for (const TriangleIndices& t : inner.triangles())
+    triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  EXPECT_NE(messageOf(Mesh(vertices, triangles)).find("oriented against"), std::string::npos);
+  // The inner ball turned inward is a cavity: a hollow ball, whose mass is the shell's.
+  for (std::size_t k = sphere.triangleCount(); k < triangles.size(); ++k)
+    std::swap(triangles[k][1], triangles[k][2]);
+  const ParticleShape hollow(Mesh(vertices, triangles), 1.0);
+  EXPECT_NEAR(hollow.volume(),
+              ParticleShape(sphere, 1.0).volume() - ParticleShape(inner, 1.0).volume(), 1e-12);
 }
 
 TEST(DemParticleShape, SphereHasExactMassProperties) {

@@ -376,6 +376,18 @@ TEST(DemVolumeLaw, WorldsRefuseWhatTheLawCannotUse) {
             std::string::npos);
   EXPECT_NE(errorOf([&] { world.addShape(ParticleShape::sphere(0.01, kDensity)); }).find("sphere"),
             std::string::npos);
+  // A box with a second box of the same orientation inside it: closed, crossing nowhere, and
+  // bounding no solid (its inner part is misoriented).
+  const Mesh outer = primitives::box({1, 1, 1}), inner = primitives::box({0.5, 0.5, 0.5});
+  std::vector<Vec3> vertices(outer.vertices().begin(), outer.vertices().end());
+  vertices.insert(vertices.end(), inner.vertices().begin(), inner.vertices().end());
+  std::vector<TriangleIndices> triangles(outer.triangles().begin(), outer.triangles().end());
+  const auto offset = static_cast<std::uint32_t>(outer.vertexCount());
+  for (const TriangleIndices& t : inner.triangles())
+    triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const Mesh shells(vertices, triangles);
+  EXPECT_NE(errorOf([&] { world.addObstacle(shells); }).find("oriented against"),
+            std::string::npos);
   EXPECT_EQ(world.obstacles().size(), 0u);
   EXPECT_EQ(world.shapes().size(), 0u);
   for (const Mesh& wall : openBoxWalls(1.0, 1.0, 1.0, 0.0, 0.1))

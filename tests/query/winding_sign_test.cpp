@@ -474,3 +474,58 @@ TEST(WindingSign, MeshContactsOfACrossingMeshMarkOverlapsByWindingNumber) {
 
 }  // namespace
 }  // namespace delta::contactdetection
+
+namespace delta::contactdetection {
+namespace {
+
+/// The box [−1, 1]³ with each face's diagonal split at its midpoint m on one side and a triangle
+/// of zero area (its ends and m) filling the edge: closed, with a flat triangle across every face.
+Mesh boxWithFlatDiagonals() {
+  const Mesh box = primitives::box({2, 2, 2});
+  std::vector<Vec3> vertices(box.vertices().begin(), box.vertices().end());
+  std::vector<TriangleIndices> triangles;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> split;
+  for (const TriangleIndices& t : box.triangles()) {
+    bool done = false;
+    for (std::size_t e = 0; e < 3 && !done; ++e) {
+      const std::uint32_t from = t[(e + 2) % 3], to = t[e], apex = t[(e + 1) % 3];
+      const Vec3 d = vertices[to] - vertices[from];
+      if ((d.x != 0) + (d.y != 0) + (d.z != 0) != 2) continue;  // not the face's diagonal
+      const std::pair<std::uint32_t, std::uint32_t> key{std::min(from, to), std::max(from, to)};
+      if (std::find(split.begin(), split.end(), key) != split.end()) break;
+      split.push_back(key);
+      // t = (to, apex, from): the diagonal traversed from → to; split there at m.
+      const auto m = static_cast<std::uint32_t>(vertices.size());
+      vertices.push_back((vertices[from] + vertices[to]) * 0.5);
+      triangles.push_back({to, apex, m});
+      triangles.push_back({m, apex, from});
+      triangles.push_back({to, m, from});  // zero area: to → m → from, against the other side
+      done = true;
+    }
+    if (!done) triangles.push_back(t);
+  }
+  return Mesh(vertices, triangles);
+}
+
+TEST(WindingSign, ExactRaysPassOverTrianglesOfZeroArea) {
+  const Mesh mesh = boxWithFlatDiagonals();
+  const QueryMesh query(mesh);
+  ASSERT_TRUE(query.closed());
+  ASSERT_EQ(mesh.triangleCount(), 24u);
+  std::mt19937_64 random(3);
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < 200; ++i) {
+    const Vec3 p{3 * test::unit(random) - 1.5, 3 * test::unit(random) - 1.5,
+                 3 * test::unit(random) - 1.5};
+    const bool expected = std::abs(p.x) < 1 && std::abs(p.y) < 1 && std::abs(p.z) < 1;
+    inside += expected;
+    // Every axis ray from inside the box meets a flat triangle's box: they used to give nothing.
+    const std::optional<bool> exact = detail::insideByExactRays(query.data(), p);
+    ASSERT_TRUE(exact.has_value()) << toString(p);
+    EXPECT_EQ(*exact, expected) << toString(p);
+  }
+  EXPECT_GT(inside, 20u);
+}
+
+}  // namespace
+}  // namespace delta::contactdetection

@@ -45,11 +45,12 @@ enum class ParticleKind : std::uint8_t {
 /// mass was in the mesh's own coordinates, so a particle placed at `centroid()` with the identity
 /// orientation sits exactly where the mesh was.
 ///
-/// Throws delta::Error when the mesh is not closed and consistently oriented (it must bound a
-/// solid: a particle needs a mass and an inside), is inside-out or flat, or when the density is
-/// not finite and positive. Degenerate triangles are accepted (they add no mass and take part in
-/// contacts as the segments they are); a mesh that intersects itself is not detected, and its
-/// mass properties count the overlap twice (delta::massProperties).
+/// Throws delta::Error when the mesh does not bound a solid (a particle needs a mass and an
+/// inside): when it is not closed and consistently oriented, crosses itself (selfIntersections:
+/// its mass properties would count the overlap twice), has a part oriented against the others
+/// (misorientedParts: an inside-out part, a shell inside a shell of the same orientation), or is
+/// inside-out or flat; and when the density is not finite and positive. Degenerate triangles are
+/// accepted (they add no mass and take part in contacts as the segments they are).
 ///
 /// A sphere shape (ParticleShape::sphere) is an exact ball for contacts and mass properties:
 /// mass 4/3·π·r³·ρ, inertia 2/5·m·r²·I, bounding radius r. Its mesh() is an icosphere of radius r

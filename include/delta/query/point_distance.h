@@ -49,15 +49,13 @@ enum class Sign {
   /// Winding Numbers for Soups and Clouds" (SIGGRAPH 2018), over the QueryMesh's tree with a
   /// rigorous error bound, and over all triangles exactly where that bound leaves the side of ½
   /// in doubt: the sign is always that of the exact winding number (the O(n) sum of
-  /// delta::windingNumber), up to its rounding. On a closed mesh that does not cross itself
-  /// (selfIntersections(), found by the first such query) the winding number off the surface is
-  /// 0 or 1 and the pseudonormal sign is its sign, exactly also within rounding of a face, where
-  /// solid angles are not: that is what runs there, at the pseudonormal's cost. (Not detected:
-  /// a closed mesh whose separate parts are oriented against each other — an inside-out part
-  /// outside the others, or a shell inside a shell of the same orientation — has winding
-  /// numbers −1 or 2 off its surface, and both signs answer there by pseudonormals, which name
-  /// the wrong side of such a part. Orient the parts of a solid as its boundary: outward, and
-  /// cavities inward.)
+  /// delta::windingNumber), up to its rounding. On a closed mesh that bounds a solid — it
+  /// crosses itself nowhere (selfIntersections()) and no part is oriented against the parts
+  /// around it (misorientedParts(): an inside-out part outside the others, a shell inside a
+  /// shell of the same orientation, whose winding numbers are −1 or 2), both found by the first
+  /// such query — the winding number off the surface is 0 or 1 and the pseudonormal sign is its
+  /// sign, exactly also within rounding of a face, where solid angles are not: that is what runs
+  /// there, at the pseudonormal's cost.
   winding,
 };
 
@@ -93,9 +91,10 @@ struct PointQuery {
   /// 2⁻²⁵⁰ but not 0 the exact predicates do not hold, and the rules above decide as they can.)
   bool signedDistance = false;
   /// How signedDistance decides (ignored without it). Sign::pseudonormal, the default, refuses
-  /// a mesh that is not closed and one that crosses itself (selfIntersections() > 0: there the
-  /// pseudonormals give wrong signs near the crossings), with a delta::Error that names
-  /// Sign::winding, which answers both.
+  /// a mesh that is not closed, one that crosses itself (selfIntersections() > 0: there the
+  /// pseudonormals give wrong signs near the crossings) and one with a part oriented against the
+  /// parts around it (misorientedParts(): its pseudonormals name the wrong side near it), with a
+  /// delta::Error that names Sign::winding, which answers all three.
   Sign sign = Sign::pseudonormal;
   /// Sign::winding: a point is `ambiguous` where |w − ½| ≤ windingTolerance (in [0, ½); NaN and
   /// others: delta::Error). The default 0.05 flags points near a hole's rim or a crossing whose

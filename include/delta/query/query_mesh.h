@@ -30,7 +30,8 @@ struct QueryMeshData;
 /// the angle weighted pseudonormal", IEEE TVCG 2005) that sign a distance in O(1) once the closest
 /// point is known, made by the first query that needs them (thread-safe; 24 bytes a triangle that
 /// unsigned queries never pay), and, made likewise by the first query that needs them, its
-/// self-intersections (query/self_intersections.h) and per tree node the moments of the
+/// self-intersections (query/self_intersections.h), its misoriented parts
+/// (query/misoriented_parts.h) and per tree node the moments of the
 /// hierarchical winding number (Sign::winding, about 20 bytes a triangle). About 85 bytes a
 /// triangle in all before the pseudonormals.
 ///
@@ -40,7 +41,8 @@ struct QueryMeshData;
 ///
 /// `closed()` — every edge shared by exactly two triangles that traverse it oppositely — is what
 /// pseudonormal signs and the "inside both meshes" overlap marker need (with no
-/// self-intersections); winding-number signs take any mesh. An inside-out closed mesh (negative
+/// self-intersections and no misoriented parts: boundsSolid()); winding-number signs take any
+/// mesh. An inside-out closed mesh (negative
 /// signed volume) is handled: inside is where its winding number is −1. An open mesh's
 /// orientation, for winding signs, is the sign of its signed volume about its box's centre.
 ///
@@ -96,7 +98,8 @@ class QueryMesh {
   /// copies; the queries do not need them) and kept; thread-safe. May throw std::bad_alloc.
   const TriangleSoA& triangles() const;
   const Topology& topology() const noexcept;
-  /// Closed and consistently oriented: signed distances and inside tests are defined.
+  /// Closed and consistently oriented. Pseudonormal signs also need the mesh to bound a solid
+  /// (boundsSolid: no self-intersections, no misoriented parts); winding signs take any mesh.
   bool closed() const noexcept;
   /// The box of all vertices, in the prepared frame.
   const Aabb& bounds() const noexcept;

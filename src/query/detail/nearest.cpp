@@ -2,6 +2,8 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <span>
 
 #include "delta/kernels/isa.h"
 #include "delta/kernels/point_triangle.h"
@@ -167,34 +169,62 @@ bool exactlyOnTriangle(const Triangle& t, const Vec3& p) {
   return !((e0 > 0 || e1 > 0 || e2 > 0) && (e0 < 0 || e1 < 0 || e2 < 0));
 }
 
-/// What a ray from a point meets (insideNearSurface).
-enum class RaySide { inside, outside, onSurface, degenerate, inexact };
+/// What a ray from a point meets.
+enum class RaySide { crossed, onSurface, degenerate, inexact };
+
+/// A ray's walk: how it ended, and where it crossed every triangle it tested (`crossed`) the
+/// signed sum of its crossings, +1 for each leaving through a face's front.
+struct RayWalk {
+  RaySide ended = RaySide::crossed;
+  int winding = 0;
+};
+
+/// Whether triangle t has zero area exactly: orient(a, b, c, s) vanishes at the four points
+/// s = 0, e_x, e_y, e_z, which no plane holds all of.
+bool exactlyFlat(const Triangle& t) {
+  constexpr Vec3 kProbes[] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  return std::all_of(std::begin(kProbes), std::end(kProbes),
+                     [&t](const Vec3& s) { return orientSign(t.a, t.b, t.c, s) == 0; });
+}
 
 /// The ray from `p` along `axis` (0, 1, 2), towards +∞ where `up`, else −∞, to a point `q` beyond
-/// the mesh's box: the signed sum of its crossings (exact orientation signs). Only the triangles
-/// whose leaf boxes the segment p → q meets are tested: O(log n) for a mesh whose few triangles
-/// lie on any one line.
-RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool up,
-                std::vector<TreeEntry>& stack) {
+/// the mesh's box — where `skewed`, turned off the axis by about 2⁻²¹ and 2⁻²³ radians towards
+/// the other two, which passes beside the copies of a vertex that a lattice of translated parts
+/// lines up along the axis — : the signed sum of its crossings with the triangles that `skip(k)`
+/// does not exclude (exact orientation signs: q is wherever its rounding put it). Only the
+/// triangles whose leaf boxes the segment p → q meets are tested: O(log n) for a mesh whose few
+/// triangles lie on any one line. A triangle of zero area is passed over: it subtends no solid
+/// angle, and where the ray meets it, it meets an edge of a neighbour with area too (or only such
+/// triangles, whose winding is 0).
+template <class Skip>
+RayWalk castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool up, bool skewed,
+                std::vector<TreeEntry>& stack, const Skip& skip) {
   const double edge = up ? mesh.bounds.upper[axis] : mesh.bounds.lower[axis];
   Vec3 q = p;
   q[axis] = edge + (up ? 1.0 : -1.0) * (std::abs(edge) + 1.0);  // strictly beyond the box
+  if (skewed) {
+    const double span = std::abs(q[axis] - p[axis]);
+    q[(axis + 1) % 3] += 0x1.3p-21 * span;
+    q[(axis + 2) % 3] -= 0x1.7p-23 * span;
+    if (!predicatesExactAt(q) || !isFinite(q)) return {RaySide::degenerate, 0};
+  }
   Aabb segment;
   segment.extend(p);
   segment.extend(q);
-  int winding = 0;
-  RaySide ended = RaySide::outside;  // what stopped the walk, where something did
+  RayWalk walk;
   const bool walked = forTrianglesMeeting(mesh, segment, stack, [&](std::uint32_t k) {
+    if (skip(k)) return true;
     const Triangle t = mesh.triangle(k);
     // Only a triangle whose box meets the segment can meet it.
     if (intersection(t.bounds(), segment).empty()) return true;
     if (!predicatesExactAt(t.a) || !predicatesExactAt(t.b) || !predicatesExactAt(t.c)) {
-      ended = RaySide::inexact;
+      walk.ended = RaySide::inexact;
       return false;
     }
     const int atP = orientSign(t.a, t.b, t.c, p), atQ = orientSign(t.a, t.b, t.c, q);
-    if (atP == 0 && atQ == 0) {  // the ray in the triangle's plane
-      ended = RaySide::degenerate;
+    if (atP == 0 && atQ == 0) {  // the ray in the triangle's plane, or no plane
+      if (exactlyFlat(t)) return true;
+      walk.ended = RaySide::degenerate;
       return false;
     }
     if (atP == atQ || atQ == 0) return true;  // one side, or q's plane (q lies beyond the box)
@@ -203,19 +233,32 @@ RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool
     const bool positive = e0 > 0 || e1 > 0 || e2 > 0, negative = e0 < 0 || e1 < 0 || e2 < 0;
     if (positive && negative) return true;  // the line passes beside the triangle
     if (atP == 0) {                         // p in the triangle's plane, within its edges
-      ended = RaySide::onSurface;
+      walk.ended = RaySide::onSurface;
       return false;
     }
     if (e0 == 0 || e1 == 0 || e2 == 0) {  // through an edge or vertex
-      ended = RaySide::degenerate;
+      walk.ended = RaySide::degenerate;
       return false;
     }
-    winding += atQ;  // leaving through the face's front: +1
+    walk.winding += atQ;  // leaving through the face's front: +1
     return true;
   });
-  if (!walked) return ended;
-  const double signedWinding = winding * mesh.orientation;
-  return signedWinding > 0.5 ? RaySide::inside : RaySide::outside;
+  if (walked) walk.ended = RaySide::crossed;
+  return walk;
+}
+
+/// The first of the six axis rays from `point`, then of the six skewed ones, that decides
+/// (castRay): its walk, or `degenerate` where none does. The expansions' memory may throw.
+template <class Skip>
+RayWalk firstDecidingRay(const QueryMeshData& mesh, const Vec3& point, const Skip& skip) {
+  std::vector<TreeEntry> stack;
+  for (const bool skewed : {false, true})
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      for (const bool up : {true, false}) {
+        const RayWalk walk = castRay(mesh, point, axis, up, skewed, stack, skip);
+        if (walk.ended != RaySide::degenerate) return walk;
+      }
+  return {RaySide::degenerate, 0};
 }
 
 }  // namespace
@@ -223,21 +266,29 @@ RaySide castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool
 std::optional<bool> insideByExactRays(const QueryMeshData& mesh, const Vec3& point) noexcept {
   if (!predicatesExactAt(point)) return std::nullopt;
   try {
-    std::vector<TreeEntry> stack;
-    for (std::size_t axis = 0; axis < 3; ++axis)
-      for (const bool up : {true, false}) {
-        switch (castRay(mesh, point, axis, up, stack)) {
-          case RaySide::inside:
-            return true;
-          case RaySide::outside:
-          case RaySide::onSurface:
-            return false;
-          case RaySide::inexact:
-            return std::nullopt;
-          case RaySide::degenerate:
-            break;  // the next ray
-        }
-      }
+    const RayWalk walk = firstDecidingRay(mesh, point, [](std::uint32_t) { return false; });
+    switch (walk.ended) {
+      case RaySide::crossed:
+        return walk.winding * mesh.orientation > 0.5;
+      case RaySide::onSurface:
+        return false;
+      case RaySide::degenerate:
+      case RaySide::inexact:
+        return std::nullopt;
+    }
+  } catch (...) {  // the expansions' memory
+  }
+  return std::nullopt;
+}
+
+std::optional<int> windingOfOtherParts(const QueryMeshData& mesh, const Vec3& point,
+                                       std::span<const std::uint32_t> partOf,
+                                       std::uint32_t part) noexcept {
+  if (!predicatesExactAt(point)) return std::nullopt;
+  try {
+    const RayWalk walk = firstDecidingRay(
+        mesh, point, [&partOf, part](std::uint32_t k) { return partOf[k] == part; });
+    if (walk.ended == RaySide::crossed) return walk.winding;
   } catch (...) {  // the expansions' memory
   }
   return std::nullopt;

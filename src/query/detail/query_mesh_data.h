@@ -8,6 +8,7 @@
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "delta/mesh/mesh.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
+#include "delta/query/misoriented_parts.h"
 #include "delta/query/self_intersections.h"
 
 #include "bound_grid.h"
@@ -266,6 +268,9 @@ struct QueryMeshData {
   /// The mesh's self-intersections (query/self_intersections.h), found on the first call and
   /// kept. Thread-safe.
   const SelfIntersections& selfIntersections() const;
+  /// The closed mesh's parts oriented against the parts around them (misoriented_parts.h),
+  /// found on the first call and kept. Thread-safe.
+  const MisorientedParts& misorientedParts() const;
   /// The tree's winding-number moments (winding_tree.h), made on the first call (only winding
   /// signs need them, about 20 bytes a triangle). Thread-safe.
   const WindingTree& windingTree() const;
@@ -287,6 +292,8 @@ struct QueryMeshData {
   mutable std::atomic<bool> pseudonormalsMade_{false};
   mutable std::once_flag selfIntersectionsOnce_;
   mutable SelfIntersections selfIntersections_;
+  mutable std::once_flag misorientedPartsOnce_;
+  mutable MisorientedParts misorientedParts_;
   mutable std::once_flag windingTreeOnce_;
   mutable WindingTree windingTree_;
   mutable std::atomic<bool> windingTreeMade_{false};
@@ -389,14 +396,26 @@ Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
 bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& nearest) noexcept;
 
 /// Whether `point` lies inside the closed mesh, exactly: the signed sum of a ray's crossings
-/// with exact orientation predicates (exact_predicates.h), the ray along ±x, ±y or ±z, the first
-/// that meets no edge or vertex of the mesh and lies in no triangle's plane: the winding number
+/// with exact orientation predicates (exact_predicates.h), the ray along ±x, ±y or ±z, or one of
+/// those turned by about 2⁻²¹ radians, the first that meets no edge or vertex of the mesh and lies
+/// in no triangle's plane (triangles of zero area, exactly, are passed over: they subtend no solid
+/// angle): the winding number
 /// of a point off the surface (times the orientation: 1 inside). False where the ray starts on
 /// the surface. A ray tests only the triangles of the leaves whose boxes its segment meets
 /// (forTrianglesMeeting), a few where it crosses the surface a few times. Nothing where a
 /// coordinate involved is below 2⁻²⁵⁰ but not 0 (the expansions' products would underflow), or
 /// every ray is degenerate.
 std::optional<bool> insideByExactRays(const QueryMeshData& mesh, const Vec3& point) noexcept;
+
+/// The winding number at `point` of the triangles of a closed mesh outside part `part`
+/// (`partOf[k]` the part of sorted triangle k): the signed sum of an exact ray's crossings with
+/// them, as insideByExactRays counts them, not times the orientation (+1 for each leaving
+/// through a face's front). Nothing where the point lies on one of them, where every ray meets
+/// an edge or vertex of them or lies in the plane of one, or where a coordinate involved is
+/// below 2⁻²⁵⁰ but not 0.
+std::optional<int> windingOfOtherParts(const QueryMeshData& mesh, const Vec3& point,
+                                       std::span<const std::uint32_t> partOf,
+                                       std::uint32_t part) noexcept;
 
 /// Where `point` lies within rounding of the closed mesh's surface (its distance below 2⁻⁴⁰ of
 /// the closest point's magnitude and the nearest triangle's extent: there the closest point's own
