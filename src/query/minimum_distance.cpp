@@ -422,8 +422,10 @@ class PreparedPairSearch {
   void openFirst(const Entry& entry) {
     double bounds[detail::kFanout];
     const std::uint32_t level = entry.firstLevel - 1;
+    // The octets lie less the origin of A's single-precision copy: the box too.
+    const Aabb box = secondTree_.box(entry.secondLevel, entry.secondNode);
     detail::distancesSquared(a_.childOctets[level][entry.firstNode],
-                             secondTree_.box(entry.secondLevel, entry.secondNode), bounds);
+                             {box.lower - a_.lanes.origin, box.upper - a_.lanes.origin}, bounds);
     const std::size_t begin = std::size_t{entry.firstNode} * detail::kFanout;
     const std::size_t count = std::min(detail::kFanout, a_.levels[level].size() - begin);
     for (std::size_t c = 0; c < count; ++c)
@@ -436,8 +438,9 @@ class PreparedPairSearch {
   void openSecond(const Entry& entry) {
     double bounds[detail::kFanout];
     const std::uint32_t level = entry.secondLevel - 1;
-    detail::distancesSquared(secondTree_.moved(b_.childOctets[level][entry.secondNode]),
-                             a_.levels[entry.firstLevel][entry.firstNode], bounds);
+    detail::distancesSquared(
+        secondTree_.moved(b_.childOctets[level][entry.secondNode], b_.lanes.origin),
+        a_.levels[entry.firstLevel][entry.firstNode], bounds);
     const std::size_t begin = std::size_t{entry.secondNode} * detail::kFanout;
     const std::size_t count = std::min(detail::kFanout, secondTree_.nodeCount(level) - begin);
     for (std::size_t c = 0; c < count; ++c)

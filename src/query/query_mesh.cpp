@@ -199,18 +199,20 @@ float roundedOutward(double value, bool down) noexcept {
 }
 
 /// The point queries' copy of the tree (query_mesh_data.h): per inner node its children's
-/// boxes.
+/// boxes, less the single-precision triangles' origin.
 void buildOctets(detail::QueryMeshData& data) {
   data.childOctets.resize(data.levels.size() - 1);
   for (std::size_t l = 0; l + 1 < data.levels.size(); ++l) {
     data.childOctets[l].resize(data.levels[l + 1].size());
     for (std::size_t i = 0; i < data.levels[l + 1].size(); ++i)
-      data.childOctets[l][i] = detail::octetOf(data.levels[l], i * detail::kFanout);
+      data.childOctets[l][i] =
+          detail::octetOf(data.levels[l], i * detail::kFanout, data.lanes.origin);
   }
 }
 
 /// The cylinders of the leaves of node `node` of level 1 (query_mesh_data.h): each normal is the
-/// leaf's slab's in single precision, each centre that of the leaf's box in the node's octet.
+/// leaf's slab's in single precision, each centre that of the leaf's box in the node's octet
+/// (less the origin, as the octet is).
 detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size_t node) {
   const detail::BoxOctet& boxes = data.childOctets[0][node];
   detail::CylinderOctet cylinders{};  // empty slots: zeros (their boxes' centres are NaN)
@@ -231,7 +233,7 @@ detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size
     for (std::size_t k = from; k < to; ++k) {
       const Triangle t = data.triangle(k);
       for (const Vec3& v : {t.a, t.b, t.c}) {
-        const Vec3 w = v - centre;
+        const Vec3 w = (v - data.lanes.origin) - centre;
         const double h = dot(axis, w);
         low = std::min(low, h);
         high = std::max(high, h);
@@ -430,12 +432,14 @@ Vec3 QueryMeshData::pseudonormal(std::uint32_t sorted, std::size_t slot) const {
   return normalized(triangle(sorted).areaVector()) + normalized(triangle(other).areaVector());
 }
 
-BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first) noexcept {
+BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first, const Vec3& origin) noexcept {
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
   BoxOctet octet;
   for (std::size_t i = 0; i < kFanout; ++i) {
     const bool present = first + i < boxes.size() && !boxes[first + i].empty();
-    const Aabb box = present ? boxes[first + i] : Aabb{};
+    // The differences round by half an ulp of the box's extent at most: the slack covers it.
+    const Aabb box =
+        present ? Aabb{boxes[first + i].lower - origin, boxes[first + i].upper - origin} : Aabb{};
     octet.lowerX[i] = present ? roundedOutward(box.lower.x, true) : kInfinity;
     octet.lowerY[i] = present ? roundedOutward(box.lower.y, true) : kInfinity;
     octet.lowerZ[i] = present ? roundedOutward(box.lower.z, true) : kInfinity;

@@ -39,7 +39,7 @@ TEST(BoxOctet, BoundsRoundOutwardToTheNearestFloat) {
     boxes.push_back({lower, upper});
   }
   for (std::size_t first = 0; first < boxes.size(); first += kFanout) {
-    const BoxOctet octet = octetOf(boxes, first);
+    const BoxOctet octet = octetOf(boxes, first, {});
     for (std::size_t i = 0; i < kFanout; ++i) {
       if (first + i >= boxes.size()) {  // empty slots lie infinitely far
         EXPECT_EQ(octet.lowerX[i], std::numeric_limits<float>::infinity());
@@ -55,6 +55,16 @@ TEST(BoxOctet, BoundsRoundOutwardToTheNearestFloat) {
         ASSERT_LE(static_cast<double>(lower[axis]), box.lower[axis]);
         ASSERT_GE(static_cast<double>(upper[axis]), box.upper[axis]);
       }
+      // Less an origin: the boxes less it, in double, rounded outward the same way.
+      const Vec3 origin{1e8, -3.5, 0x1p-60};
+      const BoxOctet shifted = octetOf(boxes, first, origin);
+      const Vec3 low = box.lower - origin, high = box.upper - origin;
+      ASSERT_EQ(shifted.lowerX[i], reference(low.x, true));
+      ASSERT_EQ(shifted.lowerY[i], reference(low.y, true));
+      ASSERT_EQ(shifted.lowerZ[i], reference(low.z, true));
+      ASSERT_EQ(shifted.upperX[i], reference(high.x, false));
+      ASSERT_EQ(shifted.upperY[i], reference(high.y, false));
+      ASSERT_EQ(shifted.upperZ[i], reference(high.z, false));
     }
   }
 }

@@ -145,15 +145,16 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
       for (const Vec3& p : probesOf(data, leaf, random)) {
         const double exact = leafDistanceSquared(data, leaf, p);
         const double shrink = cylinderShrink(data, p);
+        const Vec3 local = p - data.lanes.origin;  // the octets' frame
         double boxOnly[kFanout], plain[kFanout];
-        distancesSquared(boxes, p, boxOnly);
-        PlainBounds::leaves(boxes, cylinders, p, shrink, kInfinity, plain);
+        distancesSquared(boxes, local, boxOnly);
+        PlainBounds::leaves(boxes, cylinders, local, shrink, kInfinity, plain);
         ASSERT_LE(plain[slot], exact) << name << ", leaf " << leaf << ", p = " << toString(p);
         if (plain[slot] > boxOnly[slot]) ++raised;
         // Every ISA's leaf bounds (its point table's) are bounds too.
         for (const kernels::Isa isa : isas) {
           double bounds[kFanout];
-          pointKernels(isa).leaves(boxes, cylinders, p, shrink, kInfinity, bounds);
+          pointKernels(isa).leaves(boxes, cylinders, local, shrink, kInfinity, bounds);
           ASSERT_LE(bounds[slot], exact) << name << " (" << kernels::name(isa) << "), leaf " << leaf
                                          << ", p = " << toString(p);
           // The same arithmetic but for contracted sums (AVX2, AVX-512): apart by a few
@@ -162,7 +163,7 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
           ASSERT_NEAR(bounds[slot], plain[slot], 1e-12 * (plain[slot] + exact) + shrink * reach)
               << name << " (" << kernels::name(isa) << "), leaf " << leaf;
           double boxes8[kFanout];  // and its boxes' distances, as the children's bounds
-          pointKernels(isa).children(boxes, p, kInfinity, boxes8);
+          pointKernels(isa).children(boxes, local, kInfinity, boxes8);
           ASSERT_LE(boxes8[slot], exact)
               << name << " (" << kernels::name(isa) << "), leaf " << leaf;
           ASSERT_NEAR(boxes8[slot], boxOnly[slot], 1e-12 * (boxOnly[slot] + exact))
@@ -170,8 +171,10 @@ void expectBelowTheLeaves(const Mesh& mesh, const std::string& name, std::size_t
         }
         if (avx2 && avx512) {  // AVX2's are AVX-512's operations in halves: the same bits
           double halves[kFanout], wide[kFanout];
-          pointKernels(kernels::Isa::Avx2).leaves(boxes, cylinders, p, shrink, kInfinity, halves);
-          pointKernels(kernels::Isa::Avx512).leaves(boxes, cylinders, p, shrink, kInfinity, wide);
+          pointKernels(kernels::Isa::Avx2)
+              .leaves(boxes, cylinders, local, shrink, kInfinity, halves);
+          pointKernels(kernels::Isa::Avx512)
+              .leaves(boxes, cylinders, local, shrink, kInfinity, wide);
           ASSERT_EQ(halves[slot], wide[slot]) << name << ", leaf " << leaf;
         }
       }
@@ -192,6 +195,9 @@ TEST(LeafCylinder, BoundNeverExceedsTheLeafsTriangles) {
   expectBelowTheLeaves(tiltedGrid(24, {0, 0, 0}), "tilted grid", nodes, raised);
   EXPECT_GT(raised, 100u);
   expectBelowTheLeaves(primitives::icosphere(3, 1e-7, {3, 1, 2}), "tiny icosphere", nodes, raised);
+  expectBelowTheLeaves(primitives::icosphere(3, 1.0, {1e9, -2e9, 3e8}), "icosphere at 1e9", nodes,
+                       raised);
+  EXPECT_GT(raised, 100u);  // the boxes as fine as at the origin: the cylinders still tighten
   expectBelowTheLeaves(primitives::box({1, 2, 3}), "box", nodes, raised);
   expectBelowTheLeaves(degenerateSoup(2000, 3), "slivers and zero-area triangles", nodes, raised);
 }
@@ -208,17 +214,19 @@ TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
   for (int round = 0; round < 50; ++round) {
     const Triangle t = data.triangle(random() % data.size());
     const Vec3 p = t.a + normal * (unit(random) * 0.5);
+    const Vec3 local = p - data.lanes.origin;  // the octets' frame
     double nearest = kInfinity;
     for (std::size_t k = 0; k < data.size(); ++k)
       nearest =
           std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
     for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
       double boxes[kFanout], bounds[kFanout];
-      const unsigned admitted = PlainBounds::children(data.childOctets[0][node], p, nearest, boxes);
+      const unsigned admitted =
+          PlainBounds::children(data.childOctets[0][node], local, nearest, boxes);
       byBoxes += static_cast<std::size_t>(std::popcount(admitted));
       byCylinders += static_cast<std::size_t>(
-          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node], p,
-                                            cylinderShrink(data, p), nearest, bounds)));
+          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node],
+                                            local, cylinderShrink(data, p), nearest, bounds)));
     }
   }
   EXPECT_GE(byCylinders, 50u);  // at least the leaf of the nearest triangle

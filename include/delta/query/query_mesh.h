@@ -18,22 +18,23 @@ struct QueryMeshData;
 /// A mesh prepared for queries: its triangles in the tree's order (the vertices in double, through
 /// indices, for the exact kernels; a single-precision copy less the box's centre for the vector
 /// leaf bounds, which allow for its rounding), a bounding-volume tree over them (eight triangles
-/// to a leaf, eight nodes to a parent, each node with its box and an oriented slab — its
-/// triangles' mean normal and their extent along it, which separates nearly parallel patches
-/// whose boxes overlap, and each leaf an oriented cylinder around that normal, which keeps a far
-/// point's search out of the leaves whose boxes come closer than their triangles; built top-down by
-/// binary splits of the centroids at the axis and child boundary of least surface area heuristic),
-/// a uniform grid over its box with a lower bound of the distance to the mesh in every cell (one
-/// byte a cell, about two cells a triangle: queries with a limit ε reject most points farther than
-/// ε with one read, the seed's early "no contact"), and, for a closed mesh, the angle-weighted
-/// pseudonormals of its vertices and edges (Bærentzen and Aanæs, "Signed distance computation using
-/// the angle weighted pseudonormal", IEEE TVCG 2005) that sign a distance in O(1) once the closest
-/// point is known, made by the first query that needs them (thread-safe; 24 bytes a triangle that
-/// unsigned queries never pay), and, made likewise by the first query that needs them, its
-/// self-intersections (query/self_intersections.h), its misoriented parts
-/// (query/misoriented_parts.h) and per tree node the moments of the
-/// hierarchical winding number (Sign::winding, about 20 bytes a triangle). About 85 bytes a
-/// triangle in all before the pseudonormals.
+/// to a leaf, eight nodes to a parent, each node with its box (for the point queries also in
+/// single precision less the same centre: a mesh far from the origin is searched about as fast as
+/// one at it) and an oriented slab — its triangles' mean normal and their extent along it, which
+/// separates nearly parallel patches whose boxes overlap, and each leaf an oriented cylinder around
+/// that normal, which keeps a far point's search out of the leaves whose boxes come closer than
+/// their triangles; built top-down by binary splits of the centroids at the axis and child boundary
+/// of least surface area heuristic), a uniform grid over its box with a lower bound of the distance
+/// to the mesh in every cell (one byte a cell, about two cells a triangle: queries with a limit ε
+/// reject most points farther than ε with one read, the seed's early "no contact"), and, for a
+/// closed mesh, the angle-weighted pseudonormals of its vertices and edges (Bærentzen and Aanæs,
+/// "Signed distance computation using the angle weighted pseudonormal", IEEE TVCG 2005) that sign a
+/// distance in O(1) once the closest point is known, made by the first query that needs them
+/// (thread-safe; 24 bytes a triangle that unsigned queries never pay), and, made likewise by the
+/// first query that needs them, its self-intersections (query/self_intersections.h), its
+/// misoriented parts (query/misoriented_parts.h) and per tree node the moments of the hierarchical
+/// winding number (Sign::winding, about 20 bytes a triangle). About 85 bytes a triangle in all
+/// before the pseudonormals.
 ///
 /// Built once, in O(n log n), and then queried any number of times (query/point_distance.h,
 /// query/contacts.h). Like a TriangleSoA it is a snapshot: moving the Mesh afterwards does not

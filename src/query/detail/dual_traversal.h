@@ -144,17 +144,18 @@ class MovedTree {
     const Vec3 half = magnitude_ * (box.extent() * 0.5);
     return {centre - half, centre + half};
   }
-  /// The eight boxes of an octet of this tree (its children's or a leaf's triangles'), moved as
-  /// box() moves one, eight at once.
-  MovedOctet moved(const BoxOctet& octet) const noexcept {
+  /// The eight boxes of an octet of this tree's children, which lie less `origin`
+  /// (QueryMeshData::childOctets), put back at the origin and moved as box() moves one, eight at
+  /// once. (Putting back rounds by half an ulp of the coordinates: the slack covers it.)
+  MovedOctet moved(const BoxOctet& octet, const Vec3& origin) const noexcept {
     MovedOctet out;
     const float* lower[3] = {octet.lowerX, octet.lowerY, octet.lowerZ};
     const float* upper[3] = {octet.upperX, octet.upperY, octet.upperZ};
     if (!motion_) {
       for (std::size_t axis = 0; axis < 3; ++axis)
         for (std::size_t i = 0; i < kFanout; ++i) {
-          out.lower[axis][i] = lower[axis][i];
-          out.upper[axis][i] = upper[axis][i];
+          out.lower[axis][i] = lower[axis][i] + origin[axis];  // ±∞ where empty
+          out.upper[axis][i] = upper[axis][i] + origin[axis];
         }
       return out;
     }
@@ -162,7 +163,7 @@ class MovedTree {
     for (std::size_t axis = 0; axis < 3; ++axis)
       for (std::size_t i = 0; i < kFanout; ++i) {
         const double low = lower[axis][i], high = upper[axis][i];
-        centre[axis][i] = (low + high) * 0.5;
+        centre[axis][i] = (low + high) * 0.5 + origin[axis];
         half[axis][i] = (high - low) * 0.5;
       }
     // Rows of the motion, like MatrixMotion::apply and Mat3 * Vec3 (the same operation order).

@@ -42,7 +42,8 @@ struct PointKernels {
   void (*exact)(const QueryMeshData& mesh, const Vec3& point, const std::uint32_t* sorted,
                 std::size_t count, double* out) noexcept;
   /// The node bounds of the descent (node_bounds.h): the squared distances of a node's eight
-  /// children into `out`, and the mask of those not above `prune`.
+  /// children into `out`, and the mask of those not above `prune`. `point` is less the octets'
+  /// origin (FloatTriangles::origin), as their boxes are.
   unsigned (*children)(const BoxOctet& boxes, const Vec3& point, double prune,
                        double (&out)[kFanout]) noexcept;
   /// The same for eight leaves, raised by their cylinders (shrunk by `shrink`).

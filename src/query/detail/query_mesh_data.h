@@ -34,17 +34,20 @@ inline constexpr std::size_t kFanout = 8;
 
 /// Eight boxes side by side (Embree's `bvh_node_aabb.h` layout): one cache-line-aligned block per
 /// node whose children the point queries test together, 192 bytes instead of 384. Single
-/// precision, rounded outward, so a box here contains the double box it stands for and its
-/// distance (computed in double) never exceeds that box's; empty slots have lower > upper (+∞,
-/// −∞) and lie infinitely far away.
+/// precision less an origin (the tree's: FloatTriangles::origin, the mesh box's centre, so that
+/// a mesh far from the origin keeps boxes as fine as near it), rounded outward, so a box here
+/// contains the double box it stands for, less the origin, up to the rounding of that difference
+/// (far below the slack the boxes grew by), and its distance from a point less the origin
+/// (computed in double) never exceeds that box's; empty slots have lower > upper (+∞, −∞) and lie
+/// infinitely far away.
 struct alignas(64) BoxOctet {
   float lowerX[kFanout], lowerY[kFanout], lowerZ[kFanout];
   float upperX[kFanout], upperY[kFanout], upperZ[kFanout];
 };
 using BoxOctets = std::vector<BoxOctet, AlignedAllocator<BoxOctet, 64>>;
 
-/// The octet of `boxes[first, first + kFanout)` (fewer at the end: the rest empty).
-BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first) noexcept;
+/// The octet of `boxes[first, first + kFanout)` (fewer at the end: the rest empty), less `origin`.
+BoxOctet octetOf(const std::vector<Aabb>& boxes, std::size_t first, const Vec3& origin) noexcept;
 
 /// The squared distances from `point` to the eight boxes of an octet. (A plain loop: measured
 /// faster than eight-lane vectors, whose float-to-double conversions and blends cost more than
@@ -214,7 +217,8 @@ struct QueryMeshData {
   /// distance inside it (rounding included).
   std::vector<std::vector<Aabb>> levels;
   /// The same tree for the point queries: childOctets[l][i] holds the boxes of node i of level
-  /// l + 1's children (levels[l][8i, 8i + 8)).
+  /// l + 1's children (levels[l][8i, 8i + 8)), less lanes.origin: the octets' bounds take a point
+  /// less it too.
   std::vector<BoxOctets> childOctets;
   /// Per node of level 1, its leaves' cylinders (childOctets[0]'s boxes give their centres).
   CylinderOctets leafCylinders;

@@ -230,6 +230,7 @@ template <typename Bounds>
   }
   stack[top++] = {distanceSquared(point, mesh.levels.back()[0]), nodeKey(rootLevel, 0)};
   const double shrink = cylinderShrink(mesh, point);
+  const Vec3 local{leaves.point[0], leaves.point[1], leaves.point[2]};  // the octets' frame
   while (top > 0) {
     const Pending entry = stack[--top];
     if (entry.bound > search.prune) continue;
@@ -241,7 +242,7 @@ template <typename Bounds>
       // Their triangles are asked for first (Search::prefetch): a leaf's bounds read 288 bytes.
       unsigned rest =
           Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
-                         point, shrink, search.prune, bounds);
+                         local, shrink, search.prune, bounds);
       if (search.prefetch)
         for (unsigned more = rest; more != 0; more &= more - 1)
           prefetchLeaf(leaves, first + static_cast<std::uint32_t>(std::countr_zero(more)));
@@ -261,7 +262,7 @@ template <typename Bounds>
     // order of distance, so the nearest is popped next. The mask is made without branches: a
     // branch per child mispredicted often enough to cost 4% of an ε-limited query.
     const unsigned near = Bounds::children(mesh.childOctets[entry.level() - 1][entry.index()],
-                                           point, search.prune, bounds);
+                                           local, search.prune, bounds);
     const std::size_t base = top;
     for (unsigned rest = near; rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -287,6 +288,7 @@ template <typename Bounds>
   // directly).
   if (rootLevel == 0) return kMostCandidates + 1;
   const double shrink = cylinderShrink(mesh, center);
+  const Vec3 local = center - mesh.lanes.origin;   // the octets' frame
   constexpr std::size_t kCapacity = 16 * kFanout;  // depth ≤ 11 for 2³² triangles
   std::uint64_t stack[kCapacity];
   std::size_t top = 0, count = 0;
@@ -299,7 +301,7 @@ template <typename Bounds>
     double bounds[kFanout];
     if (level == 1) {
       for (unsigned rest = Bounds::leaves(mesh.childOctets[0][index], mesh.leafCylinders[index],
-                                          center, shrink, radiusSquared, bounds);
+                                          local, shrink, radiusSquared, bounds);
            rest != 0; rest &= rest - 1) {
         if (count == kMostCandidates) return kMostCandidates + 1;
         leaves[count++] = first + static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -308,7 +310,7 @@ template <typename Bounds>
     }
     // Pushed in descending order of index, so the leaves come out ascending.
     const unsigned near =
-        Bounds::children(mesh.childOctets[level - 1][index], center, radiusSquared, bounds);
+        Bounds::children(mesh.childOctets[level - 1][index], local, radiusSquared, bounds);
     for (unsigned rest = near; rest != 0; rest &= ~(1u << (31 - std::countl_zero(rest))))
       stack[top++] =
           nodeKey(level - 1, first + static_cast<std::uint32_t>(31 - std::countl_zero(rest)));
@@ -328,12 +330,13 @@ template <typename Bounds>
   search.prune = limitSquared;
   search.prefetch = true;  // a limited search
   const double shrink = cylinderShrink(mesh, point);
+  const Vec3 local{leaves.point[0], leaves.point[1], leaves.point[2]};  // the octets' frame
   double bound[kMostCandidates];
   std::uint32_t leaf[kMostCandidates];
   std::size_t pending = 0;
   for (std::size_t octet = 0; octet < candidates.octets; ++octet) {
     double bounds[kFanout];
-    for (unsigned rest = Bounds::leaves(candidates.boxes[octet], candidates.cylinders[octet], point,
+    for (unsigned rest = Bounds::leaves(candidates.boxes[octet], candidates.cylinders[octet], local,
                                         shrink, search.prune, bounds);
          rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::size_t>(std::countr_zero(rest));
