@@ -6,7 +6,7 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/measures.h"
 #include "delta/mesh/topology.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 #include "commands.h"
@@ -32,7 +32,8 @@ struct MeshReport {
   double volume = 0.0;  // meaningful when topology.closed && topology.consistentlyOriented
   Topology topology;
   std::size_t selfIntersections = 0;  ///< crossing pairs of non-adjacent triangles
-  MisorientedParts parts;             ///< of a closed mesh: its parts, and those misoriented
+  PartNesting nesting;                ///< of a closed mesh: how its parts nest
+  bool boundsSolid = false;           ///< closed, not crossing itself, its parts nested
   EdgeLengths edges;
   io::LoadStatistics statistics;
   std::size_t meshBytes = 0;
@@ -57,7 +58,8 @@ MeshReport analyse(const std::string& source) {
     report.volume = signedVolume(mesh);
   const QueryMesh query(mesh);
   report.selfIntersections = selfIntersections(query).count;
-  report.parts = misorientedParts(query);
+  report.nesting = partNesting(query);
+  report.boundsSolid = boundsSolid(query);
   report.edges = edgeLengths(mesh);
   report.statistics = loaded.statistics;
   report.meshBytes = mesh.memoryBytes();
@@ -95,8 +97,11 @@ void printJson(const std::string& source, const MeshReport& r) {
       .value("boundary_edges", r.topology.boundaryEdges)
       .value("non_manifold_edges", r.topology.nonManifoldEdges)
       .value("self_intersections", r.selfIntersections)
-      .value("parts", r.parts.parts)
-      .value("misoriented_parts", r.parts.count)
+      .value("parts", r.nesting.parts)
+      .value("misoriented_parts", r.nesting.misoriented)
+      .value("pinched_vertices", r.nesting.pinched)
+      .value("undecided_parts", r.nesting.undecided)
+      .value("bounds_solid", r.boundsSolid)
       .beginObject("mesh_size")
       .value("min_edge", r.edges.min)
       .value("mean_edge", r.edges.mean)
@@ -139,10 +144,13 @@ void printText(const std::string& source, const MeshReport& r) {
               yesNo(r.topology.consistentlyOriented), r.topology.misorientedEdges);
   std::printf("self-intersections   %zu%s\n", r.selfIntersections,
               r.selfIntersections == 0 ? "" : " pairs of triangles cross (--sign winding)");
-  if (r.topology.closed && r.topology.consistentlyOriented)
-    std::printf(
-        "misoriented parts    %zu of %zu%s\n", r.parts.count, r.parts.parts,
-        r.parts.count == 0 ? "" : " oriented against the parts around them (--sign winding)");
+  if (r.topology.closed && r.topology.consistentlyOriented) {
+    const PartNesting& n = r.nesting;
+    std::printf("parts                %zu (%zu misoriented, %zu undecided), %zu pinched vertices\n",
+                n.parts, n.misoriented, n.undecided, n.pinched);
+    std::printf("bounds a solid       %s\n",
+                r.boundsSolid ? "yes" : "no (pseudonormal signs refused: --sign winding)");
+  }
   std::printf("mesh size h          min %.6g, mean %.6g, max %.6g (edge length)\n", r.edges.min,
               r.edges.mean, r.edges.max);
   std::printf("load                 %.3f s (analysis %.3f s)\n", r.loadSeconds, r.analyseSeconds);

@@ -482,13 +482,13 @@ class QueryMesh:
     @property
     def bounds_solid(self) -> bool:
         """
-        Closed and consistently oriented, crossing itself nowhere, and no misoriented parts: the winding number off the surface is 0 or 1 and pseudonormal signs are exact.
+        Closed and consistently oriented, crossing itself nowhere, and its parts nested (part_nesting): the winding number off the surface is 0 or 1 and pseudonormal signs are exact.
         """
         ...
     @property
     def closed(self) -> bool:
         """
-        Closed and consistently oriented. Pseudonormal signs also need bounds_solid (no self-intersections, no misoriented parts); sign="winding" takes any mesh.
+        Closed and consistently oriented. Pseudonormal signs also need bounds_solid (no self-intersections, its parts nested); sign="winding" takes any mesh.
         """
         ...
     def copy(self) -> QueryMesh:
@@ -503,15 +503,15 @@ class QueryMesh:
         """
         ...
     @property
-    def misoriented_parts(self) -> int:
-        """
-        The number of parts of a closed mesh (its triangles joined across edges) oriented against the parts around them: an inside-out part outside the others, a shell inside a shell of the same orientation (winding number -1 or 2 there). Found on first use and kept; 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a mesh with any; sign="winding" answers it.
-        """
-        ...
-    @property
     def moved(self) -> bool:
         """
         The pose is not the identity.
+        """
+        ...
+    @property
+    def part_nesting(self) -> dict:
+        """
+        How the parts of a closed mesh (its triangles joined across edges) nest, as a dict: 'parts'; 'misoriented', those oriented against the parts around them (an inside-out part outside the others, a shell inside a shell of the same orientation: winding number -1 or 2 there); 'pinched', vertices where the surface meets itself (parts touching at a vertex or sharing faces); 'undecided', parts no exact ray placed; 'misoriented_triangles', a triangle id of each of the first 16 misoriented parts. Found on first use and kept; all 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a mesh whose parts do not nest; sign="winding" answers it.
         """
         ...
     @property

@@ -24,8 +24,8 @@
 #include "delta/query/contacts.h"
 #include "delta/query/filter.h"
 #include "delta/query/minimum_distance.h"
-#include "delta/query/misoriented_parts.h"
 #include "delta/query/overlap.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 #include "delta/query/self_intersections.h"
@@ -270,7 +270,7 @@ Python threads may query one QueryMesh at once.)")
       .def_property_readonly("triangle_count", &QueryMesh::size, "The number of triangles.")
       .def_property_readonly("closed", &QueryMesh::closed,
                              "Closed and consistently oriented. Pseudonormal signs also need "
-                             "bounds_solid (no self-intersections, no misoriented parts); "
+                             "bounds_solid (no self-intersections, its parts nested); "
                              "sign=\"winding\" takes any mesh.")
       .def_property_readonly(
           "bounds",
@@ -287,24 +287,38 @@ Python threads may query one QueryMesh at once.)")
           "The number of pairs of non-adjacent triangles that intersect (found on first use, "
           "O(n log n), and kept; as `delta info`). Pseudonormal signs refuse a mesh with any.")
       .def_property_readonly(
-          "misoriented_parts",
+          "part_nesting",
           [](const QueryMesh& mesh) {
-            py::gil_scoped_release release;
-            return misorientedParts(mesh).count;
+            PartNesting nesting;
+            {
+              py::gil_scoped_release release;
+              nesting = partNesting(mesh);
+            }
+            py::dict result;
+            result["parts"] = nesting.parts;
+            result["misoriented"] = nesting.misoriented;
+            result["pinched"] = nesting.pinched;
+            result["undecided"] = nesting.undecided;
+            result["misoriented_triangles"] = nesting.misorientedTriangles;
+            return result;
           },
-          "The number of parts of a closed mesh (its triangles joined across edges) oriented "
-          "against the parts around them: an inside-out part outside the others, a shell inside a "
-          "shell of the same orientation (winding number -1 or 2 there). Found on first use and "
-          "kept; 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a "
-          "mesh with any; sign=\"winding\" answers it.")
+          "How the parts of a closed mesh (its triangles joined across edges) nest, as a dict: "
+          "'parts'; 'misoriented', those oriented against the parts around them (an inside-out "
+          "part outside the others, a shell inside a shell of the same orientation: winding "
+          "number -1 or 2 there); 'pinched', vertices where the surface meets itself (parts "
+          "touching at a vertex or sharing faces); 'undecided', parts no exact ray placed; "
+          "'misoriented_triangles', a triangle id of each of the first 16 misoriented parts. "
+          "Found on first use and kept; all 0 for an open mesh. Pseudonormal signs, overlap() and "
+          "particle shapes refuse a mesh whose parts do not nest; sign=\"winding\" answers it.")
       .def_property_readonly(
           "bounds_solid",
           [](const QueryMesh& mesh) {
             py::gil_scoped_release release;
             return boundsSolid(mesh);
           },
-          "Closed and consistently oriented, crossing itself nowhere, and no misoriented parts: "
-          "the winding number off the surface is 0 or 1 and pseudonormal signs are exact.")
+          "Closed and consistently oriented, crossing itself nowhere, and its parts nested "
+          "(part_nesting): the winding number off the surface is 0 or 1 and pseudonormal signs "
+          "are exact.")
       .def_property_readonly("memory_bytes", &QueryMesh::memoryBytes,
                              "Bytes held on the heap (triangles, tree, pseudonormals).")
       .def(

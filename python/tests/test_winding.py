@@ -125,7 +125,7 @@ def test_real_open_mesh(meshes):
     del rng
 
 
-def test_misoriented_parts_refuse_pseudonormals_and_sign_by_winding_number():
+def test_parts_that_do_not_nest_refuse_pseudonormals_and_sign_by_winding_number():
     # A ball with a second, smaller shell of the same orientation inside it: closed, crossing
     # nowhere, winding number 2 inside the inner shell and 1 between them.
     outer, inner = delta.icosphere(2, radius=2.0), delta.icosphere(2)
@@ -135,8 +135,12 @@ def test_misoriented_parts_refuse_pseudonormals_and_sign_by_winding_number():
     shells = delta.Mesh(vertices, triangles)
     query = delta.QueryMesh(shells)
     assert shells.closed and query.self_intersections == 0
-    assert query.misoriented_parts == 1 and not query.bounds_solid
-    assert delta.QueryMesh(outer).misoriented_parts == 0 and delta.QueryMesh(outer).bounds_solid
+    nesting = query.part_nesting
+    assert nesting["parts"] == 2 and nesting["misoriented"] == 1 and nesting["pinched"] == 0
+    assert nesting["misoriented_triangles"] == [len(np.asarray(outer.triangles))]
+    assert not query.bounds_solid
+    assert delta.QueryMesh(outer).part_nesting["misoriented"] == 0
+    assert delta.QueryMesh(outer).bounds_solid
     with pytest.raises(delta.Error, match="1 of its 2 parts is oriented against"):
         delta.distance(query, np.zeros((1, 3)), signed=True)
     points = np.random.default_rng(5).uniform(-2.4, 2.4, (400, 3))

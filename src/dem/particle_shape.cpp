@@ -11,7 +11,7 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/primitives.h"
 #include "delta/mesh/topology.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 namespace delta::detail {
@@ -55,9 +55,9 @@ void requireSolid(const QueryMesh& mesh) {
                 std::to_string(crossings.pairs.front().first) + " and " +
                 std::to_string(crossings.pairs.front().second) +
                 "): it bounds no solid, and its mass would count the overlap twice");
-  const MisorientedParts& parts = misorientedParts(mesh);
-  if (parts.any())
-    throw Error("particle shape: the mesh bounds no solid: " + describeMisorientedParts(parts));
+  const PartNesting& nesting = partNesting(mesh);
+  if (!nesting.nested())
+    throw Error("particle shape: the mesh bounds no solid: " + describePartNesting(nesting));
 }
 
 double largestVertexDistance(const Mesh& mesh) noexcept {

@@ -15,8 +15,8 @@
 #include "delta/dem/narrow_phase.h"
 #include "delta/mesh/coordinate_range.h"
 #include "delta/mesh/topology.h"
-#include "delta/query/misoriented_parts.h"
 #include "delta/query/overlap.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/point_distance.h"
 #include "delta/query/self_intersections.h"
 #include "delta/query/sphere_contacts.h"
@@ -121,10 +121,10 @@ void requireVolumeLawMesh(const QueryMesh& mesh, const std::string& what) {
   if (crossings > 0)
     throw Error(what + "the volume contact law needs a mesh that does not cross itself (" +
                 std::to_string(crossings) + " pairs of its triangles intersect)");
-  const MisorientedParts& parts = misorientedParts(mesh);
-  if (parts.any())
+  const PartNesting& nesting = partNesting(mesh);
+  if (!nesting.nested())
     throw Error(what + "the volume contact law needs a mesh that bounds a solid: " +
-                describeMisorientedParts(parts));
+                describePartNesting(nesting));
 }
 
 /// The general case of rotatedApply, out of line: a sphere's steps, which never take it, stay

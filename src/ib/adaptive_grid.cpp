@@ -11,7 +11,7 @@
 #include "delta/core/format.h"
 #include "delta/core/memory.h"
 #include "delta/mesh/coordinate_range.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 namespace delta::ib {
@@ -193,7 +193,7 @@ AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options
   options_.domain = domain_;
   resolution_ = std::uint32_t{1} << options_.levels;
   exactBand_ = options_.exactBand ? *options_.exactBand : cellDiagonal(options_.levels);
-  // A winding sign of a boundary that bounds no solid (open, crossing itself, a misoriented part)
+  // A winding sign of a boundary that bounds no solid (open, crossing itself, its parts not nested)
   // may change away from it as it moves.
   if (options_.signedDistance && options_.sign == contactdetection::Sign::winding &&
       !boundsSolid(boundary_))

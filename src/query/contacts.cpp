@@ -16,7 +16,7 @@
 #include "delta/kernels/pair_results.h"
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/coordinate_range.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 
 #include "detail/dual_traversal.h"
 #include "detail/placement.h"
@@ -505,7 +505,7 @@ std::vector<ContactPoint> joinedAndSorted(std::span<const std::vector<ContactPoi
 
 /// Phase 5, for two closed meshes: a contact whose triangles do not cross is marked overlapping
 /// where its x lies inside both (each mesh's nearest-triangle sign, or its winding number where
-/// it bounds no solid: it crosses itself, or a part is oriented against the others); `toFirst`
+/// it bounds no solid: it crosses itself, or its parts do not nest, part_nesting.h); `toFirst`
 /// and `toSecond` carry x into each mesh's prepared frame.
 template <class ToFirst, class ToSecond>
 void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsilon,
@@ -515,8 +515,8 @@ void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsi
   // x lies within ε of both surfaces, so the nearest-triangle searches stop within 2ε.
   const double limit = 4.0 * epsilon * epsilon;
   // A closed mesh that bounds no solid is signed by its winding number (pseudonormals are wrong
-  // near the crossings and a misoriented part). Made here, where they may throw, not in the
-  // parallel loop.
+  // near the crossings, a misoriented part and a pinched vertex). Made here, where they may throw,
+  // not in the parallel loop.
   const bool aCrosses = !boundsSolid(first), bCrosses = !boundsSolid(second);
   aCrosses ? (void)a.windingTree() : (void)a.pseudonormals();
   bCrosses ? (void)b.windingTree() : (void)b.pseudonormals();

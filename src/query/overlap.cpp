@@ -14,7 +14,7 @@
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 #include "../kernels/detail/robust_geometry.h"
@@ -1242,10 +1242,10 @@ void checkMesh(const QueryMesh& mesh, const char* which) {
                 std::to_string(crossings.count) + " pairs of triangles, the first " +
                 std::to_string(crossings.pairs.front().first) + " and " +
                 std::to_string(crossings.pairs.front().second) + "): it bounds no volume");
-  const MisorientedParts& parts = misorientedParts(mesh);
-  if (parts.any())
+  const PartNesting& nesting = partNesting(mesh);
+  if (!nesting.nested())
     throw Error(std::string("overlap: the ") + which +
-                " mesh bounds no solid: " + describeMisorientedParts(parts));
+                " mesh bounds no solid: " + describePartNesting(nesting));
 }
 
 /// The curves through the segments: each segment's end is the next one's start.

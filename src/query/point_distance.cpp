@@ -16,7 +16,7 @@
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
 #include "delta/mesh/coordinate_range.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 #include "detail/morton.h"
@@ -34,7 +34,7 @@ constexpr std::size_t kCoherentFrom = 4 * kGrain;
 constexpr double kBoundGrowth = 1.0 + 1e-12;
 
 /// Checks the query and returns it as it runs: a winding sign on a mesh that bounds a solid
-/// (closed, not crossing itself, no misoriented parts) is its pseudonormal sign, exactly (off the
+/// (closed, not crossing itself, its parts nested) is its pseudonormal sign, exactly (off the
 /// surface the winding number is 0 or 1 there, and the pseudonormal decides its side exactly
 /// where the solid angles of a point within rounding of a face would not).
 PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
@@ -69,9 +69,9 @@ PointQuery validate(const QueryMesh& mesh, const PointQuery& query) {
                 std::to_string(crossings.pairs.front().second) +
                 "), where pseudonormal signs are wrong; the winding-number sign is defined there "
                 "(C++ Sign::winding, Python sign=\"winding\", CLI --sign winding)");
-  const MisorientedParts& parts = misorientedParts(mesh);
-  if (parts.any())
-    throw Error("signed distance by pseudonormals: " + describeMisorientedParts(parts) +
+  const PartNesting& nesting = partNesting(mesh);
+  if (!nesting.nested())
+    throw Error("signed distance by pseudonormals: " + describePartNesting(nesting) +
                 ", where pseudonormal signs are wrong; the winding-number sign is defined there "
                 "(C++ Sign::winding, Python sign=\"winding\", CLI --sign winding)");
   mesh.data().pseudonormals();  // made here, where it may throw
@@ -594,8 +594,8 @@ std::vector<ContactPoint> contacts(const QueryMesh& mesh, std::span<const Vec3> 
                                    double epsilon) {
   if (!std::isfinite(epsilon) || !(epsilon > 0.0))
     throw Error("point contacts: epsilon = " + toString(epsilon) + " must be finite and positive");
-  // A closed mesh that bounds no solid (it crosses itself, or a part is oriented against the
-  // others) has its overlaps by winding number, where pseudonormal signs are wrong.
+  // A closed mesh that bounds no solid (it crosses itself, or its parts do not nest) has its
+  // overlaps by winding number, where pseudonormal signs are wrong.
   const bool closed = mesh.closed();
   const Sign sign = closed && !boundsSolid(mesh) ? Sign::winding : Sign::pseudonormal;
   const std::vector<PointDistance> near =

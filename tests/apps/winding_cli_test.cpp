@@ -50,8 +50,12 @@ TEST(WindingCli, MisorientedPartsAreReportedRefusedByPseudonormalsAndSignedByWin
   EXPECT_EQ(jsonNumber(info.out, "misoriented_parts"), 1.0) << info.out;
   const CliRun text = runDelta("info " + quoted(off));
   ASSERT_EQ(text.exitCode, 0) << text.err;
-  EXPECT_NE(text.out.find("misoriented parts    1 of 2 oriented against"), std::string::npos)
+  EXPECT_NE(text.out.find("parts                2 (1 misoriented, 0 undecided), 0 pinched"),
+            std::string::npos)
       << text.out;
+  EXPECT_NE(text.out.find("bounds a solid       no"), std::string::npos) << text.out;
+  EXPECT_EQ(jsonNumber(info.out, "pinched_vertices"), 0.0) << info.out;
+  EXPECT_NE(info.out.find("\"bounds_solid\":false"), std::string::npos) << info.out;
   expectOneLineError(runDelta("distance " + quoted(off) + " --points builtin:uniform:10 --signed"),
                      "1 of its 2 parts is oriented against");
   const fs::path csv = folder.path / "signs.csv";

@@ -47,10 +47,11 @@ enum class ParticleKind : std::uint8_t {
 ///
 /// Throws delta::Error when the mesh does not bound a solid (a particle needs a mass and an
 /// inside): when it is not closed and consistently oriented, crosses itself (selfIntersections:
-/// its mass properties would count the overlap twice), has a part oriented against the others
-/// (misorientedParts: an inside-out part, a shell inside a shell of the same orientation), or is
-/// inside-out or flat; and when the density is not finite and positive. Degenerate triangles are
-/// accepted (they add no mass and take part in contacts as the segments they are).
+/// its mass properties would count the overlap twice), has parts that do not nest as a solid's
+/// boundary (partNesting: an inside-out part, a shell inside a shell of the same orientation, a
+/// shell stored twice, parts touching at a vertex), or is inside-out or flat; and when the density
+/// is not finite and positive. Degenerate triangles are accepted (they add no mass and take part in
+/// contacts as the segments they are).
 ///
 /// A sphere shape (ParticleShape::sphere) is an exact ball for contacts and mass properties:
 /// mass 4/3·π·r³·ρ, inertia 2/5·m·r²·I, bounding radius r. Its mesh() is an icosphere of radius r

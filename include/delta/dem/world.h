@@ -251,8 +251,8 @@ struct Energies {
 /// without curves, and the law is volumePairForces; the broad phase is the same (pairs whose
 /// meshes do not overlap get no force). That law needs closed meshes that do not cross
 /// themselves: addShape refuses sphere shapes (ParticleShape refuses a mesh that bounds no
-/// solid), addObstacle open or self-intersecting meshes and those with a part oriented against the
-/// others (misoriented_parts.h) (delta::Error naming them).
+/// solid), addObstacle open or self-intersecting meshes and those whose parts do not nest as a
+/// solid's boundary (part_nesting.h) (delta::Error naming them).
 ///
 /// Sphere particles (ParticleShape::sphere) go through the same broad phase, contact law and
 /// integrator; only the narrow phase differs (narrow_phase.h): sphere–mesh particle pairs with

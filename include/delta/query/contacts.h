@@ -61,9 +61,9 @@ std::vector<ContactPoint> contacts(const TriangleSoA& first, const TriangleSoA& 
 /// `overlap` where its point x lies inside both meshes (when both are closed; QueryMesh::closed)
 /// — two parallel faces each inside the other mesh, a pair that does not intersect although the
 /// meshes interpenetrate there. Inside is decided as by a signed point query
-/// (query/point_distance.h): by pseudonormals, or, for a mesh that crosses itself
-/// (selfIntersections, found by the first such call), by its winding number; a point on either
-/// surface is not inside.
+/// (query/point_distance.h): by pseudonormals, or, for a closed mesh that bounds no solid (it
+/// crosses itself, selfIntersections, or its parts do not nest, partNesting; found by the first
+/// such call), by its winding number; a point on either surface is not inside.
 ///
 /// Found by descending both QueryMesh trees at once to the pairs of leaves whose boxes are within
 /// 2ε (work in proportion to the contact region, not to |first|·|second|), then, in parallel over

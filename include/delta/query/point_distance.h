@@ -49,13 +49,13 @@ enum class Sign {
   /// Winding Numbers for Soups and Clouds" (SIGGRAPH 2018), over the QueryMesh's tree with a
   /// rigorous error bound, and over all triangles exactly where that bound leaves the side of ½
   /// in doubt: the sign is always that of the exact winding number (the O(n) sum of
-  /// delta::windingNumber), up to its rounding. On a closed mesh that bounds a solid — it
-  /// crosses itself nowhere (selfIntersections()) and no part is oriented against the parts
-  /// around it (misorientedParts(): an inside-out part outside the others, a shell inside a
-  /// shell of the same orientation, whose winding numbers are −1 or 2), both found by the first
-  /// such query — the winding number off the surface is 0 or 1 and the pseudonormal sign is its
-  /// sign, exactly also within rounding of a face, where solid angles are not: that is what runs
-  /// there, at the pseudonormal's cost.
+  /// delta::windingNumber), up to its rounding. On a closed mesh that bounds a solid
+  /// (boundsSolid(): it crosses itself nowhere, selfIntersections(), and its parts nest as a
+  /// solid's boundary, partNesting() — no inside-out part outside the others or shell inside a
+  /// shell of the same orientation, whose winding numbers are −1 or 2, no parts touching at a
+  /// vertex; both found by the first such query) the winding number off the surface is 0 or 1
+  /// and the pseudonormal sign is its sign, exactly also within rounding of a face, where solid
+  /// angles are not: that is what runs there, at the pseudonormal's cost.
   winding,
 };
 
@@ -92,9 +92,9 @@ struct PointQuery {
   bool signedDistance = false;
   /// How signedDistance decides (ignored without it). Sign::pseudonormal, the default, refuses
   /// a mesh that is not closed, one that crosses itself (selfIntersections() > 0: there the
-  /// pseudonormals give wrong signs near the crossings) and one with a part oriented against the
-  /// parts around it (misorientedParts(): its pseudonormals name the wrong side near it), with a
-  /// delta::Error that names Sign::winding, which answers all three.
+  /// pseudonormals give wrong signs near the crossings) and one whose parts do not nest
+  /// (partNesting(): a misoriented part, a pinched vertex; the pseudonormals name the wrong side
+  /// near them), with a delta::Error that names Sign::winding, which answers all three.
   Sign sign = Sign::pseudonormal;
   /// Sign::winding: a point is `ambiguous` where |w − ½| ≤ windingTolerance (in [0, ½); NaN and
   /// others: delta::Error). The default 0.05 flags points near a hole's rim or a crossing whose

@@ -32,7 +32,7 @@ struct QueryMeshData;
 /// distance in O(1) once the closest point is known, made by the first query that needs them
 /// (thread-safe; 24 bytes a triangle that unsigned queries never pay), and, made likewise by the
 /// first query that needs them, its self-intersections (query/self_intersections.h), its
-/// misoriented parts (query/misoriented_parts.h) and per tree node the moments of the hierarchical
+/// parts' nesting (query/part_nesting.h) and per tree node the moments of the hierarchical
 /// winding number (Sign::winding, about 20 bytes a triangle). About 85 bytes a triangle in all
 /// before the pseudonormals.
 ///

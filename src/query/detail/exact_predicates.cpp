@@ -119,6 +119,16 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) 
   return signOf(sum(sum(product(w[0], n[0]), product(w[1], n[1])), product(w[2], n[2])));
 }
 
+void ExactTripleProductSum::add(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const ExactVector n = exactCross({Expansion{b.x}, Expansion{b.y}, Expansion{b.z}},
+                                   {Expansion{c.x}, Expansion{c.y}, Expansion{c.z}});
+  sum_ = sum(sum_, sum(sum(scale(n[0], a.x), scale(n[1], a.y)), scale(n[2], a.z)));
+}
+
+int ExactTripleProductSum::sign() const noexcept {
+  return signOf(sum_);
+}
+
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
   const ExactVector n = exactCross(exactDifference(q, p), exactDifference(s, r));
   for (const Expansion& component : n)

@@ -21,6 +21,7 @@
 // to an edge of a triangle is parallel to its plane and cannot cross it).
 
 #include <cmath>
+#include <vector>
 
 #include "delta/core/vec3.h"
 
@@ -44,6 +45,21 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 /// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
 /// (0 where the cross product is the zero vector).
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+
+/// An exact sum of triple products a·(b × c) (six times a closed surface's signed volume, one
+/// term a triangle): its sign where a float sum's rounding leaves it in doubt. Every coordinate
+/// must be 0 or at least kSmallestExactCoordinate in magnitude (predicatesExactAt), and within
+/// the coordinate range.
+class ExactTripleProductSum {
+ public:
+  /// Adds a·(b × c), exactly (expansion arithmetic; may throw std::bad_alloc).
+  void add(const Vec3& a, const Vec3& b, const Vec3& c);
+  /// The sum's sign: −1, 0 or +1.
+  int sign() const noexcept;
+
+ private:
+  std::vector<double> sum_;  ///< an expansion: non-overlapping, increasing magnitude
+};
 
 /// Shewchuk's bound on the rounding of orient's determinant of differences, relative to its
 /// permanent (the sum of the absolute values of its products): (7 + 56ε)ε, ε = 2⁻⁵³.

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -248,16 +249,29 @@ RayWalk castRay(const QueryMeshData& mesh, const Vec3& p, std::size_t axis, bool
 }
 
 /// The first of the six axis rays from `point`, then of the six skewed ones, that decides
-/// (castRay): its walk, or `degenerate` where none does. The expansions' memory may throw.
+/// (castRay), each six in the order of their way out of the mesh's box, shortest first (a ray
+/// along a row of parts would test every one of them): its walk, or `degenerate` where none
+/// does. The expansions' memory may throw.
 template <class Skip>
 RayWalk firstDecidingRay(const QueryMeshData& mesh, const Vec3& point, const Skip& skip) {
+  struct Direction {
+    double way;
+    std::size_t axis;
+    bool up;
+  };
+  std::array<Direction, 6> directions;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    directions[2 * axis] = {mesh.bounds.upper[axis] - point[axis], axis, true};
+    directions[2 * axis + 1] = {point[axis] - mesh.bounds.lower[axis], axis, false};
+  }
+  std::stable_sort(directions.begin(), directions.end(),
+                   [](const Direction& x, const Direction& y) { return x.way < y.way; });
   std::vector<TreeEntry> stack;
   for (const bool skewed : {false, true})
-    for (std::size_t axis = 0; axis < 3; ++axis)
-      for (const bool up : {true, false}) {
-        const RayWalk walk = castRay(mesh, point, axis, up, skewed, stack, skip);
-        if (walk.ended != RaySide::degenerate) return walk;
-      }
+    for (const Direction& direction : directions) {
+      const RayWalk walk = castRay(mesh, point, direction.axis, direction.up, skewed, stack, skip);
+      if (walk.ended != RaySide::degenerate) return walk;
+    }
   return {RaySide::degenerate, 0};
 }
 

@@ -21,7 +21,7 @@
 #include "delta/mesh/mesh.h"
 #include "delta/mesh/topology.h"
 #include "delta/mesh/triangle_soa.h"
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
 #include "bound_grid.h"
@@ -272,9 +272,9 @@ struct QueryMeshData {
   /// The mesh's self-intersections (query/self_intersections.h), found on the first call and
   /// kept. Thread-safe.
   const SelfIntersections& selfIntersections() const;
-  /// The closed mesh's parts oriented against the parts around them (misoriented_parts.h),
-  /// found on the first call and kept. Thread-safe.
-  const MisorientedParts& misorientedParts() const;
+  /// How the closed mesh's parts nest (part_nesting.h), found on the first call and kept.
+  /// Thread-safe.
+  const PartNesting& partNesting() const;
   /// The tree's winding-number moments (winding_tree.h), made on the first call (only winding
   /// signs need them, about 20 bytes a triangle). Thread-safe.
   const WindingTree& windingTree() const;
@@ -296,8 +296,8 @@ struct QueryMeshData {
   mutable std::atomic<bool> pseudonormalsMade_{false};
   mutable std::once_flag selfIntersectionsOnce_;
   mutable SelfIntersections selfIntersections_;
-  mutable std::once_flag misorientedPartsOnce_;
-  mutable MisorientedParts misorientedParts_;
+  mutable std::once_flag partNestingOnce_;
+  mutable PartNesting partNesting_;
   mutable std::once_flag windingTreeOnce_;
   mutable WindingTree windingTree_;
   mutable std::atomic<bool> windingTreeMade_{false};

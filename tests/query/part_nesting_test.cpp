@@ -1,10 +1,10 @@
-// Misoriented parts of closed meshes (query/misoriented_parts.h): parts nested as a solid's
+// How the parts of closed meshes nest (query/part_nesting.h): parts nested as a solid's
 // boundary (cavities, islands, an inside-out mesh as a whole) pass; an inside-out part, a shell
 // inside a shell of the same orientation, parts touching at a vertex, a flat part, a lattice of
 // translated parts; the signs of every query against the exact winding number over all
 // triangles, and the refusals of pseudonormal signs, the overlap query and particle shapes.
 
-#include "delta/query/misoriented_parts.h"
+#include "delta/query/part_nesting.h"
 
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/dem/particle_shape.h"
+#include "delta/mesh/mass_properties.h"
 #include "delta/mesh/primitives.h"
 #include "delta/query/contacts.h"
 #include "delta/query/overlap.h"
@@ -99,7 +100,7 @@ std::size_t expectWindingSigns(const Mesh& mesh) {
   return inside;
 }
 
-TEST(MisorientedParts, PartsNestedAsASolidsBoundaryPass) {
+TEST(PartNesting, PartsNestedAsASolidsBoundaryPass) {
   const Mesh ball = primitives::icosphere(2);
   const std::vector<std::vector<Part>> solids = {
       {{ball}, {primitives::icosphere(2, 0.5, {3, 0.2, 0.1})}},  // two apart
@@ -115,17 +116,17 @@ TEST(MisorientedParts, PartsNestedAsASolidsBoundaryPass) {
     const QueryMesh query(mesh);
     ASSERT_TRUE(query.closed());
     ASSERT_FALSE(selfIntersections(query).any());
-    const MisorientedParts& found = misorientedParts(query);
+    const PartNesting& found = partNesting(query);
     EXPECT_EQ(found.parts, parts.size());
-    EXPECT_EQ(found.count, 0u);
+    EXPECT_EQ(found.misoriented, 0u);
     EXPECT_EQ(found.undecided, 0u);
-    EXPECT_TRUE(found.triangles.empty());
+    EXPECT_TRUE(found.misorientedTriangles.empty());
     EXPECT_TRUE(boundsSolid(query));
     EXPECT_GT(expectWindingSigns(mesh), 0u);
   }
 }
 
-TEST(MisorientedParts, AnInsideOutPartAndAShellInASameShellAreFoundAndSignedByWindingNumber) {
+TEST(PartNesting, AnInsideOutPartAndAShellInASameShellAreFoundAndSignedByWindingNumber) {
   const Mesh ball = primitives::icosphere(2);  // 320 triangles
   struct Case {
     std::vector<Part> parts;
@@ -142,11 +143,11 @@ TEST(MisorientedParts, AnInsideOutPartAndAShellInASameShellAreFoundAndSignedByWi
     const QueryMesh query(mesh);
     ASSERT_TRUE(query.closed());
     ASSERT_FALSE(selfIntersections(query).any());
-    const MisorientedParts& found = misorientedParts(query);
+    const PartNesting& found = partNesting(query);
     EXPECT_EQ(found.parts, 2u);
-    EXPECT_EQ(found.count, 1u);
+    EXPECT_EQ(found.misoriented, 1u);
     EXPECT_EQ(found.undecided, 0u);
-    EXPECT_EQ(found.triangles, std::vector<std::uint32_t>{c.misoriented});
+    EXPECT_EQ(found.misorientedTriangles, std::vector<std::uint32_t>{c.misoriented});
     EXPECT_FALSE(boundsSolid(query));
     EXPECT_GT(expectWindingSigns(mesh), 0u);
     // Pseudonormal signs refuse it, naming the part and the winding sign.
@@ -166,7 +167,7 @@ TEST(MisorientedParts, AnInsideOutPartAndAShellInASameShellAreFoundAndSignedByWi
   }
 }
 
-TEST(MisorientedParts, PointContactsMarkOverlapsByWindingNumber) {
+TEST(PartNesting, PointContactsMarkOverlapsByWindingNumber) {
   // A ball with a same-orientation shell inside it: between the shells the winding number is 1,
   // inside the inner one 2; the pseudonormals of the inner shell called the gap outside.
   const Mesh mesh = joined({{primitives::icosphere(3, 2.0)}, {primitives::icosphere(3, 1.0)}});
@@ -183,8 +184,9 @@ TEST(MisorientedParts, PointContactsMarkOverlapsByWindingNumber) {
         << toString(points[contact.first]);
 }
 
-TEST(MisorientedParts, PartsAreJoinedAcrossEdgesNotAtVertices) {
-  // Two tetrahedra sharing one vertex (by index): one piece by vertices, two parts by edges.
+TEST(PartNesting, PartsTouchingAtAVertexArePinched) {
+  // Two tetrahedra sharing one vertex (by index): one piece by vertices, two parts by edges, and
+  // the shared vertex's triangles make two fans.
   const std::vector<Vec3> vertices = {{0, 0, 0},  {1, 0, 0},  {0, 1, 0}, {0, 0, 1},
                                       {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
   const std::vector<TriangleIndices> outward = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
@@ -202,25 +204,144 @@ TEST(MisorientedParts, PartsAreJoinedAcrossEdgesNotAtVertices) {
       triangles.push_back(t);
     const QueryMesh query(Mesh(vertices, triangles));
     ASSERT_TRUE(query.closed());
-    const MisorientedParts& found = misorientedParts(query);
+    const PartNesting& found = partNesting(query);
     EXPECT_EQ(found.parts, 2u);
-    EXPECT_EQ(found.count, inverted ? 1u : 0u);
+    EXPECT_EQ(found.misoriented, inverted ? 1u : 0u);
+    EXPECT_EQ(found.pinched, 1u);
+    EXPECT_EQ(found.pinchedTriangle, 0u);
     EXPECT_EQ(found.undecided, 0u);
+    EXPECT_FALSE(boundsSolid(query));
   }
-  // The same with the shared vertex copied: joined by coordinates only.
+  // The same with the shared vertex copied: joined by coordinates only, both copies pinched.
   std::vector<Vec3> copied = vertices;
   copied.push_back({0, 0, 0});
   std::vector<TriangleIndices> triangles = outward;
-  for (TriangleIndices t : second(true)) {
+  for (TriangleIndices t : second(false)) {
     for (std::uint32_t& v : t)
       if (v == 0) v = 7;
     triangles.push_back(t);
   }
   const QueryMesh query(Mesh(copied, triangles));
-  EXPECT_EQ(misorientedParts(query).count, 1u);
+  EXPECT_EQ(partNesting(query).misoriented, 0u);
+  EXPECT_EQ(partNesting(query).pinched, 2u);
+  const std::string text = describePartNesting(partNesting(query));
+  EXPECT_NE(text.find("meets itself at 2 vertices"), std::string::npos) << text;
+  // The overlap query refuses it (it walked the crossed part across edges, and the part joined
+  // at the vertex was lost: a volume of 0.125 for 1.125).
+  EXPECT_THROW((void)contactdetection::overlap(query, QueryMesh(primitives::box({2, 2, 2}))),
+               Error);
 }
 
-TEST(MisorientedParts, AFlatPartEnclosesNothingAndAnOpenMeshHasNoParts) {
+TEST(PartNesting, TouchingPartsAreSignedByWindingNumber) {
+  // A 3 × 3 × 3 block of unit cubes, all outward, sharing their faces by coordinates (a voxel
+  // block); the same with the middle cube inside out; a ball with a tetrahedron inscribed on
+  // its vertices; a ball stored twice. Each is closed and crosses itself nowhere by the
+  // self-intersection count, which does not count triangles that share a vertex.
+  const auto block = [](bool middleInverted) {
+    std::vector<Part> parts;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k)
+          parts.push_back({primitives::box({1, 1, 1}, {i + 0.5, j + 0.5, k + 0.5}),
+                           middleInverted && i == 1 && j == 1 && k == 1});
+    return joined(parts);
+  };
+  const Mesh ball = primitives::icosphere(1, 2.0);
+  const Mesh tetrahedron(
+      {ball.vertices()[0], ball.vertices()[3], ball.vertices()[7], ball.vertices()[10]},
+      {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}});
+  const bool outward = signedVolume(tetrahedron) > 0.0;
+  for (const Mesh& mesh : {block(false), block(true), joined({{ball}, {tetrahedron, !outward}}),
+                           joined({{ball}, {ball}})}) {
+    const QueryMesh query(mesh);
+    ASSERT_TRUE(query.closed());
+    ASSERT_FALSE(selfIntersections(query).any());
+    EXPECT_GT(partNesting(query).pinched, 0u);
+    EXPECT_FALSE(boundsSolid(query));
+    EXPECT_THROW((void)contactdetection::distance(query, {0, 0, 0}, signedBy(Sign::pseudonormal)),
+                 Error);
+    EXPECT_THROW(dem::ParticleShape(mesh, 1.0), Error);
+    expectWindingSigns(mesh);
+  }
+  // A point inside the block's corner cube, 0.1 from the face it shares: inside (pseudonormals
+  // said outside).
+  const QueryMesh voxels(block(false));
+  EXPECT_TRUE(contactdetection::distance(voxels, {0.9, 0.5, 0.5}, signedBy(Sign::winding)).inside);
+  EXPECT_FALSE(
+      contactdetection::distance(QueryMesh(block(true)), {1.5, 1.5, 1.4}, signedBy(Sign::winding))
+          .inside);
+}
+
+TEST(PartNesting, AThinInsideOutPartIsPlacedByItsExactVolume) {
+  // A square prism 1 × t × t in 1,000 segments beside a unit cube, inside out: its volume lies
+  // below the float sum's rounding bound, and the exact sum decides it.
+  const auto needle = [](int segments, double t) {
+    std::vector<Vec3> vertices;
+    std::vector<TriangleIndices> triangles;
+    const double h = t / 2;
+    const Vec3 ring[4] = {{0, -h, -h}, {0, h, -h}, {0, h, h}, {0, -h, h}};
+    for (int i = 0; i <= segments; ++i)
+      for (const Vec3& r : ring)
+        vertices.push_back({-0.5 + static_cast<double>(i) / segments, r.y, r.z});
+    for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(segments); ++i)
+      for (std::uint32_t j = 0; j < 4; ++j) {
+        const std::uint32_t a = 4 * i + j, b = 4 * i + (j + 1) % 4;
+        triangles.push_back({a, b, a + 4});
+        triangles.push_back({b, b + 4, a + 4});
+      }
+    const auto e = static_cast<std::uint32_t>(4 * segments);
+    triangles.insert(triangles.end(), {{0, 2, 1}, {0, 3, 2}, {e, e + 1, e + 2}, {e, e + 2, e + 3}});
+    return Mesh(vertices, triangles);
+  };
+  for (const double t : {1e-5, 1e-6}) {
+    const Mesh thin = needle(1000, t);
+    ASSERT_GT(signedVolume(thin), 0.0);
+    const Mesh mesh = joined({{primitives::box({1, 1, 1}, {0, 3, 0})}, {thin, true}});
+    const QueryMesh query(mesh);
+    EXPECT_EQ(partNesting(query).misoriented, 1u) << t;
+    EXPECT_FALSE(boundsSolid(query));
+    // Just off the needle, where its winding number is 0: outside.
+    for (const double x : {-0.3, 0.0, 0.21})
+      EXPECT_FALSE(contactdetection::distance(query, {x, t, 0}, signedBy(Sign::winding)).inside);
+  }
+}
+
+TEST(PartNesting, APartNoExactRayPlacesIsUndecidedAndBoundsNoSolid) {
+  // A box reaching down to 1e-300 (below the exact predicates' 2^-250) around a ball of the same
+  // orientation: neither the box's volume nor a ray from it is exact.
+  const Mesh mesh = joined({{Mesh({{1e-300, 1e-300, 1e-300},
+                                   {4, 1e-300, 1e-300},
+                                   {1e-300, 4, 1e-300},
+                                   {4, 4, 1e-300},
+                                   {1e-300, 1e-300, 4},
+                                   {4, 1e-300, 4},
+                                   {1e-300, 4, 4},
+                                   {4, 4, 4}},
+                                  {{0, 2, 3},
+                                   {0, 3, 1},
+                                   {4, 5, 7},
+                                   {4, 7, 6},
+                                   {0, 1, 5},
+                                   {0, 5, 4},
+                                   {2, 6, 7},
+                                   {2, 7, 3},
+                                   {0, 4, 6},
+                                   {0, 6, 2},
+                                   {1, 3, 7},
+                                   {1, 7, 5}})},
+                            {primitives::icosphere(1, 1.0, {2, 2, 2})}});
+  const QueryMesh query(mesh);
+  ASSERT_TRUE(query.closed());
+  EXPECT_GT(partNesting(query).undecided, 0u);
+  EXPECT_FALSE(boundsSolid(query));
+  const std::string text = describePartNesting(partNesting(query));
+  EXPECT_NE(text.find("not placed exactly"), std::string::npos) << text;
+  // The winding number signs it: 2 inside the ball, 1 around it.
+  EXPECT_TRUE(contactdetection::distance(query, {2, 2, 2}, signedBy(Sign::winding)).inside);
+  EXPECT_TRUE(contactdetection::distance(query, {0.5, 0.5, 0.5}, signedBy(Sign::winding)).inside);
+}
+
+TEST(PartNesting, AFlatPartEnclosesNothingAndAnOpenMeshHasNoParts) {
   // A triangle covered twice, back to back (closed, no volume), beside a ball.
   const Mesh ball = primitives::icosphere(1);
   std::vector<Vec3> vertices(ball.vertices().begin(), ball.vertices().end());
@@ -231,15 +352,15 @@ TEST(MisorientedParts, AFlatPartEnclosesNothingAndAnOpenMeshHasNoParts) {
   triangles.push_back({v, v + 2, v + 1});
   const QueryMesh flat(Mesh(vertices, triangles));
   ASSERT_TRUE(flat.closed());
-  EXPECT_EQ(misorientedParts(flat).parts, 2u);
-  EXPECT_EQ(misorientedParts(flat).count, 0u);
+  EXPECT_EQ(partNesting(flat).parts, 2u);
+  EXPECT_EQ(partNesting(flat).misoriented, 0u);
 
   const QueryMesh open(primitives::quad());
-  EXPECT_EQ(misorientedParts(open).parts, 0u);
+  EXPECT_EQ(partNesting(open).parts, 0u);
   EXPECT_FALSE(boundsSolid(open));
 }
 
-TEST(MisorientedParts, ALatticeOfTranslatedPartsWithOneInverted) {
+TEST(PartNesting, ALatticeOfTranslatedPartsWithOneInverted) {
   // 4 × 4 × 4 translated copies of one ball: every axis ray from a vertex meets the copies of
   // that vertex, and only the skewed rays place a part.
   const Mesh ball = primitives::icosphere(1, 0.4);  // 80 triangles
@@ -253,15 +374,15 @@ TEST(MisorientedParts, ALatticeOfTranslatedPartsWithOneInverted) {
       }
   const Mesh mesh = joined(parts);
   const QueryMesh query(mesh);
-  const MisorientedParts& found = misorientedParts(query);
+  const PartNesting& found = partNesting(query);
   EXPECT_EQ(found.parts, 64u);
-  EXPECT_EQ(found.count, 1u);
+  EXPECT_EQ(found.misoriented, 1u);
   EXPECT_EQ(found.undecided, 0u);
-  EXPECT_EQ(found.triangles, std::vector<std::uint32_t>{37 * 80});
-  const std::string text = describeMisorientedParts(found);
+  EXPECT_EQ(found.misorientedTriangles, std::vector<std::uint32_t>{37 * 80});
+  const std::string text = describePartNesting(found);
   EXPECT_NE(text.find("1 of its 64 parts is oriented against"), std::string::npos) << text;
   EXPECT_NE(text.find("triangle 2960"), std::string::npos) << text;
-  EXPECT_EQ(describeMisorientedParts(misorientedParts(QueryMesh(ball))), "");
+  EXPECT_EQ(describePartNesting(partNesting(QueryMesh(ball))), "");
   // The winding number inside the inverted ball is −1: outside, where pseudonormals said inside
   // just off its surface.
   const PointQuery winding = signedBy(Sign::winding);
