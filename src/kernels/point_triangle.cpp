@@ -71,15 +71,27 @@ bool crossComponentIsZero(const std::array<double, 2>& ui, const std::array<doub
 }
 
 /// Whether `p` lies exactly (in exact arithmetic on the doubles given) on the segment [s0, s1]:
-/// inside its box and on its line, (s1 − s0) × (p − s0) = 0 by exact expansions.
+/// inside its box and on its line, (s1 − s0) × (p − s0) = 0 by exact expansions. Differences
+/// below 2⁻³⁰⁰ are scaled up by a power of two first (exact): their products, and the products'
+/// errors, would underflow, and a point 1e-203 off a segment 1e-200 long was on it.
 bool exactlyOnSegment(const Vec3& p, const Vec3& s0, const Vec3& s1) noexcept {
   for (std::size_t axis = 0; axis < 3; ++axis)
     if (!(std::fmin(s0[axis], s1[axis]) <= p[axis] && p[axis] <= std::fmax(s0[axis], s1[axis])))
       return false;
   std::array<std::array<double, 2>, 3> u, r;
+  double largest = 0.0;
   for (std::size_t axis = 0; axis < 3; ++axis) {
     u[axis] = exactDifference(s1[axis], s0[axis]);
     r[axis] = exactDifference(p[axis], s0[axis]);
+    largest = std::fmax(largest, std::fmax(std::abs(u[axis][0]), std::abs(r[axis][0])));
+  }
+  if (largest > 0.0 && largest < 0x1p-300) {
+    const int exponent = -std::ilogb(largest);
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      for (std::size_t part = 0; part < 2; ++part) {
+        u[axis][part] = std::ldexp(u[axis][part], exponent);
+        r[axis][part] = std::ldexp(r[axis][part], exponent);
+      }
   }
   return crossComponentIsZero(u[1], r[2], u[2], r[1]) &&
          crossComponentIsZero(u[2], r[0], u[0], r[2]) &&

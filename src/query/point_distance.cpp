@@ -157,8 +157,9 @@ PointDistance answer(const QueryMesh& mesh, const Vec3& worldPoint, const PointQ
   const auto grown = [](double distanceSquared) {
     return std::nextafter(distanceSquared * kBoundGrowth, std::numeric_limits<double>::infinity());
   };
+  // Never beyond the limit: a bound just below ε grown past ε² found a triangle at exactly ε.
   double first = limit;
-  if (upperBound < query.epsilon) first = grown(upperBound * upperBound);
+  if (upperBound < query.epsilon) first = std::min(limit, grown(upperBound * upperBound));
   const double reach = hint ? hint->distance + length(point - hint->point) : 0.0;
   if (hint && hint->sorted != kNoTriangle && reach * reach < first)
     first = std::min(

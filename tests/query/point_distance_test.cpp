@@ -595,5 +595,60 @@ TEST(PointDistance, SameAnswersForAnyThreadCountAndFromManyThreads) {
     expectSameAnswers(answer, near, "an ε-limited batch from a thread of its own");
 }
 
+TEST(PointDistance, TinyTrianglesOffAnEdgeAreNotTouched) {
+  // A triangle of size s beside one of size 1 (the mesh in range), a point 1.4e-3·s off the
+  // middle of its edge (0, 0, 0)–(s, s, s), inside that edge's box: the exact on-edge test's
+  // products underflowed below about 1e-146, and the point was on the edge (distance 0).
+  for (const double scale : {1.0, 0x1p-400, 1e-150, 1e-160, 1e-200, 1e-300}) {
+    const std::vector<Vec3> v = {
+        {0, 0, 0}, {scale, scale, scale}, {scale, 0, 0}, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}};
+    const QueryMesh mesh(Mesh(v, {{0, 1, 2}, {3, 4, 5}}));
+    const Vec3 p = Vec3{0.5, 0.5, 0.5} * scale + Vec3{-1e-3, 1e-3, 0} * scale;
+    // The offset is square to the edge and points away from the third corner: the edge is
+    // nearest, 1e-3·s·√2 away.
+    const double expected = 1e-3 * scale * std::sqrt(2.0);
+    const PointDistance d = distance(mesh, p);
+    EXPECT_EQ(d.triangle, 0u) << scale;
+    EXPECT_NEAR(d.distance / expected, 1.0, 1e-9) << scale;
+    EXPECT_NEAR(kernels::distanceAtScale(p, {v[0], v[1], v[2]}) / expected, 1.0, 1e-9) << scale;
+    // And a point exactly on the edge's middle is on it.
+    EXPECT_EQ(kernels::distanceAtScale(Vec3{0.5, 0.5, 0.5} * scale, {v[0], v[1], v[2]}), 0.0);
+  }
+}
+
+TEST(PointDistance, SubnormalSquaresAreRankedByTheirDistancesAtScale) {
+  // Two triangles 1e-160 across, 4.5e-162 (id 0) and 4.19e-162 (id 1) from a point: their
+  // squares round to the same subnormal, and the smaller id won at 7% too far.
+  const double s = 1e-160, above = 4.5e-162, below = -4.19e-162;
+  const QueryMesh mesh(Mesh({{0, 0, above},
+                             {s, 0, above},
+                             {0, s, above},
+                             {0, 0, below},
+                             {s, 0, below},
+                             {0, s, below},
+                             {5, 5, 5},
+                             {6, 5, 5},
+                             {5, 6, 5}},
+                            {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}}));
+  const PointDistance d = distance(mesh, {1e-162, 1e-162, 0});
+  EXPECT_EQ(d.triangle, 1u);
+  EXPECT_DOUBLE_EQ(d.distance, -below);
+}
+
+TEST(PointDistance, AnUpperBoundJustBelowEpsilonKeepsEpsilonStrict) {
+  // A point exactly 1 from the mesh, ε = 1: not closer than ε, with or without a bound (a bound
+  // just below ε, grown past ε², found it).
+  const QueryMesh mesh(Mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+  const std::vector<Vec3> points = {{0.25, 0.25, 1.0}};
+  const PointQuery query{.epsilon = 1.0};
+  EXPECT_FALSE(distances(mesh, points, query)[0].found());
+  for (const double bound : {std::nextafter(1.0, 0.0), 0.5, 1.0, 2.0}) {
+    std::vector<PointDistance> out(1);
+    const std::vector<double> bounds = {bound};
+    distances(mesh, points, bounds, query, out);
+    EXPECT_FALSE(out[0].found()) << bound;
+  }
+}
+
 }  // namespace
 }  // namespace delta::contactdetection

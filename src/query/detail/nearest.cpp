@@ -128,24 +128,34 @@ Nearest nearestAmong(const QueryMeshData& mesh, const Vec3& point, double limitS
 
 Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
                          const Nearest& nearest) noexcept {
-  // A winner whose square is positive is the least square, which no triangle underflowed to
-  // 0 beat: only squares tied at 0 need their distances at scale.
-  if (nearest.distanceSquared > 0.0) return nearest;
+  if (!(nearest.distanceSquared < kUnderflowingSquare)) return nearest;
   double best = distanceOf(mesh, point, nearest);
-  if (!(best > 0.0)) return nearest;
+  if (!(best > 0.0)) return nearest;  // on the winner: nothing is nearer
+  // Every triangle whose square is below kUnderflowingSquare lies within 2⁻⁴⁸⁰ of the point, in
+  // a leaf whose box meets the box of that reach around it.
+  constexpr double kReach = 0x1p-479;
+  Aabb around;
+  around.extend(point - Vec3{kReach, kReach, kReach});
+  around.extend(point + Vec3{kReach, kReach, kReach});
   Nearest resolved = nearest;
-  for (std::size_t k = 0; k < mesh.size(); ++k) {
-    const Triangle triangle = mesh.triangle(k);
-    const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, triangle);
-    if (!(r.distanceSquared < kUnderflowingSquare)) continue;
-    const double distance = kernels::distanceAtScale(point, triangle);
-    if (distance < best || (distance == best && mesh.order[k] < resolved.triangle)) {
-      best = distance;
-      resolved.distanceSquared = r.distanceSquared;
-      resolved.triangle = mesh.order[k];
-      resolved.sorted = static_cast<std::uint32_t>(k);
-      resolved.closest = r;
-    }
+  std::vector<TreeEntry> stack;
+  try {
+    forTrianglesMeeting(mesh, around, stack, [&](std::uint32_t k) {
+      const Triangle triangle = mesh.triangle(k);
+      const kernels::PointTriangleResult r = kernels::closestPointOnTriangle(point, triangle);
+      if (!(r.distanceSquared < kUnderflowingSquare)) return true;
+      const double distance = kernels::distanceAtScale(point, triangle);
+      if (distance < best || (distance == best && mesh.order[k] < resolved.triangle)) {
+        best = distance;
+        resolved.distanceSquared = r.distanceSquared;
+        resolved.triangle = mesh.order[k];
+        resolved.sorted = k;
+        resolved.closest = r;
+      }
+      return true;
+    });
+  } catch (...) {  // the stack's memory: the search's own winner stands
+    return nearest;
   }
   return resolved;
 }

@@ -381,14 +381,14 @@ inline double distanceOf(const QueryMeshData& mesh, const Vec3& point,
 }
 
 /// The nearest triangle where the search's winner has a square that may have underflowed
-/// (`nearest.distanceSquared` < kUnderflowingSquare): those squares tie at 0 or nearly, so the
-/// triangles that may be nearer (every one whose square is below kUnderflowingSquare) are
+/// (`nearest.distanceSquared` < kUnderflowingSquare): those squares tie at 0 or nearly, or keep
+/// only a few bits (subnormal: two triangles 4.5e-162 and 4.19e-162 away had the same square),
+/// so the triangles that may be nearer (every one whose square is below kUnderflowingSquare) are
 /// compared by their distances at scale (kernels::distanceAtScale), ties to the smallest id.
-/// Returns `nearest` itself, at once, where its square is positive (the least, which no square
-/// underflowed to 0 beat) or its distance at scale is 0 (the point lies on it: nothing is
-/// nearer, and it is the smallest id of the squares at 0); otherwise (squares at 0 by underflow:
-/// a point within 1e-162 of a triangle smaller than about 1e-77, not on it) a scan of every
-/// triangle, O(n), for such points only.
+/// Returns `nearest` itself, at once, where its square is not below kUnderflowingSquare or its
+/// distance at scale is 0 (the point lies on it: nothing is nearer, and it is the smallest id of
+/// the squares at 0); otherwise the triangles in the leaves within 2⁻⁴⁷⁹ of the point, found
+/// through the tree (forTrianglesMeeting).
 Nearest resolveUnderflow(const QueryMeshData& mesh, const Vec3& point,
                          const Nearest& nearest) noexcept;
 
