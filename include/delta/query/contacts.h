@@ -34,7 +34,10 @@ namespace delta::contactdetection {
 ///
 /// Pruning before any kernel runs: the meshes' boxes further apart than 2ε return at once; blocks
 /// of the second mesh whose box is further than 2ε from a triangle's box are skipped. With the
-/// hybrid (default) or brute-force solver the contact set is exact; with the penalty solver,
+/// hybrid (default) or brute-force solver the contact set is exact: every pair whose distance,
+/// as that solver computes it (within a few ulps of the pair's coordinates), is below 2ε; a pair
+/// within those ulps of 2ε may be in one solver's set and not the other's (two triangles exactly
+/// 1 apart near 1e6 were at 0.99999999999999989 by the hybrid). With the penalty solver,
 /// approximate (a pair may be missed or misplaced where its Newton did not converge).
 ///
 /// Degenerate and overlapping input: zero-area triangles take part like any other (as the

@@ -73,7 +73,9 @@ std::optional<Sign> parseSign(std::string_view text) noexcept;
 ///
 /// Threading: a value type; no shared state.
 struct PointQuery {
-  /// Answer only points closer than ε (strictly); the others get distance +∞ and no triangle.
+  /// Answer only points closer than ε (strictly: their squared distance below ε²; the distance
+  /// reported, a rounded square root, may then equal ε); the others get distance +∞ and no
+  /// triangle.
   /// A finite ε lets the search stop near the root for points far from the mesh. Any positive ε
   /// is exact: one whose square underflows (below about 1e-154) is compared with the distance
   /// itself, not its square.
