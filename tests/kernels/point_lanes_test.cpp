@@ -156,6 +156,41 @@ TEST(PointLanes, SliversAndZeroAreaAreBoundedByTheirBoxes) {
   }
 }
 
+TEST(PointLanes, BoundsNeverExceedTheExactKernelFarFromTheOrigin) {
+  // Every family moved 1e8, 1e12 and 2¹⁵⁰ from the origin (the lanes' origin is the eight's box
+  // centre, so their floats stay fine): the exact kernel's differences round by ε of the
+  // differences, not of the offset, and the margin's share of the offset (2⁻³⁶) stays far above
+  // it.
+  for (Isa isa : supportedIsas()) {
+    Checked checked;
+    for (const double offset : {1e8, 1e12, 0x1p150})
+      for (const auto family : test::kAllFamilies) {
+        test::PairRandom random(29);
+        const auto pairs = test::makePairs(family, test::scaledCount(200), 5);
+        const Vec3 shift{offset, -0.5 * offset, 0.25 * offset};
+        const auto moved = [&shift](const Triangle& t) {
+          return Triangle{t.a + shift, t.b + shift, t.c + shift};
+        };
+        for (std::size_t first = 0; first + 8 <= pairs.size(); first += 8) {
+          std::vector<Triangle> eight;
+          for (std::size_t i = first; i < first + 8; ++i)
+            eight.push_back(moved(pairs[i].first));
+          const double size = test::pairSize(pairs[first].first, pairs[first].second);
+          const Vec3 queries[] = {eight[0].a,
+                                  (eight[1].b + eight[1].c) * 0.5,
+                                  eight[2].centroid(),
+                                  moved(pairs[first].second).a,
+                                  eight[3].centroid() + random.inCube(size),
+                                  eight[4].a + random.inCube(0.01 * size),
+                                  eight[5].b + random.inCube(30 * size)};
+          for (const Vec3& p : queries)
+            check(isa, eight, p, checked, test::name(family));
+        }
+      }
+    EXPECT_GT(checked.below, 1000) << name(isa);
+  }
+}
+
 TEST(PointLanes, SinglePrecisionVerticesWidenTheBounds) {
   // Eight triangles spread over 10³ about the origin of their lanes, with vertices that are no
   // floats (a float there is off by up to 3·10⁻⁵), and points 0.1 to 3 from one of them: the
@@ -220,10 +255,9 @@ TEST(PointLanes, NeedlesInAnyDirectionStayBelow) {
   }
 }
 
-TEST(PointLanes, FarFromTheOriginTheMarginGrowsWithTheCoordinates) {
-  // A small triangle at 1e6 and a point 1e-3 above it: the local differences carry rounding of
-  // ε·1e6, so the bounds must stand off the exact distance by at least that much, yet stay on
-  // their sides of it for every ISA (and for a point exactly on the triangle, lower at most 0).
+TEST(PointLanes, FarFromTheOriginASmallTriangleIsBracketed) {
+  // A small triangle at 1e6 and a point 1e-3 above it: the bounds stay on their sides of the
+  // exact distance for every ISA (and for a point exactly on the triangle, lower at most 0).
   const Vec3 at{1e6, -2e6, 3e6};
   const Triangle t{at, at + Vec3{1e-3, 0, 0}, at + Vec3{0, 1e-3, 0}};
   const std::vector<Triangle> eight(8, t);
