@@ -104,15 +104,16 @@ struct Piece {
   std::array<int, 3> crossings{};  ///< per edge: how many
 };
 
-/// Where an edge of a triangle crosses the other mesh: at `lambda` along it (from corner i to
-/// i + 1), entering the other mesh (σ = +1) or leaving it (−1).
+/// Where an edge of a triangle crosses the other mesh: through the other's triangle that `key`
+/// names, entering the other mesh (σ = +1) or leaving it (−1).
 struct EdgeCrossing {
   std::int32_t piece = kAbsent;
   std::uint8_t edge = 0;
   std::int8_t sigma = 0;
-  double lambda = 0.0;
   EndKey key;
   Vec3 point;  ///< relative to the reference point
+  /// The other mesh's sorted triangle it passes through.
+  std::uint32_t through() const noexcept { return static_cast<std::uint32_t>(key.triangle); }
 };
 
 /// Per vertex of a side that the query reaches.
@@ -465,16 +466,17 @@ void trianglesNear(Side& side, const Aabb& worldBox, const Visit& visit) {
 }
 
 /// Where the segment p0 → p1 (an edge, given in the order of its vertex ids so that both
-/// triangles of the edge compute the same point) crosses the plane of triangle t, and at which
-/// fraction of the way. Local coordinates: the rounding is that of the numbers near the overlap.
-std::pair<Vec3, double> crossingPoint(const Vec3& p0, const Vec3& p1,
-                                      const std::array<Vec3, 3>& t) noexcept {
+/// triangles of the edge compute the same point) crosses the plane of triangle t. Local
+/// coordinates: the rounding is that of the numbers near the overlap. Only a number: where the
+/// edge lies in the plane to its rounding (faces coplanar but for the rounding of their turned
+/// corners) the point is anywhere along it, and crossings are ordered by crossingOrder.
+Vec3 crossingPoint(const Vec3& p0, const Vec3& p1, const std::array<Vec3, 3>& t) noexcept {
   const Vec3 normal = detail::accurateNormal(t[0], t[1], t[2]);
   const double d0 = dot(p0 - t[0], normal), d1 = dot(p1 - t[0], normal);
   double lambda = 0.5;
   if (d0 != d1) lambda = std::clamp(d0 / (d0 - d1), 0.0, 1.0);
   if (!std::isfinite(lambda)) lambda = 0.5;
-  return {lambda == 1.0 ? p1 : p0 + (p1 - p0) * lambda, lambda};
+  return lambda == 1.0 ? p1 : p0 + (p1 - p0) * lambda;
 }
 
 /// The query's state: both sides, the reference point, the segments found.
@@ -557,7 +559,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       const int s = edgeSign(i, 0);
       if (edgeSign(i, 1) != s || edgeSign(i, 2) != s) continue;
       const std::uint32_t v0 = query.a.corner(ta, i), v1 = query.a.corner(ta, i1);
-      const auto [point, lambda] =
+      const Vec3 point =
           v0 < v1 ? crossingPoint(la[i], la[i1], lb) : crossingPoint(la[i1], la[i], lb);
       const EndKey key = endKey(true, v0, v1, tb);
       addEnd({point, key, sideA[i] < 0});
@@ -566,8 +568,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       piece.parity[i] += sigma;
       ++piece.crossings[i];
       query.a.crossings().push_back({query.a.pieceSlot(ta), static_cast<std::uint8_t>(i),
-                                     static_cast<std::int8_t>(sigma),
-                                     v0 < v1 ? lambda : 1.0 - lambda, key, point});
+                                     static_cast<std::int8_t>(sigma), key, point});
     }
   // B's edges through A's triangle.
   if (!flatA)
@@ -577,7 +578,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       const int s = edgeSign(0, j);
       if (edgeSign(1, j) != s || edgeSign(2, j) != s) continue;
       const std::uint32_t v0 = query.b.corner(tb, j), v1 = query.b.corner(tb, j1);
-      const auto [point, lambda] =
+      const Vec3 point =
           v0 < v1 ? crossingPoint(lb[j], lb[j1], la) : crossingPoint(lb[j1], lb[j], la);
       const EndKey key = endKey(false, v0, v1, ta);
       addEnd({point, key, sideB[j] > 0});
@@ -586,8 +587,7 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
       piece.parity[j] += sigma;
       ++piece.crossings[j];
       query.b.crossings().push_back({query.b.pieceSlot(tb), static_cast<std::uint8_t>(j),
-                                     static_cast<std::int8_t>(sigma),
-                                     v0 < v1 ? lambda : 1.0 - lambda, key, point});
+                                     static_cast<std::int8_t>(sigma), key, point});
     }
   if (found == 0) return;
   if (found != 2 || ends[0].start == ends[1].start)
@@ -1017,27 +1017,40 @@ class FaceBuilder {
     }
   }
 
-  /// The crossings of piece `p`'s edge `i` into `along_`, in order along it. Crossings closer
-  /// than their rounding may come out of order: within such a cluster, the one that keeps
-  /// inside/outside alternating is taken.
+  /// The crossings of piece `p`'s edge `i` into `along_`, in order along it: the exact order
+  /// under the displacement (detail::crossingOrder), as every other decision of the query.
+  /// (Ordered by their rounded points, crossings within rounding of one another came out of
+  /// order: where two unit cubes turned alike share coplanar faces, an edge lies in the other's
+  /// face to an ulp, and where it crosses the planes of that face's two triangles is anywhere
+  /// along it.) Crossings at one point whatever the displacement (through triangles of one
+  /// plane: faces of the other mesh back to back) come in either order: among them, the one
+  /// that keeps inside/outside alternating first.
   void sortAlongEdge(std::size_t p, std::size_t i) {
     along_.clear();
     for (std::uint32_t k = crossingStart_[p]; k < crossingStart_[p + 1]; ++k)
       if (crossings_[crossingOrder_[k]].edge == i) along_.push_back(&crossings_[crossingOrder_[k]]);
+    if (along_.empty()) return;
+    const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
+    const Vec3 e0 = t.p[i], e1 = t.p[(i + 1) % 3];
+    int inside = side_.state(t.slots[i]).inside;
+    Side& other = ofA_ ? query_.b : query_.a;
+    const auto order = [&](const EdgeCrossing* x, const EdgeCrossing* y) {
+      // Copied: placed triangles' references hold until the next placing (these are placed).
+      const std::array<Vec3, 3> first = other.triangle(x->through()).p;
+      return detail::crossingOrder(e0, e1, first, other.triangle(y->through()).p, ofA_);
+    };
     std::sort(along_.begin(), along_.end(),
-              [](const EdgeCrossing* x, const EdgeCrossing* y) { return x->lambda < y->lambda; });
-    int inside = side_.state(side_.triangle(pieces_[p].sorted).slots[i]).inside;
+              [&](const EdgeCrossing* x, const EdgeCrossing* y) { return order(x, y) < 0; });
     for (std::size_t k = 0; k < along_.size(); ++k) {
       if (inside + along_[k]->sigma == 0 || inside + along_[k]->sigma == 1) {
         inside += along_[k]->sigma;
         continue;
       }
       std::size_t swap = k + 1;
-      while (swap < along_.size() && along_[swap]->lambda - along_[k]->lambda < 0x1p-30 &&
-             along_[swap]->sigma == along_[k]->sigma)
+      while (swap < along_.size() && along_[swap]->sigma == along_[k]->sigma &&
+             order(along_[k], along_[swap]) == 0)
         ++swap;
-      if (swap == along_.size() || along_[swap]->lambda - along_[k]->lambda >= 0x1p-30)
-        inconsistent();
+      if (swap == along_.size() || order(along_[k], along_[swap]) != 0) inconsistent();
       std::rotate(along_.begin() + static_cast<std::ptrdiff_t>(k),
                   along_.begin() + static_cast<std::ptrdiff_t>(swap),
                   along_.begin() + static_cast<std::ptrdiff_t>(swap) + 1);

@@ -98,15 +98,16 @@ struct OverlapOptions {
 /// The overlap of two closed meshes, each where its pose puts it (world coordinates: each
 /// vertex moved as Mesh::transform moves it).
 ///
-/// Exact topology: which side of a triangle's plane a vertex lies on and which way a segment
-/// passes an edge are decided by exact predicates (a floating-point filter, Shewchuk's
-/// expansions where it cannot decide), with the second mesh displaced by an infinitesimal
-/// translation (symbolic perturbation) so that no vertex lies on a face and no edges meet:
-/// touching surfaces, coplanar faces, shared vertices and edge-on-edge crossings are resolved
-/// consistently, every curve is closed and every triangle's inside part well defined. The
-/// volume is continuous under that translation, so it is the exact volume of the unperturbed
-/// meshes up to the rounding of the numbers. The numbers (crossing points, areas, volumes) are
-/// computed in double in frames local to each triangle, so they keep their accuracy at any offset.
+/// Exact topology: which side of a triangle's plane a vertex lies on, which way a segment passes
+/// an edge and in which order an edge crosses the other mesh's triangles are decided by exact
+/// predicates (a floating-point filter, exact arithmetic where it cannot decide), with the
+/// second mesh displaced by an infinitesimal translation (symbolic perturbation) so that no
+/// vertex lies on a face and no edges meet: touching surfaces, coplanar faces, shared vertices
+/// and edge-on-edge crossings are resolved consistently, every curve is closed and every
+/// triangle's inside part well defined. The volume is continuous under that translation, so it
+/// is the exact volume of the unperturbed meshes up to the rounding of the numbers. The numbers
+/// (crossing points, areas, volumes) are computed in double in frames local to each triangle, so
+/// they keep their accuracy at any offset.
 ///
 /// How: the trees of both meshes are descended together to the pairs of triangles whose boxes
 /// meet; each pair gives at most one segment, and they are crossed by increasing triangle ids

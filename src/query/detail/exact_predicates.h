@@ -19,7 +19,15 @@
 // t·v has the sign of v's first non-zero component. These are zero only for a triangle of zero
 // area (N = 0) and for parallel edges, where the callers never need them (a segment parallel
 // to an edge of a triangle is parallel to its plane and cannot cross it).
+//
+// One predicate of degree 6 orders the points where an edge crosses two planes of the other
+// mesh (crossingOrder): where the edge crosses plane k at λ_k = m_k/n_k along it, m_k =
+// orient(T_k, e0) = D_k − τ·N_k (τ the displacement of the triangles against the edge: t for an
+// edge of A, −t for one of B) and n_k = orient(T_k, e0) − orient(T_k, e1), which the
+// displacement does not change, λ_1 − λ_2 has the sign of n_1·n_2·(F − τ·G), F = D_1 n_2 −
+// D_2 n_1 and G = n_2 N_1 − n_1 N_2.
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -45,6 +53,24 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 /// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
 /// (0 where the cross product is the zero vector).
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+
+/// The order along the edge e0 → e1 of the points where it crosses the planes of triangles
+/// `first` and `second` of the other mesh, B perturbed: −1 where it crosses `first`'s first,
+/// +1 where `second`'s, 0 where the two planes cross its line at one point whatever the
+/// displacement (one plane, or parallel ones through one point: the triangles lie in one plane).
+/// `edgeOfA`: the edge is A's and the triangles B's; else the other way round. Neither plane
+/// may be parallel to the edge (both cross it, where the callers ask).
+///
+/// Its sign is exact: a floating-point filter (Shewchuk's bounds on the determinants of degree
+/// 3, carried through the products), then integer arithmetic of any size (the products of six
+/// coordinate differences span up to some 3,000 bits, beyond a double's exponents, which the
+/// expansions would need). Every coordinate as the other predicates take them (0 or at least
+/// kSmallestExactCoordinate in magnitude, within the coordinate range). For crossings that lie
+/// on one another to within their rounding: where an edge lies in the other's plane to an ulp
+/// (faces coplanar but for the rounding of their turned corners), the rounded crossing points
+/// are anywhere along it, and no tolerance orders them.
+int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& first,
+                  const std::array<Vec3, 3>& second, bool edgeOfA);
 
 /// An exact sum of triple products a·(b × c) (six times a closed surface's signed volume, one
 /// term a triangle): its sign where a float sum's rounding leaves it in doubt. Every coordinate
