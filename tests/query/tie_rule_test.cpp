@@ -177,5 +177,49 @@ TEST(TieRule, KernelGivesZeroOnVerticesAndEdges) {
   EXPECT_EQ(kernels::closestPointOnTriangle(middle, binary).closest, middle);
 }
 
+TEST(TieRule, PointsVeryFarAwayNameTheSmallestIdOnEveryIsa) {
+  // A flat 40 × 40 grid at the origin and moved by 1e9, points about 1e15 away: many triangles
+  // round to one squared distance, and a leaf box's distance came out an ulp above it with fused
+  // multiply–adds (AVX2, AVX-512), far beyond what the boxes' slack covers, so those ISAs lost
+  // the smallest id. Every ISA's descent names the loop's triangle.
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> triangles;
+  constexpr std::uint32_t n = 40;
+  for (std::uint32_t j = 0; j <= n; ++j)
+    for (std::uint32_t i = 0; i <= n; ++i)
+      vertices.push_back({static_cast<double>(i), static_cast<double>(j), 0.0});
+  for (std::uint32_t j = 0; j < n; ++j)
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      triangles.push_back({a, b, d});
+      triangles.push_back({a, d, c});
+    }
+  std::mt19937_64 random(41);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (const double offset : {0.0, 1e9}) {
+    Mesh mesh(vertices, triangles);
+    mesh.translate({offset, 0.75 * offset, -0.5 * offset});
+    const QueryMesh query(mesh);
+    std::vector<Vec3> points = {{-1e15, 3, 7}};
+    for (int k = 0; k < 60; ++k)
+      points.push_back(Vec3{unit(random), unit(random), unit(random)} * 1e15);
+    for (const Vec3& p : points) {
+      double best = std::numeric_limits<double>::infinity();
+      std::uint32_t expected = 0;
+      for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
+        const double squared = kernels::closestPointOnTriangle(p, mesh.triangle(k)).distanceSquared;
+        if (squared < best) best = squared, expected = static_cast<std::uint32_t>(k);
+      }
+      for (const kernels::Isa isa : kernels::supportedIsas()) {
+        const detail::Nearest found =
+            detail::nearestTriangle(query.data(), p, std::numeric_limits<double>::infinity(), isa);
+        ASSERT_EQ(found.triangle, expected) << kernels::name(isa) << ", offset " << offset;
+        ASSERT_EQ(found.distanceSquared, best) << kernels::name(isa);
+      }
+      EXPECT_EQ(distance(query, p).triangle, expected);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace delta::contactdetection

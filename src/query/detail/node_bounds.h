@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstddef>
+#include <limits>
 
 #include "delta/core/vec3.h"
 
@@ -30,6 +31,17 @@
 #endif
 
 namespace delta::detail {
+
+/// The pruning bound a node's box is held against: `prune` grown by 2⁻⁴⁰ of itself (capped at the
+/// largest double, so that an empty slot, at +∞, stays out). A box's distance rounds by a few
+/// ulps of itself and of the point's offset from the octets' origin, which the boxes' slack (a
+/// share of the mesh's size) covers only for points within about 2¹⁷ sizes of the mesh: from a
+/// point 1e15 away the box of a leaf whose triangle ties the best came out an ulp above it with
+/// fused multiply–adds (AVX2, AVX-512) and not without, and the smallest id was lost on those
+/// ISAs. The growth, 256 times those ulps, keeps every box of a tie in the search at any distance.
+inline double admitting(double prune) noexcept {
+  return std::min(prune + prune * 0x1p-40, std::numeric_limits<double>::max());
+}
 
 /// What the cylinder bounds of a search from `point` shrink by (raiseByCylinders): 2⁻³⁸ of the
 /// point's and the mesh's coordinates and extent, thousands of times the rounding of the bound

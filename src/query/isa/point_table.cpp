@@ -233,7 +233,7 @@ template <typename Bounds>
   const Vec3 local{leaves.point[0], leaves.point[1], leaves.point[2]};  // the octets' frame
   while (top > 0) {
     const Pending entry = stack[--top];
-    if (entry.bound > search.prune) continue;
+    if (entry.bound > admitting(search.prune)) continue;
     double bounds[kFanout];
     const std::uint32_t first = entry.index() * static_cast<std::uint32_t>(kFanout);
     if (entry.level() == 1) {
@@ -242,7 +242,7 @@ template <typename Bounds>
       // Their triangles are asked for first (Search::prefetch): a leaf's bounds read 288 bytes.
       unsigned rest =
           Bounds::leaves(mesh.childOctets[0][entry.index()], mesh.leafCylinders[entry.index()],
-                         local, shrink, search.prune, bounds);
+                         local, shrink, admitting(search.prune), bounds);
       if (search.prefetch)
         for (unsigned more = rest; more != 0; more &= more - 1)
           prefetchLeaf(leaves, first + static_cast<std::uint32_t>(std::countr_zero(more)));
@@ -252,7 +252,7 @@ template <typename Bounds>
           const auto i = static_cast<std::uint32_t>(std::countr_zero(more));
           if (bounds[i] < bounds[nearest]) nearest = i;
         }
-        if (bounds[nearest] > search.prune) break;
+        if (bounds[nearest] > admitting(search.prune)) break;
         visitLeaf<Bounds>(mesh, leaves, point, first + nearest, search);
         rest &= ~(1u << nearest);
       }
@@ -262,7 +262,7 @@ template <typename Bounds>
     // order of distance, so the nearest is popped next. The mask is made without branches: a
     // branch per child mispredicted often enough to cost 4% of an ε-limited query.
     const unsigned near = Bounds::children(mesh.childOctets[entry.level() - 1][entry.index()],
-                                           local, search.prune, bounds);
+                                           local, admitting(search.prune), bounds);
     const std::size_t base = top;
     for (unsigned rest = near; rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -301,7 +301,7 @@ template <typename Bounds>
     double bounds[kFanout];
     if (level == 1) {
       for (unsigned rest = Bounds::leaves(mesh.childOctets[0][index], mesh.leafCylinders[index],
-                                          local, shrink, radiusSquared, bounds);
+                                          local, shrink, admitting(radiusSquared), bounds);
            rest != 0; rest &= rest - 1) {
         if (count == kMostCandidates) return kMostCandidates + 1;
         leaves[count++] = first + static_cast<std::uint32_t>(std::countr_zero(rest));
@@ -309,8 +309,8 @@ template <typename Bounds>
       continue;
     }
     // Pushed in descending order of index, so the leaves come out ascending.
-    const unsigned near =
-        Bounds::children(mesh.childOctets[level - 1][index], local, radiusSquared, bounds);
+    const unsigned near = Bounds::children(mesh.childOctets[level - 1][index], local,
+                                           admitting(radiusSquared), bounds);
     for (unsigned rest = near; rest != 0; rest &= ~(1u << (31 - std::countl_zero(rest))))
       stack[top++] =
           nodeKey(level - 1, first + static_cast<std::uint32_t>(31 - std::countl_zero(rest)));
@@ -337,7 +337,7 @@ template <typename Bounds>
   for (std::size_t octet = 0; octet < candidates.octets; ++octet) {
     double bounds[kFanout];
     for (unsigned rest = Bounds::leaves(candidates.boxes[octet], candidates.cylinders[octet], local,
-                                        shrink, search.prune, bounds);
+                                        shrink, admitting(search.prune), bounds);
          rest != 0; rest &= rest - 1) {
       const auto i = static_cast<std::size_t>(std::countr_zero(rest));
       bound[pending] = bounds[i];
@@ -350,7 +350,7 @@ template <typename Bounds>
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < pending; ++k)
       if (bound[k] < bound[nearest]) nearest = k;
-    if (bound[nearest] > search.prune) break;
+    if (bound[nearest] > admitting(search.prune)) break;
     visitLeaf<Bounds>(mesh, leaves, point, leaf[nearest], search);
     --pending;
     bound[nearest] = bound[pending];
