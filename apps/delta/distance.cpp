@@ -280,11 +280,11 @@ void addDistanceCommand(CLI::App& app) {
   distance->add_option("--eps", options->epsilon,
                        "Answer only points closer than ε (the others: empty distance)");
   distance->add_flag("--signed", options->signedDistance,
-                     "Also inside/outside (by pseudonormals: the mesh must be closed and not "
-                     "cross itself; see --sign)");
+                     "Also inside/outside (by pseudonormals: the mesh must bound a solid, closed, "
+                     "not crossing itself, its parts nested; see --sign and delta info)");
   distance->add_option("--sign", options->sign,
                        "How --signed decides inside (implies --signed): pseudonormal (default; "
-                       "closed meshes that do not cross themselves) or winding (the generalized "
+                       "meshes that bound a solid) or winding (the generalized "
                        "winding number > 1/2: any mesh, open or self-intersecting; --out .csv adds "
                        "a last column 'ambiguous', 1 where it is within 0.05 of 1/2)");
   distance->add_option("--out", options->out,

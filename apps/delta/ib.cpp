@@ -317,8 +317,9 @@ void addIbCommand(CLI::App& app) {
   ib->add_flag("--unsigned", options->unsignedDistance,
                "Unsigned distances (the default, signed, needs a closed mesh; see --sign)");
   ib->add_option("--sign", options->sign,
-                 "How signed distances decide inside: pseudonormal (default; a closed mesh that "
-                 "does not cross itself) or winding (the generalized winding number > 1/2: open "
+                 "How signed distances decide inside: pseudonormal (default; a mesh that bounds a "
+                 "solid: closed, not crossing itself, its parts nested) or winding (the "
+                 "generalized winding number > 1/2: open "
                  "and self-intersecting meshes too)")
       ->check(CLI::IsMember({contactdetection::signName(contactdetection::Sign::pseudonormal),
                              contactdetection::signName(contactdetection::Sign::winding)}));

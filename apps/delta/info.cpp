@@ -100,6 +100,7 @@ void printJson(const std::string& source, const MeshReport& r) {
       .value("parts", r.nesting.parts)
       .value("misoriented_parts", r.nesting.misoriented)
       .value("pinched_vertices", r.nesting.pinched)
+      .value("flat_parts", r.nesting.flat)
       .value("undecided_parts", r.nesting.undecided)
       .value("bounds_solid", r.boundsSolid)
       .beginObject("mesh_size")
@@ -146,8 +147,10 @@ void printText(const std::string& source, const MeshReport& r) {
               r.selfIntersections == 0 ? "" : " pairs of triangles cross (--sign winding)");
   if (r.topology.closed && r.topology.consistentlyOriented) {
     const PartNesting& n = r.nesting;
-    std::printf("parts                %zu (%zu misoriented, %zu undecided), %zu pinched vertices\n",
-                n.parts, n.misoriented, n.undecided, n.pinched);
+    std::printf(
+        "parts                %zu (%zu misoriented, %zu flat, %zu undecided), %zu pinched "
+        "vertices\n",
+        n.parts, n.misoriented, n.flat, n.undecided, n.pinched);
     std::printf("bounds a solid       %s\n",
                 r.boundsSolid ? "yes" : "no (pseudonormal signs refused: --sign winding)");
   }

@@ -511,7 +511,7 @@ class QueryMesh:
     @property
     def part_nesting(self) -> dict:
         """
-        How the parts of a closed mesh (its triangles joined across edges) nest, as a dict: 'parts'; 'misoriented', those oriented against the parts around them (an inside-out part outside the others, a shell inside a shell of the same orientation: winding number -1 or 2 there); 'pinched', vertices where the surface meets itself (parts touching at a vertex or sharing faces); 'undecided', parts no exact ray placed; 'misoriented_triangles', a triangle id of each of the first 16 misoriented parts. Found on first use and kept; all 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a mesh whose parts do not nest; sign="winding" answers it.
+        How the parts of a closed mesh (its triangles joined across edges) nest, as a dict: 'parts'; 'misoriented', those oriented against the parts around them (an inside-out part outside the others, a shell inside a shell of the same orientation: winding number -1 or 2 there); 'pinched', vertices where the surface meets itself (parts touching at a vertex or sharing faces); 'flat', parts enclosing no volume (a triangle stored twice, back to back); 'undecided', parts no exact ray placed; 'misoriented_triangles', a triangle id of each of the first 16 misoriented parts. Found on first use and kept; all 0 for an open mesh. Pseudonormal signs, overlap() and particle shapes refuse a mesh whose parts do not nest; sign="winding" answers it.
         """
         ...
     @property
@@ -639,8 +639,8 @@ def distance(mesh: Union[Mesh, QueryMesh], points: numpy.typing.ArrayLike, eps: 
     `closest` (3,) the closest point of the mesh, `triangle` (uint32, the smallest id of a tie;
     delta.NO_TRIANGLE beyond eps), `inside` (with signed=True), `ambiguous` (with sign="winding": the
     winding number is within 0.05 of 1/2, as across a hole). `sign` (implies signed=True):
-    "pseudonormal" (the default; the mesh must be closed and must not cross itself, delta.Error
-    otherwise) or "winding" (inside where the generalized winding number exceeds 1/2: any mesh, open
+    "pseudonormal" (the default; the mesh must bound a solid, QueryMesh.bounds_solid: closed, not
+    crossing itself, its parts nested; delta.Error otherwise) or "winding" (inside where the generalized winding number exceeds 1/2: any mesh, open
     or self-intersecting; computed fast by Barill et al.'s hierarchy, exact in sign); another string
     raises ValueError. The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
     delta.signed_distance(r) computes it. `eps`: answer only points closer than eps (faster: the

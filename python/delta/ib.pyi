@@ -14,7 +14,7 @@ class AdaptiveGrid:
 
     AdaptiveGrid(boundary, levels=7, refine_factor=1.0, signed=True, exact_band=None, padding=0.1,
     domain=None, sign="pseudonormal"): `boundary` a Mesh or QueryMesh (signed distances by
-    pseudonormals need a closed one that does not cross itself, delta.Error otherwise; sign="winding"
+    pseudonormals need one that bounds a solid, QueryMesh.bounds_solid, delta.Error otherwise; sign="winding"
     signs by the generalized winding number any boundary, open or self-intersecting, and then
     queries every vertex again after a move; another string raises ValueError). The domain
     (default: the boundary's box made a cube and grown by padding times its longest side) is the root

@@ -298,6 +298,7 @@ Python threads may query one QueryMesh at once.)")
             result["parts"] = nesting.parts;
             result["misoriented"] = nesting.misoriented;
             result["pinched"] = nesting.pinched;
+            result["flat"] = nesting.flat;
             result["undecided"] = nesting.undecided;
             result["misoriented_triangles"] = nesting.misorientedTriangles;
             return result;
@@ -306,7 +307,8 @@ Python threads may query one QueryMesh at once.)")
           "'parts'; 'misoriented', those oriented against the parts around them (an inside-out "
           "part outside the others, a shell inside a shell of the same orientation: winding "
           "number -1 or 2 there); 'pinched', vertices where the surface meets itself (parts "
-          "touching at a vertex or sharing faces); 'undecided', parts no exact ray placed; "
+          "touching at a vertex or sharing faces); 'flat', parts enclosing no volume (a triangle "
+          "stored twice, back to back); 'undecided', parts no exact ray placed; "
           "'misoriented_triangles', a triangle id of each of the first 16 misoriented parts. "
           "Found on first use and kept; all 0 for an open mesh. Pseudonormal signs, overlap() and "
           "particle shapes refuse a mesh whose parts do not nest; sign=\"winding\" answers it.")
@@ -383,8 +385,8 @@ less the last axis, written in place by the query: `distance` (unsigned; +inf be
 `closest` (3,) the closest point of the mesh, `triangle` (uint32, the smallest id of a tie;
 delta.NO_TRIANGLE beyond eps), `inside` (with signed=True), `ambiguous` (with sign="winding": the
 winding number is within 0.05 of 1/2, as across a hole). `sign` (implies signed=True):
-"pseudonormal" (the default; the mesh must be closed and must not cross itself, delta.Error
-otherwise) or "winding" (inside where the generalized winding number exceeds 1/2: any mesh, open
+"pseudonormal" (the default; the mesh must bound a solid, QueryMesh.bounds_solid: closed, not
+crossing itself, its parts nested; delta.Error otherwise) or "winding" (inside where the generalized winding number exceeds 1/2: any mesh, open
 or self-intersecting; computed fast by Barill et al.'s hierarchy, exact in sign); another string
 raises ValueError. The signed distance is np.where(r["inside"], -r["distance"], r["distance"]);
 delta.signed_distance(r) computes it. `eps`: answer only points closer than eps (faster: the

@@ -20,7 +20,7 @@ namespace {
 constexpr std::size_t kStartVertices = 32;
 
 /// What placing a part found.
-enum class Placement : std::uint8_t { wellOriented, misoriented, undecided };
+enum class Placement : std::uint8_t { wellOriented, misoriented, flat, undecided };
 
 /// The parts of a closed mesh: its sorted triangles joined across edges (Pseudonormals::across),
 /// grouped: part p has triangles[offsets[p], offsets[p + 1]), ascending, and `of` names each
@@ -72,13 +72,11 @@ Parts partsOf(const detail::QueryMeshData& mesh) {
   return parts;
 }
 
-/// The sign of the volume a closed part encloses (+1 for an outward part), exactly: its signed
-/// volume about its box's centre, scaled by a power of two to about 1 (exact), where it exceeds a
-/// bound on the sum's rounding; elsewhere the exact sum of its triple products about the origin
-/// (a closed surface's volume is the same about any point); 0 for a volume of exactly 0; nothing
-/// where a coordinate is below 2⁻²⁵⁰ but not 0 (the exact sum would underflow).
-std::optional<int> orientationOf(const detail::QueryMeshData& mesh,
-                                 std::span<const std::uint32_t> part) {
+}  // namespace
+
+namespace detail {
+
+std::optional<int> volumeSign(const QueryMeshData& mesh, std::span<const std::uint32_t> part) {
   Aabb box;
   for (const std::uint32_t k : part)
     for (const std::uint32_t v : mesh.corners[k])
@@ -115,13 +113,26 @@ std::optional<int> orientationOf(const detail::QueryMeshData& mesh,
   return exact.sign();
 }
 
+}  // namespace detail
+
+namespace {
+
 /// Where part `p` stands: its orientation relative to the mesh's against the other parts'
 /// winding number at the first of its vertices that an exact ray places.
 Placement place(const detail::QueryMeshData& mesh, const Parts& parts, std::uint32_t p) {
   const std::span<const std::uint32_t> part = parts[p];
-  const std::optional<int> own = orientationOf(mesh, part);
+  const std::optional<int> own = detail::volumeSign(mesh, part);
   if (!own) return Placement::undecided;
-  if (*own == 0) return Placement::wellOriented;  // encloses nothing
+  if (*own == 0) {
+    // Flat, unless it has no area either (a fold (c, c, a) alone, whose edges pair with each
+    // other): nothing of it has a side to name.
+    const bool area = std::any_of(part.begin(), part.end(), [&mesh](std::uint32_t k) {
+      const Vec3 n = mesh.triangle(k).areaVector();
+      return n.x != 0.0 || n.y != 0.0 || n.z != 0.0;
+    });
+    return area ? Placement::flat : Placement::wellOriented;
+  }
+  if (parts.count() == 1) return Placement::wellOriented;  // nothing to place it against
   const int orientation = mesh.orientation < 0.0 ? -1 : 1;
   std::vector<std::uint32_t> tried;
   for (const std::uint32_t k : part)
@@ -204,7 +215,6 @@ PartNesting findPartNesting(const detail::QueryMeshData& mesh) {
       for (const std::uint32_t v : mesh.corners[k])
         if (pinched[v]) result.pinchedTriangle = std::min(result.pinchedTriangle, mesh.order[k]);
   if (result.pinched == 0) result.pinchedTriangle = 0;
-  if (result.parts < 2) return result;  // a single closed part has nothing to be placed against
   std::vector<Placement> placed(parts.count(), Placement::wellOriented);
   parallelFor(0, parts.count(), 16, [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p)
@@ -212,6 +222,7 @@ PartNesting findPartNesting(const detail::QueryMeshData& mesh) {
   });
   for (std::size_t p = 0; p < parts.count(); ++p) {
     if (placed[p] == Placement::undecided) ++result.undecided;
+    if (placed[p] == Placement::flat) ++result.flat;
     if (placed[p] != Placement::misoriented) continue;
     ++result.misoriented;
     std::uint32_t smallest = std::numeric_limits<std::uint32_t>::max();
@@ -265,6 +276,10 @@ std::string describePartNesting(const PartNesting& nesting) {
         " (parts touching at a vertex or sharing faces, or a vertex whose triangles make more "
         "than one fan), such as one of triangle " +
         std::to_string(nesting.pinchedTriangle));
+  if (nesting.flat > 0)
+    add(parts(nesting.flat) +
+        " flat, enclosing no volume (such as a triangle stored twice, back to back: its faces' "
+        "pseudonormals tie, and either side is named)");
   if (nesting.undecided > 0)
     add(parts(nesting.undecided) +
         " not placed exactly (every ray from its vertices met another part's edge or vertex, or a "

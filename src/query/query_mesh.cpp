@@ -505,7 +505,14 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
   }
   data->topology = analyzeTopology(mesh);
   data->closed = data->topology.closed && data->topology.consistentlyOriented;
-  if (data->closed) data->orientation = signedVolume(mesh) < 0.0 ? -1.0 : 1.0;
+  if (data->closed) {
+    // The exact sign (a float sum where its rounding bound decides it): a thin closed mesh whose
+    // float volume rounds to the wrong sign would be taken inside out, every sign turned.
+    std::vector<std::uint32_t> all(data->size());
+    std::iota(all.begin(), all.end(), std::uint32_t{0});
+    const std::optional<int> sign = detail::volumeSign(*data, all);
+    data->orientation = sign ? (*sign < 0 ? -1.0 : 1.0) : (signedVolume(mesh) < 0.0 ? -1.0 : 1.0);
+  }
   data_ = std::move(data);
 }
 

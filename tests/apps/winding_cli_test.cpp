@@ -50,7 +50,7 @@ TEST(WindingCli, MisorientedPartsAreReportedRefusedByPseudonormalsAndSignedByWin
   EXPECT_EQ(jsonNumber(info.out, "misoriented_parts"), 1.0) << info.out;
   const CliRun text = runDelta("info " + quoted(off));
   ASSERT_EQ(text.exitCode, 0) << text.err;
-  EXPECT_NE(text.out.find("parts                2 (1 misoriented, 0 undecided), 0 pinched"),
+  EXPECT_NE(text.out.find("parts                2 (1 misoriented, 0 flat, 0 undecided), 0 pinched"),
             std::string::npos)
       << text.out;
   EXPECT_NE(text.out.find("bounds a solid       no"), std::string::npos) << text.out;

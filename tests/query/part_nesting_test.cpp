@@ -341,8 +341,10 @@ TEST(PartNesting, APartNoExactRayPlacesIsUndecidedAndBoundsNoSolid) {
   EXPECT_TRUE(contactdetection::distance(query, {0.5, 0.5, 0.5}, signedBy(Sign::winding)).inside);
 }
 
-TEST(PartNesting, AFlatPartEnclosesNothingAndAnOpenMeshHasNoParts) {
-  // A triangle covered twice, back to back (closed, no volume), beside a ball.
+TEST(PartNesting, AFlatPartBoundsNoSolidAndAnOpenMeshHasNoParts) {
+  // A triangle covered twice, back to back (closed, no volume), beside a ball: its faces'
+  // pseudonormals tie, and a point 0.1 above it was inside (either sign), where the winding
+  // number is 0.
   const Mesh ball = primitives::icosphere(1);
   std::vector<Vec3> vertices(ball.vertices().begin(), ball.vertices().end());
   std::vector<TriangleIndices> triangles(ball.triangles().begin(), ball.triangles().end());
@@ -354,6 +356,20 @@ TEST(PartNesting, AFlatPartEnclosesNothingAndAnOpenMeshHasNoParts) {
   ASSERT_TRUE(flat.closed());
   EXPECT_EQ(partNesting(flat).parts, 2u);
   EXPECT_EQ(partNesting(flat).misoriented, 0u);
+  EXPECT_EQ(partNesting(flat).flat, 1u);
+  EXPECT_FALSE(boundsSolid(flat));
+  const std::string text = describePartNesting(partNesting(flat));
+  EXPECT_NE(text.find("1 of its 2 parts is flat"), std::string::npos) << text;
+  for (const double side : {0.1, -0.1}) {
+    const Vec3 p{3.25, 0.25, side};
+    EXPECT_FALSE(contactdetection::distance(flat, p, signedBy(Sign::winding)).inside) << side;
+    EXPECT_THROW((void)contactdetection::distance(flat, p, signedBy(Sign::pseudonormal)), Error);
+  }
+  // Alone, it is flat too.
+  const QueryMesh alone(Mesh({{3, 0, 0}, {4, 0, 0}, {3, 1, 0}}, {{0, 1, 2}, {0, 2, 1}}));
+  ASSERT_TRUE(alone.closed());
+  EXPECT_EQ(partNesting(alone).flat, 1u);
+  EXPECT_FALSE(boundsSolid(alone));
 
   const QueryMesh open(primitives::quad());
   EXPECT_EQ(partNesting(open).parts, 0u);

@@ -28,6 +28,9 @@ namespace delta {
 ///   more than one fan — joins sheets that the pseudonormals at it and at the faces there take for
 ///   one surface, and near it they name the wrong side (self_intersections.h does not count
 ///   triangles that share a vertex as crossing);
+/// - a flat part — a closed part enclosing no volume (a triangle stored twice, back to back) —
+///   has faces that coincide with opposite normals, and the pseudonormal of whichever comes first
+///   names a side of a surface that has none;
 /// - an undecided part: one whose place no exact ray found (every ray from its vertices met
 ///   another part's edge, vertex or plane, or a coordinate below 2⁻²⁵⁰ but not 0), which may be
 ///   misoriented.
@@ -37,6 +40,7 @@ struct PartNesting {
   std::size_t parts = 0;        ///< the closed mesh's parts (0 for a mesh that is not closed)
   std::size_t misoriented = 0;  ///< parts oriented against the parts around them
   std::size_t pinched = 0;      ///< pinched vertices
+  std::size_t flat = 0;         ///< parts enclosing no volume
   std::size_t undecided = 0;    ///< parts no exact ray placed
   /// For the first kListed misoriented parts, each part's smallest triangle id (mesh order),
   /// ascending: for a message or a test.
@@ -46,8 +50,11 @@ struct PartNesting {
 
   /// How many parts misorientedTriangles lists at most.
   static constexpr std::size_t kListed = 16;
-  /// Whether the parts nest as a solid's boundary: nothing misoriented, pinched or undecided.
-  bool nested() const noexcept { return misoriented == 0 && pinched == 0 && undecided == 0; }
+  /// Whether the parts nest as a solid's boundary: nothing misoriented, pinched, flat or
+  /// undecided.
+  bool nested() const noexcept {
+    return misoriented == 0 && pinched == 0 && flat == 0 && undecided == 0;
+  }
 };
 
 /// How the parts of `mesh`, if it is closed, nest (see PartNesting); nothing for a mesh that is
@@ -55,15 +62,15 @@ struct PartNesting {
 ///
 /// Each part is placed exactly: its orientation is the exact sign of its signed volume (a float
 /// sum, and expansion arithmetic where the float sum's rounding bound leaves it in doubt; a part
-/// of volume exactly 0 encloses nothing and passes), and the other parts' winding number at one
+/// of volume exactly 0 is flat), and the other parts' winding number at one
 /// of its vertices is the signed sum of an exact ray's crossings with them (exact orientation
 /// predicates; the ray towards the nearest side of the mesh's box first, along an axis, then the
 /// other axis rays, then six turned off the axes by about 2⁻²¹ rad, from the first of up to 32
 /// of its vertices where one meets no edge, vertex or plane of theirs). Pinched vertices are
 /// found by sorting the vertices by coordinates and walking each vertex's fan across edges. A
-/// mesh of one part has nothing to place. O(n log n) and a ray walk per part (each to the nearest
-/// side of the box), in parallel over the parts; found on the first call and kept by the
-/// QueryMesh's shared data (thread-safe); the pose is irrelevant.
+/// mesh of one part has nothing to place it against (but may be flat). O(n log n) and a ray walk
+/// per part (each to the nearest side of the box), in parallel over the parts; found on the first
+/// call and kept by the QueryMesh's shared data (thread-safe); the pose is irrelevant.
 ///
 /// Pseudonormal signs, the overlap query, the volume contact law and particle shapes refuse a
 /// mesh whose parts are not nested, naming the defect; winding signs, and the overlap markers of

@@ -411,6 +411,14 @@ bool insideAt(const QueryMeshData& mesh, const Vec3& point, const Nearest& neare
 /// every ray is degenerate.
 std::optional<bool> insideByExactRays(const QueryMeshData& mesh, const Vec3& point) noexcept;
 
+/// The exact sign of the volume the closed surface of sorted triangles `part` encloses (+1 for
+/// an outward one): its signed volume about its box's centre, scaled by a power of two to about 1
+/// (exact), where it exceeds a bound on the sum's rounding; elsewhere the exact sum of its triple
+/// products about the origin (a closed surface's volume is the same about any point); 0 for a
+/// volume of exactly 0; nothing where a coordinate is below 2⁻²⁵⁰ but not 0 (the exact sum would
+/// underflow). May throw std::bad_alloc.
+std::optional<int> volumeSign(const QueryMeshData& mesh, std::span<const std::uint32_t> part);
+
 /// The winding number at `point` of the triangles of a closed mesh outside part `part`
 /// (`partOf[k]` the part of sorted triangle k): the signed sum of an exact ray's crossings with
 /// them, as insideByExactRays counts them, not times the orientation (+1 for each leaving
