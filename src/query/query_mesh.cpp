@@ -511,6 +511,7 @@ QueryMesh::QueryMesh(const Mesh& mesh) {
     std::vector<std::uint32_t> all(data->size());
     std::iota(all.begin(), all.end(), std::uint32_t{0});
     const std::optional<int> sign = detail::volumeSign(*data, all);
+    data->exactVolumeSign = sign;
     data->orientation = sign ? (*sign < 0 ? -1.0 : 1.0) : (signedVolume(mesh) < 0.0 ? -1.0 : 1.0);
   }
   data_ = std::move(data);

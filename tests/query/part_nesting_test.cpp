@@ -365,6 +365,24 @@ TEST(PartNesting, AFlatPartBoundsNoSolidAndAnOpenMeshHasNoParts) {
     EXPECT_FALSE(contactdetection::distance(flat, p, signedBy(Sign::winding)).inside) << side;
     EXPECT_THROW((void)contactdetection::distance(flat, p, signedBy(Sign::pseudonormal)), Error);
   }
+  // Flat or not is decided exactly: three exactly collinear points (whose rounded cross product
+  // is not 0) stored twice enclose nothing and have no area, and pass; a needle 2⁻¹⁰⁰ wide (whose
+  // rounded cross product is 0) stored twice is flat.
+  const Mesh box = primitives::box();
+  const auto withDoubled = [&box](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return joined({{box}, {Mesh({a, b, c}, {{0, 1, 2}, {0, 2, 1}})}});
+  };
+  const Vec3 first{0x1.10c67fd361120p+2, 0x1.9929bfbd119b0p+2, 0x1.54f81fc839568p+2};
+  const Vec3 second{1236, 1854, 1545}, third{47132, 70698, 58915};
+  ASSERT_NE(lengthSquared(cross(second - first, third - first)), 0.0);
+  const QueryMesh collinear(withDoubled(first, second, third));
+  EXPECT_EQ(partNesting(collinear).flat, 0u);
+  EXPECT_TRUE(boundsSolid(collinear));
+  const Vec3 tip{-4, -4, 10}, b{0, 0x1p-50, 10}, c{0x1p-50, 0x1p-49, 10};
+  ASSERT_EQ(lengthSquared(cross(b - tip, c - tip)), 0.0);
+  const QueryMesh needle(withDoubled(tip, b, c));
+  EXPECT_EQ(partNesting(needle).flat, 1u);
+  EXPECT_FALSE(boundsSolid(needle));
   // Alone, it is flat too.
   const QueryMesh alone(Mesh({{3, 0, 0}, {4, 0, 0}, {3, 1, 0}}, {{0, 1, 2}, {0, 2, 1}}));
   ASSERT_TRUE(alone.closed());

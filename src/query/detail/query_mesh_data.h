@@ -233,6 +233,8 @@ struct QueryMeshData {
   std::optional<std::pair<std::size_t, Triangle>> tinyTriangle;
   bool closed = false;
   double orientation = 1.0;  ///< −1 for an inside-out closed mesh
+  /// A closed mesh's volumeSign (its orientation's source; nothing where it is not exact).
+  std::optional<int> exactVolumeSign;
   Aabb bounds;
   /// The farthest vertex from bounds.center(), rounded up: a moved mesh's points move at most
   /// as far as that ball's (the contact caches' bound).
