@@ -263,10 +263,12 @@ TEST(PartNesting, TouchingPartsAreSignedByWindingNumber) {
     EXPECT_THROW(dem::ParticleShape(mesh, 1.0), Error);
     expectWindingSigns(mesh);
   }
-  // A point inside the block's corner cube, 0.1 from the face it shares: inside (pseudonormals
-  // said outside).
+  // Points inside the block, 0.15–0.17 from faces its cubes share: inside (the build before
+  // part nesting called both outside, by either sign).
   const QueryMesh voxels(block(false));
-  EXPECT_TRUE(contactdetection::distance(voxels, {0.9, 0.5, 0.5}, signedBy(Sign::winding)).inside);
+  for (const Vec3& p :
+       {Vec3{2.67972934, 1.17311689, 1.67853728}, Vec3{1.3325924, 0.18255011, 1.15120675}})
+    EXPECT_TRUE(contactdetection::distance(voxels, p, signedBy(Sign::winding)).inside);
   EXPECT_FALSE(
       contactdetection::distance(QueryMesh(block(true)), {1.5, 1.5, 1.4}, signedBy(Sign::winding))
           .inside);
@@ -417,8 +419,7 @@ TEST(PartNesting, ALatticeOfTranslatedPartsWithOneInverted) {
   EXPECT_NE(text.find("1 of its 64 parts is oriented against"), std::string::npos) << text;
   EXPECT_NE(text.find("triangle 2960"), std::string::npos) << text;
   EXPECT_EQ(describePartNesting(partNesting(QueryMesh(ball))), "");
-  // The winding number inside the inverted ball is −1: outside, where pseudonormals said inside
-  // just off its surface.
+  // The winding number inside the inverted ball is −1, and 0 just outside it: outside.
   const PointQuery winding = signedBy(Sign::winding);
   const Vec3 centre{2, 1, 1};  // part 37's
   EXPECT_FALSE(contactdetection::distance(query, centre, winding).inside);
