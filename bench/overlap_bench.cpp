@@ -15,6 +15,12 @@
 //    meshes; each iteration cuts fresh copies of the inputs, made outside the timing and timed
 //    on their own as Armadillo/cgal_copy. Counters: CGAL's volume and its relative difference
 //    from Δ's.
+//  - Cubes/<pose>: two unit cubes (12 triangles each) sharing faces' planes, the exact
+//    predicates' worst case: `turned_coplanar` (the second turned 30° about z and moved by
+//    (0.5, 0.2, 0): top and bottom faces in the planes z = ±0.5), `turned_apart` (the same moved
+//    10⁻³ further along z), `tilted_alike` (both tilted by one rotation, the second moved by
+//    (0.5, 0.25, 0) in their frame: four pairs of faces coplanar but for the rounding of the
+//    turned corners) and `tilted_diagonal` (moved by (0.5, 0.25, 0.125) instead).
 //
 // Run: build/bench/delta_bench_overlap --benchmark_repetitions=3 (data/meshes from
 // scripts/setup.sh).
@@ -26,6 +32,7 @@
 #include <filesystem>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "delta/core/rotation.h"
@@ -197,6 +204,38 @@ void armadilloPrepare(benchmark::State& state) {
   }
 }
 
+/// Cubes/<pose>: the two cubes' poses.
+struct CubePoses {
+  const char* name;
+  RigidTransform first, second;
+};
+
+std::vector<CubePoses> cubePoses() {
+  const double half = 0.5235987755982988 / 2.0;  // 30°
+  const Quaternion turn = Quaternion::fromComponents(std::cos(half), 0.0, 0.0, std::sin(half));
+  const RigidTransform tilt{Quaternion::fromComponents(0.9, 0.3, -0.2, 0.1), {}};
+  return {{"turned_coplanar", {}, RigidTransform{turn, {0.5, 0.2, 0.0}}},
+          {"turned_apart", {}, RigidTransform{turn, {0.5, 0.2, 1e-3}}},
+          {"tilted_alike", tilt, tilt * RigidTransform::translationBy({0.5, 0.25, 0.0})},
+          {"tilted_diagonal", tilt, tilt * RigidTransform::translationBy({0.5, 0.25, 0.125})}};
+}
+
+void cubes(benchmark::State& state, const CubePoses& poses) {
+  const bench::OmpThreads threads(1);
+  QueryMesh first(primitives::box()), second(primitives::box());
+  first.setPose(poses.first);
+  second.setPose(poses.second);
+  cd::OverlapOptions options;
+  options.curves = false;  // as a DEM step
+  cd::Overlap found;
+  for (auto _ : state) {
+    found = cd::overlap(first, second, options);
+    benchmark::DoNotOptimize(found);
+  }
+  state.counters["volume"] = found.total.volume;
+  state.counters["segments"] = static_cast<double>(found.segments);
+}
+
 #ifdef DELTA_HAVE_CGAL
 void armadilloCgal(benchmark::State& state) {
   if (armadilloMissing(state)) return;
@@ -229,6 +268,10 @@ const int registered = [] {
   for (const bool curves : {false, true})
     benchmark::RegisterBenchmark(curves ? "Granulates/curves_on" : "Granulates/curves_off",
                                  [curves](benchmark::State& s) { granulates(s, curves); })
+        ->Unit(benchmark::kMicrosecond);
+  for (const CubePoses& poses : cubePoses())
+    benchmark::RegisterBenchmark((std::string("Cubes/") + poses.name).c_str(),
+                                 [poses](benchmark::State& s) { cubes(s, poses); })
         ->Unit(benchmark::kMicrosecond);
   for (const bool curves : {false, true})
     benchmark::RegisterBenchmark(

@@ -22,6 +22,7 @@
 #include "detail/exact_predicates.h"
 #include "detail/placement.h"
 #include "detail/query_mesh_data.h"
+#include "detail/union_find.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -828,25 +829,9 @@ struct Element {
   std::size_t edge = 3;              ///< the triangle's edge it is a part of (3: a segment)
 };
 
-/// Union–find over small index sets, in a buffer of the caller's (recycled: allocated for each
+/// Union–find over small index sets, in a buffer recycled by the thread (allocated for each
 /// query, the sets cost a malloc and a free each).
-class UnionFind {
- public:
-  explicit UnionFind(std::vector<std::size_t>& parent) noexcept : parent_(parent) {}
-  void reset(std::size_t count) {
-    parent_.resize(count);
-    std::iota(parent_.begin(), parent_.end(), std::size_t{0});
-  }
-  std::size_t find(std::size_t i) noexcept {
-    while (parent_[i] != i)
-      i = parent_[i] = parent_[parent_[i]];
-    return i;
-  }
-  void join(std::size_t i, std::size_t j) noexcept { parent_[find(i)] = find(j); }
-
- private:
-  std::vector<std::size_t>& parent_;
-};
+using UnionFind = detail::UnionFind<std::size_t>;
 
 /// Whether the point `point` lies inside the closed chain of `elements` (those of face `face`
 /// under `faceOf`), in the plane whose normal's largest component is `axis`: the parity of the
@@ -1341,22 +1326,18 @@ namespace delta::detail {
 const MeshComponents& QueryMeshData::components() const {
   std::call_once(componentsOnce_, [this] {
     MeshComponents& made = components_;
-    // Union–find over the vertices along the triangles' edges.
-    std::vector<std::uint32_t> parent(vertices.size());
-    std::iota(parent.begin(), parent.end(), std::uint32_t{0});
-    const auto find = [&](std::uint32_t v) {
-      while (parent[v] != v)
-        v = parent[v] = parent[parent[v]];
-      return v;
-    };
+    // The vertices joined along the triangles' edges.
+    std::vector<std::uint32_t> parent;
+    UnionFind<std::uint32_t> sets(parent);
+    sets.reset(vertices.size());
     for (const TriangleIndices& c : corners)
       for (std::size_t i = 1; i < 3; ++i)
-        parent[find(c[i])] = find(c[0]);
+        sets.join(c[i], c[0]);
     std::vector<std::uint32_t> index(vertices.size(), std::numeric_limits<std::uint32_t>::max());
     made.ofVertex.assign(vertices.size(), 0);
     for (const TriangleIndices& c : corners)
       for (const std::uint32_t v : c) {
-        const std::uint32_t root = find(v);
+        const std::uint32_t root = sets.find(v);
         if (index[root] == std::numeric_limits<std::uint32_t>::max()) {
           index[root] = static_cast<std::uint32_t>(made.representative.size());
           made.representative.push_back(v);

@@ -12,6 +12,7 @@
 
 #include "detail/exact_predicates.h"
 #include "detail/query_mesh_data.h"
+#include "detail/union_find.h"
 
 namespace delta {
 namespace {
@@ -38,25 +39,18 @@ struct Parts {
 Parts partsOf(const detail::QueryMeshData& mesh) {
   const std::size_t n = mesh.size();
   const detail::Pseudonormals& normals = mesh.pseudonormals();
-  std::vector<std::uint32_t> parent(n);
-  std::iota(parent.begin(), parent.end(), std::uint32_t{0});
-  const auto find = [&parent](std::uint32_t k) {
-    while (parent[k] != k)
-      k = parent[k] = parent[parent[k]];
-    return k;
-  };
+  std::vector<std::uint32_t> parent;
+  detail::UnionFind<std::uint32_t> sets(parent);
+  sets.reset(n);
   for (std::uint32_t k = 0; k < n; ++k)
     for (const std::uint32_t other : normals.across[k])
-      if (other != detail::Pseudonormals::kNone) {
-        const std::uint32_t a = find(k), b = find(other);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
+      if (other != detail::Pseudonormals::kNone) sets.join(k, other);
   Parts parts;
   parts.of.assign(n, 0);
   std::vector<std::uint32_t> index(n, std::numeric_limits<std::uint32_t>::max());
   parts.offsets.assign(1, 0);
   for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t root = find(k);
+    const std::uint32_t root = sets.find(k);
     if (index[root] == std::numeric_limits<std::uint32_t>::max()) {
       index[root] = static_cast<std::uint32_t>(parts.offsets.size() - 1);
       parts.offsets.push_back(0);
