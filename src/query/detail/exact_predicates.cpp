@@ -34,7 +34,7 @@ struct Expansion {
 };
 
 /// a + b = x + y exactly, x = fl(a + b).
-inline void twoSum(double a, double b, double& x, double& y) noexcept {
+[[gnu::always_inline]] inline void twoSum(double a, double b, double& x, double& y) noexcept {
   x = a + b;
   const double bVirtual = x - a;
   const double aVirtual = x - bVirtual;
@@ -45,7 +45,7 @@ inline void twoSum(double a, double b, double& x, double& y) noexcept {
 /// else by Dekker's splitting (the same y, exactly: on the x86-64 baseline std::fma is a call
 /// into libm, a tenth of an exact orientation). The split's a·(2²⁷ + 1) stays finite: the
 /// predicates' numbers are below 2⁶⁰⁴ (coordinate_range.h).
-inline void twoProduct(double a, double b, double& x, double& y) noexcept {
+[[gnu::always_inline]] inline void twoProduct(double a, double b, double& x, double& y) noexcept {
   x = a * b;
 #if defined(__FMA__) || defined(__aarch64__)
   y = std::fma(a, b, -x);
@@ -65,7 +65,7 @@ inline void twoProduct(double a, double b, double& x, double& y) noexcept {
 /// h += component, in place (grow_expansion_zeroelim): h needs room for one more term. The
 /// output's k-th term is written after the input's k-th is read, so one array serves both.
 template <std::size_t N>
-void grow(Expansion<N>& h, double component) noexcept {
+[[gnu::always_inline]] inline void grow(Expansion<N>& h, double component) noexcept {
   double q = component;
   std::size_t out = 0;
   for (std::size_t i = 0; i < h.size; ++i) {
@@ -81,7 +81,8 @@ void grow(Expansion<N>& h, double component) noexcept {
 /// e + f: every component of f grown into e (fast_expansion_sum_zeroelim's result, by grow
 /// steps done plainly).
 template <std::size_t N, std::size_t M>
-Expansion<N + M> sum(const Expansion<N>& e, const Expansion<M>& f) noexcept {
+[[gnu::always_inline]] inline Expansion<N + M> sum(const Expansion<N>& e,
+                                                   const Expansion<M>& f) noexcept {
   Expansion<N + M> h;
   std::copy(e.begin(), e.end(), h.terms.begin());
   h.size = e.size;
@@ -92,7 +93,8 @@ Expansion<N + M> sum(const Expansion<N>& e, const Expansion<M>& f) noexcept {
 
 /// e − f: sum's steps with f's components negated (exactly).
 template <std::size_t N, std::size_t M>
-Expansion<N + M> subtract(const Expansion<N>& e, const Expansion<M>& f) noexcept {
+[[gnu::always_inline]] inline Expansion<N + M> subtract(const Expansion<N>& e,
+                                                        const Expansion<M>& f) noexcept {
   Expansion<N + M> h;
   std::copy(e.begin(), e.end(), h.terms.begin());
   h.size = e.size;
@@ -103,7 +105,7 @@ Expansion<N + M> subtract(const Expansion<N>& e, const Expansion<M>& f) noexcept
 
 /// e·b (scale_expansion_zeroelim).
 template <std::size_t N>
-Expansion<2 * N> scale(const Expansion<N>& e, double b) noexcept {
+[[gnu::always_inline]] inline Expansion<2 * N> scale(const Expansion<N>& e, double b) noexcept {
   Expansion<2 * N> h;
   if (e.size == 0) return h;
   double q, low;
@@ -126,7 +128,8 @@ Expansion<2 * N> scale(const Expansion<N>& e, double b) noexcept {
 
 /// e·f: the sum of e scaled by each component of f.
 template <std::size_t N, std::size_t M>
-Expansion<2 * N * M> product(const Expansion<N>& e, const Expansion<M>& f) noexcept {
+[[gnu::always_inline]] inline Expansion<2 * N * M> product(const Expansion<N>& e,
+                                                           const Expansion<M>& f) noexcept {
   Expansion<2 * N * M> h;
   for (const double component : f)
     for (const double term : scale(e, component))
@@ -333,6 +336,64 @@ int filteredCrossingOrder(const PlaneCrossing& first, const PlaneCrossing& secon
   return static_cast<int>(difference > margin) - static_cast<int>(-difference > margin);
 }
 
+/// Shewchuk's adaptive stages B and C of orient3d ("Adaptive Precision Floating-Point Arithmetic
+/// and Fast Robust Geometric Predicates", 1997, section 4.3), for the determinant
+/// det[u; v; w] = orient(p, q, r, s) of the rounded differences u = q − p, v = r − p, w = s − p:
+/// B evaluates it exactly from the rounded differences and decides where that is beyond
+/// (3 + 28ε)ε of the permanent; C adds the differences' rounding errors to first order and
+/// decides beyond (26 + 288ε)ε² of the permanent and (3 + 8ε)ε of the result. 0 where neither
+/// decides (the full expansion then does), and where the permanent is below 2⁻⁹⁰⁰, so that the
+/// bounds stay far above any product's underflow. Faces coplanar but for the rounding of turned
+/// corners put four points a few ulps off a plane: C decides them, where the full expansion of
+/// differences that are not doubles took a tenth of a microsecond each.
+int adaptiveOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, const Vec3& u,
+                       const Vec3& v, const Vec3& w) noexcept {
+  // Shewchuk's names: a, b, c the rows u, v, w, expanded along z.
+  const double adx = u.x, ady = u.y, adz = u.z, bdx = v.x, bdy = v.y, bdz = v.z, cdx = w.x,
+               cdy = w.y, cdz = w.z;
+  const double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy, cdxady = cdx * ady, adxcdy = adx * cdy,
+               adxbdy = adx * bdy, bdxady = bdx * ady;
+  const double permanent = (std::abs(bdxcdy) + std::abs(cdxbdy)) * std::abs(adz) +
+                           (std::abs(cdxady) + std::abs(adxcdy)) * std::abs(bdz) +
+                           (std::abs(adxbdy) + std::abs(bdxady)) * std::abs(cdz);
+  if (!(permanent >= 0x1p-900)) return 0;
+  constexpr double kEpsilon = 0x1p-53;
+  constexpr double kBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;
+  constexpr double kBoundC = (26.0 + 288.0 * kEpsilon) * kEpsilon * kEpsilon;
+  constexpr double kResultBound = (3.0 + 8.0 * kEpsilon) * kEpsilon;
+  const auto minor = [](double a, double b, double c, double d) {  // a·b − c·d, exactly
+    return subtract(product(Expansion<1>{a}, Expansion<1>{b}),
+                    product(Expansion<1>{c}, Expansion<1>{d}));
+  };
+  const auto whole =
+      sum(sum(scale(minor(bdx, cdy, cdx, bdy), adz), scale(minor(cdx, ady, adx, cdy), bdz)),
+          scale(minor(adx, bdy, bdx, ady), cdz));
+  double det = 0.0;
+  for (const double term : whole)
+    det += term;
+  const double boundB = kBoundB * permanent;
+  if (det > boundB) return 1;
+  if (-det > boundB) return -1;
+  const auto tail = [](double x, double y) {  // (x − y) − fl(x − y), exactly
+    double high, low;
+    twoSum(x, -y, high, low);
+    return low;
+  };
+  const double adxt = tail(q.x, p.x), adyt = tail(q.y, p.y), adzt = tail(q.z, p.z);
+  const double bdxt = tail(r.x, p.x), bdyt = tail(r.y, p.y), bdzt = tail(r.z, p.z);
+  const double cdxt = tail(s.x, p.x), cdyt = tail(s.y, p.y), cdzt = tail(s.z, p.z);
+  const double boundC = kBoundC * permanent + kResultBound * std::abs(det);
+  det += (adz * ((bdx * cdyt + cdy * bdxt) - (bdy * cdxt + cdx * bdyt)) +
+          adzt * (bdx * cdy - bdy * cdx)) +
+         (bdz * ((cdx * adyt + ady * cdxt) - (cdy * adxt + adx * cdyt)) +
+          bdzt * (cdx * ady - cdy * adx)) +
+         (cdz * ((adx * bdyt + bdy * adxt) - (ady * bdxt + bdx * adyt)) +
+          cdzt * (adx * bdy - ady * bdx));
+  if (det > boundC) return 1;
+  if (-det > boundC) return -1;
+  return 0;
+}
+
 }  // namespace
 
 int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& first,
@@ -399,6 +460,7 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) 
   if (zeroProducts(u.x, v.y, w.z, u.x, v.z, w.y) && zeroProducts(u.y, v.z, w.x, u.y, v.x, w.z) &&
       zeroProducts(u.z, v.x, w.y, u.z, v.y, w.x))
     return 0;
+  if (const int sign = adaptiveOrientSign(p, q, r, s, u, v, w); sign != 0) return sign;
   const ExactVector<2> eu = exactDifference(q, p), ev = exactDifference(r, p),
                        ew = exactDifference(s, p);
   const ExactVector<16> n = exactCross(eu, ev);
