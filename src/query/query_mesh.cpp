@@ -210,9 +210,53 @@ void buildOctets(detail::QueryMeshData& data) {
   }
 }
 
-/// The cylinders of the leaves of node `node` of level 1 (query_mesh_data.h): each normal is the
-/// leaf's slab's in single precision, each centre that of the leaf's box in the node's octet
-/// (less the origin, as the octet is).
+/// A leaf's cylinder about an axis through `centre` (query_mesh_data.h's CylinderOctet, before
+/// the slack): the axis in single precision, the range of n·w and the largest distance from the
+/// axis over its triangles' vertices (w = vertex − origin − centre).
+struct LeafCylinder {
+  float axis[3] = {0.0f, 0.0f, 0.0f};
+  double low = 0.0, high = 0.0, radius = 0.0;
+
+  /// The cylinder's surface (2πr·length + 2πr², without the 2π): what it adds to the volume
+  /// around it that a search's bound admits.
+  double surface() const noexcept {
+    const double s =
+        double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2];
+    return radius * ((high - low) / std::sqrt(s) + radius);
+  }
+};
+
+LeafCylinder cylinderAbout(const detail::QueryMeshData& data, const Vec3& direction,
+                           const Vec3& centre, std::size_t from, std::size_t to) {
+  LeafCylinder cylinder;
+  cylinder.axis[0] = static_cast<float>(direction.x);
+  cylinder.axis[1] = static_cast<float>(direction.y);
+  cylinder.axis[2] = static_cast<float>(direction.z);
+  const Vec3 axis{cylinder.axis[0], cylinder.axis[1], cylinder.axis[2]};
+  const double inverse = 1.0 / dot(axis, axis);
+  cylinder.low = std::numeric_limits<double>::infinity();
+  cylinder.high = -cylinder.low;
+  for (std::size_t k = from; k < to; ++k) {
+    const Triangle t = data.triangle(k);
+    for (const Vec3& v : {t.a, t.b, t.c}) {
+      const Vec3 w = (v - data.lanes.origin) - centre;
+      const double h = dot(axis, w);
+      cylinder.low = std::min(cylinder.low, h);
+      cylinder.high = std::max(cylinder.high, h);
+      cylinder.radius = std::max(cylinder.radius, length(w - axis * (h * inverse)));
+    }
+  }
+  return cylinder;
+}
+
+/// The cylinders of the leaves of node `node` of level 1 (query_mesh_data.h), each about an axis
+/// through the centre of the leaf's box in the node's octet (less the origin, as the octet is):
+/// the leaf's slab's normal, a flat disc around a patch of a surface; or, where its surface is
+/// less than half the disc's, the leaf's long direction (from the vertex farthest from the
+/// centre to the vertex farthest from that one), a thin rod around a fan of slivers. A cap of a
+/// cylinder triangulated as a fan from its centre puts every leaf's triangles from the centre to
+/// the rim: a point above the cap lay within the box and the disc of a fifth of the leaves, and
+/// a search took 97 µs on a fan of 16,384 slivers where it took 1.4 µs on one of 1,024.
 detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size_t node) {
   const detail::BoxOctet& boxes = data.childOctets[0][node];
   detail::CylinderOctet cylinders{};  // empty slots: zeros (their boxes' centres are NaN)
@@ -221,32 +265,37 @@ detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size
     const std::size_t from = leaf * detail::kFanout;
     const std::size_t to = std::min(from + detail::kFanout, data.size());
     if (from >= to) break;
-    const Vec3 normal = data.slabs[0][leaf].normal;
-    const float n[3] = {static_cast<float>(normal.x), static_cast<float>(normal.y),
-                        static_cast<float>(normal.z)};
-    const Vec3 axis{n[0], n[1], n[2]};
-    const double inverse = 1.0 / dot(axis, axis);
     const Vec3 centre{(double{boxes.lowerX[i]} + double{boxes.upperX[i]}) * 0.5,
                       (double{boxes.lowerY[i]} + double{boxes.upperY[i]}) * 0.5,
                       (double{boxes.lowerZ[i]} + double{boxes.upperZ[i]}) * 0.5};
-    double low = std::numeric_limits<double>::infinity(), high = -low, radius = 0.0;
-    for (std::size_t k = from; k < to; ++k) {
-      const Triangle t = data.triangle(k);
-      for (const Vec3& v : {t.a, t.b, t.c}) {
-        const Vec3 w = (v - data.lanes.origin) - centre;
-        const double h = dot(axis, w);
-        low = std::min(low, h);
-        high = std::max(high, h);
-        radius = std::max(radius, length(w - axis * (h * inverse)));
+    LeafCylinder cylinder = cylinderAbout(data, data.slabs[0][leaf].normal, centre, from, to);
+    // The long direction: the two vertices farthest apart, nearly.
+    const auto farthestFrom = [&](const Vec3& point) {
+      Vec3 farthest = point;
+      double most = 0.0;
+      for (std::size_t k = from; k < to; ++k) {
+        const Triangle t = data.triangle(k);
+        for (const Vec3& v : {t.a, t.b, t.c})
+          if (const double d = lengthSquared((v - data.lanes.origin) - point); d > most) {
+            most = d;
+            farthest = v - data.lanes.origin;
+          }
       }
+      return farthest;
+    };
+    const Vec3 end = farthestFrom(centre), start = farthestFrom(end);
+    const Vec3 along = end - start;
+    if (const double size = length(along); size > 0.0 && std::isfinite(size)) {
+      const LeafCylinder rod = cylinderAbout(data, along / size, centre, from, to);
+      if (rod.surface() < 0.5 * cylinder.surface()) cylinder = rod;
     }
     // The slack covers this rounding and the queries' (far above a few ulps of the box).
-    cylinders.normalX[i] = n[0];
-    cylinders.normalY[i] = n[1];
-    cylinders.normalZ[i] = n[2];
-    cylinders.low[i] = roundedOutward(low - data.slack, true);
-    cylinders.high[i] = roundedOutward(high + data.slack, false);
-    cylinders.radius[i] = roundedOutward(radius + data.slack, false);
+    cylinders.normalX[i] = cylinder.axis[0];
+    cylinders.normalY[i] = cylinder.axis[1];
+    cylinders.normalZ[i] = cylinder.axis[2];
+    cylinders.low[i] = roundedOutward(cylinder.low - data.slack, true);
+    cylinders.high[i] = roundedOutward(cylinder.high + data.slack, false);
+    cylinders.radius[i] = roundedOutward(cylinder.radius + data.slack, false);
   }
   return cylinders;
 }

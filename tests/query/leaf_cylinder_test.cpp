@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -50,6 +51,21 @@ Mesh tiltedGrid(int n, const Vec3& offset) {
       triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
       triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
     }
+  return Mesh(std::move(vertices), std::move(triangles));
+}
+
+/// A disc of radius 1 about `centre` in the plane z = centre.z, triangulated as a fan of `n`
+/// slivers from its centre (as CAD exports a cylinder's cap): every leaf's triangles reach from
+/// the centre to the rim.
+Mesh fan(int n, const Vec3& centre) {
+  std::vector<Vec3> vertices{centre};
+  std::vector<TriangleIndices> triangles;
+  for (int i = 0; i < n; ++i) {
+    const double angle = 2.0 * std::numbers::pi * i / n;
+    vertices.push_back(centre + Vec3{std::cos(angle), std::sin(angle), 0.0});
+    triangles.push_back(
+        {0u, static_cast<std::uint32_t>(1 + i), static_cast<std::uint32_t>(1 + (i + 1) % n)});
+  }
   return Mesh(std::move(vertices), std::move(triangles));
 }
 
@@ -200,6 +216,10 @@ TEST(LeafCylinder, BoundNeverExceedsTheLeafsTriangles) {
   EXPECT_GT(raised, 100u);  // the boxes as fine as at the origin: the cylinders still tighten
   expectBelowTheLeaves(primitives::box({1, 2, 3}), "box", nodes, raised);
   expectBelowTheLeaves(degenerateSoup(2000, 3), "slivers and zero-area triangles", nodes, raised);
+  expectBelowTheLeaves(fan(4096, {0, 0, 0}), "fan of slivers", nodes, raised);
+  EXPECT_GT(raised, 100u);
+  expectBelowTheLeaves(fan(4096, {3e6, -1e6, 2e6}), "fan of slivers at 1e6", nodes, raised);
+  EXPECT_GT(raised, 100u);
 }
 
 TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
@@ -231,6 +251,36 @@ TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
   }
   EXPECT_GE(byCylinders, 50u);  // at least the leaf of the nearest triangle
   EXPECT_LT(3 * byCylinders, byBoxes) << byCylinders << " of " << byBoxes;
+}
+
+TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveAFanOfSlivers) {
+  // Above a fan, a leaf's box and a disc about its plane's normal come as close as the fan's
+  // plane wherever the point's foot lies in the box (a fifth of the leaves); a rod along the
+  // leaf's slivers does not.
+  const QueryMesh query(fan(16384, {0, 0, 0}));
+  const QueryMeshData& data = query.data();
+  std::mt19937_64 random(12);
+  std::uniform_real_distribution<double> unit(-0.5, 0.5);
+  std::size_t byBoxes = 0, byCylinders = 0;
+  for (int round = 0; round < 20; ++round) {
+    const Vec3 p{unit(random), unit(random), 0.3};
+    const Vec3 local = p - data.lanes.origin;  // the octets' frame
+    double nearest = kInfinity;
+    for (std::size_t k = 0; k < data.size(); ++k)
+      nearest =
+          std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
+    for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
+      double boxes[kFanout], bounds[kFanout];
+      const unsigned admitted =
+          PlainBounds::children(data.childOctets[0][node], local, nearest, boxes);
+      byBoxes += static_cast<std::size_t>(std::popcount(admitted));
+      byCylinders += static_cast<std::size_t>(
+          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node],
+                                            local, cylinderShrink(data, p), nearest, bounds)));
+    }
+  }
+  EXPECT_GE(byCylinders, 20u);  // at least the leaf of the nearest triangle
+  EXPECT_LT(4 * byCylinders, byBoxes) << byCylinders << " of " << byBoxes;
 }
 
 }  // namespace
