@@ -121,14 +121,45 @@ TEST(Overlap, ASmallBodyAgainstALargeOneKeepsItsAccuracy) {
           << size;
     }
   }
-  // Its terms are then of the region's own size: two unit cubes overlapping by a slab 2⁻⁵⁰ deep
-  // make a region (its fans from a far corner made its volume look like rounding: "touching").
+  // Its terms are then of the region's own size: two unit cubes overlapping by a slab 10⁻¹¹
+  // deep make a region (its fans from a far corner made its volume look like rounding:
+  // "touching"). One 2⁻⁵⁰ deep (8.9e-16) is within the rounding the terms of the cubes' faces
+  // may carry in general (a few ulps of a face's area times its distance from the reference
+  // point): the cubes touch, as they do turned alike (below).
   const QueryMesh unit(primitives::box({1, 1, 1}));
-  const QueryMesh slab = placed(primitives::box({1, 1, 1}), {Quaternion{}, {1 - 0x1p-50, 0, 0}});
+  const QueryMesh slab = placed(primitives::box({1, 1, 1}), {Quaternion{}, {1 - 1e-11, 0, 0}});
   const Overlap thin = overlap(unit, slab);
   ASSERT_EQ(thin.regions.size(), 1u);
   EXPECT_EQ(thin.touching, 0u);
-  EXPECT_NEAR(thin.total.volume, 0x1p-50, 0x1p-50 * 1e-9);
+  EXPECT_NEAR(thin.total.volume, 1e-11, 1e-11 * 1e-4);
+  const Overlap thinner =
+      overlap(unit, placed(primitives::box({1, 1, 1}), {Quaternion{}, {1 - 0x1p-50, 0, 0}}));
+  EXPECT_EQ(thinner.regions.size(), 0u);
+  EXPECT_EQ(thinner.touching, 1u);
+}
+
+TEST(Overlap, CubesTurnedAlikeAndTouchingFaceToFaceShareNoVolume) {
+  // The shared face's four corners are the same doubles in both and exactly coplanar; with B
+  // displaced into A the faces' fans cancel but for their rounding, and a region of 9.5e-18
+  // with the whole face's area vector came out where the reference point lay near the faces'
+  // plane (its terms o·a were near 0, and their rounding scale with them). Both orders now agree
+  // with the exact answer: nothing, or a touching piece.
+  const Quaternion turn = Quaternion::fromComponents(0.26475914304120585, -0.52192719953169997,
+                                                     -0.56913681010804329, -0.57756201913311822);
+  for (const Vec3& offset : {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{1, 1, 0}, Vec3{0, 0, -1}}) {
+    for (const double scale : {1e-6, 1.0, 1e3}) {
+      Mesh first = primitives::box(Vec3{1, 1, 1} * scale, Vec3{0.5, 0.5, 0.5} * scale);
+      Mesh second = primitives::box(Vec3{1, 1, 1} * scale, (Vec3{0.5, 0.5, 0.5} + offset) * scale);
+      first.rotate(turn);
+      second.rotate(turn);
+      const QueryMesh a(first), b(second);
+      for (const Overlap& o : {overlap(a, b), overlap(b, a)}) {
+        EXPECT_EQ(o.regions.size(), 0u) << toString(offset) << " " << scale;
+        EXPECT_EQ(o.total.volume, 0.0) << toString(offset) << " " << scale;
+        EXPECT_LE(o.touching, 2u);
+      }
+    }
+  }
 }
 
 TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {

@@ -78,10 +78,11 @@ struct Overlap {
   /// here. Surfaces that only touch (faces lying on one another, a vertex on a face) give either
   /// such a piece or nothing, as the symbolic displacement of B (along +x first) moves B into A
   /// or away from it: two unit cubes side by side give 1 with B on A's −x side, 0 on its +x side.
-  /// A region whose volume is within 1024 ulps of the sum of its terms' magnitudes (Σ|o·a|/3 of
-  /// its fans, each about a face piece's area times the region's own extent) counts here too:
-  /// its sign would not be sure. Two unit cubes overlapping by a slab 2⁻⁵³ deep still give their
-  /// region (1.1e-16).
+  /// A region whose volume is within 1024 ulps of the rounding its terms may carry (each fan
+  /// triangle (o, p, q) of its faces, about the query's reference point, some ulps of
+  /// |o|·(|o|·(|p − o| + |q − o|) + |p − o|·|q − o|)) counts here too: its volume and sign would
+  /// not be sure. Two unit cubes overlapping by a slab 10⁻¹¹ deep still give their region; by
+  /// one 2⁻⁵⁰ deep (8.9e-16), only as exact as that where their coordinates are, they touch.
   std::size_t touching = 0;
   bool any() const noexcept { return !regions.empty(); }
 };
