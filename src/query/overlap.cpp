@@ -76,15 +76,20 @@ struct Segment {
 struct Integrals {
   Vec3 area, areaMoment, volumeMoment;
   double volume = 0.0;
-  /// The scale of the volume's rounding (reportRegions): per face, Σ|a|₁ over its terms
-  /// times the magnitude its points round at (closeFace). A point rounds to ulps of its
-  /// coordinates, and a closed surface's volume moves by at most its area times the points'
-  /// move: some ulps of that, whatever the terms o·a themselves. (Measured by Σ|o·a|/3, as it
-  /// was, a face whose plane passes near the reference point had a scale near 0 but not its
-  /// rounding: two cubes turned alike and touching face to face, whose faces' terms cancel but
-  /// for that rounding, gave a region of 1e-17 with the faces' whole area vector.)
+  /// The scale of the volume's rounding (reportRegions): per face, Σ|a|₁ over its terms plus
+  /// Σ|q − p|₁·|p|₁ over its boundary's pieces (their length times their distance from the
+  /// reference point), times the magnitude its points round at (closeFace). A point rounds to
+  /// ulps of its coordinates: a closed surface's volume moves by at most its area times the
+  /// points' move; and where the pieces on the two meshes that should close it are bounded by
+  /// different points of one line (faces lying on one another, an edge along the other mesh's
+  /// edge), one came out ulps wide (its area vector any direction the rounding gave it) and the
+  /// other of no area: it leaks a strip along the boundary, whose term is at most its area times
+  /// its distance. (Measured by Σ|o·a|/3, as it was, a face whose plane passes near the
+  /// reference point had a scale near 0 but not its rounding: two cubes turned alike and
+  /// touching face to face, or edge to edge, gave regions of 1e-19 to 1e-17, one with the
+  /// faces' whole area vector.)
   double volumeScale = 0.0;
-  double areaScale = 0.0;  ///< Σ of the terms' |a.x| + |a.y| + |a.z| since the last closeFace
+  double areaScale = 0.0;  ///< Σ|a|₁ + Σ|q − p|₁·|p|₁ since the last closeFace
 
   void add(const Vec3& origin, const Vec3& p, const Vec3& q) noexcept {
     const Vec3 u = p - origin, v = q - origin;
@@ -94,7 +99,10 @@ struct Integrals {
     areaMoment += cross(g, a);
     const double tetrahedron = dot(origin, a) * (1.0 / 3.0);
     volume += tetrahedron;
-    areaScale += std::abs(a.x) + std::abs(a.y) + std::abs(a.z);
+    const Vec3 along = v - u;  // q − p
+    areaScale += std::abs(a.x) + std::abs(a.y) + std::abs(a.z) +
+                 (std::abs(along.x) + std::abs(along.y) + std::abs(along.z)) *
+                     (std::abs(p.x) + std::abs(p.y) + std::abs(p.z));
     volumeMoment += (origin * 3.0 + u + v) * (tetrahedron * 0.25);
   }
   void add(const Integrals& other) noexcept {
@@ -297,13 +305,6 @@ class Side {
 
   const QueryMeshData& data() const noexcept { return data_; }
   bool isA() const noexcept { return isA_; }
-  /// The magnitude a placed vertex rounds at beyond its own coordinates: those of the prepared
-  /// frame and the pose's translation where the mesh is moved (0 where it is not).
-  double placingMagnitude() const noexcept {
-    return moved_
-               ? maxAbs(data_.bounds.lower) + maxAbs(data_.bounds.upper) + maxAbs(pose_.translation)
-               : 0.0;
-  }
   const Aabb& box() const noexcept { return box_; }
   double margin() const noexcept { return margin_; }
   const RigidTransform& inversePose() const noexcept { return inverse_; }
@@ -889,8 +890,7 @@ class FaceBuilder {
         ofA_(side.isA()),
         pieces_(side.pieces()),
         crossings_(side.crossings()),
-        count_(pieces_.size()),
-        base_(side.placingMagnitude() + maxAbs(query.reference)) {}
+        count_(pieces_.size()) {}
 
   void run() {
     groupByPiece();
@@ -959,7 +959,7 @@ class FaceBuilder {
     const PlacedTriangle& t = side_.triangle(pieces_[p].sorted);
     Face whole{{}, ofA_};
     whole.integrals.add(t.local[0], t.local[1], t.local[2]);
-    whole.integrals.closeFace(faceMagnitude(t.local, t.local[0]));
+    closeFace(whole.integrals, t.local, t.local[0]);
     for (std::size_t i = 0; i < 3; ++i) {
       intervalStart_[3 * p + i] = static_cast<std::uint32_t>(intervalFaces_.size());
       intervalFaces_.push_back(faces_.size());
@@ -1073,13 +1073,16 @@ class FaceBuilder {
   /// vector, a centroid 10⁴ away and a volume 12% off.)
   Vec3 fanOrigin() const noexcept { return elements_.empty() ? Vec3{} : elements_.front().p; }
 
-  /// The magnitude the points of a face of triangle `local` with fan origin `origin` round at:
-  /// where the vertices were placed (Side::placingMagnitude) and the reference point (`base_`),
-  /// and the face's own extent about it (all of it within the triangle), each coordinate
-  /// counted (finite here, and a bound of the largest).
-  double faceMagnitude(const std::array<Vec3, 3>& local, const Vec3& origin) const noexcept {
+  /// Ends `integrals`, a face of triangle `local` with fan origin `origin` (Integrals::closeFace):
+  /// its points round at ulps of the magnitude the query computes them at about the reference
+  /// point, the origin's and the face's extent (all of it within the triangle), each coordinate
+  /// counted (finite here, and a bound of the largest). Not where a pose placed them: the answer
+  /// is the volume of the meshes as placed (in doubles), and a placed vertex is exact from then
+  /// on.
+  static void closeFace(Integrals& integrals, const std::array<Vec3, 3>& local,
+                        const Vec3& origin) noexcept {
     const auto sum = [](const Vec3& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
-    return base_ + sum(origin) + 2.0 * (sum(local[1] - local[0]) + sum(local[2] - local[0]));
+    integrals.closeFace(sum(origin) + 2.0 * (sum(local[1] - local[0]) + sum(local[2] - local[0])));
   }
   /// Phase 3: the chain's cycles, a face per cycle (`local_`, `faceOf_` of each element), and
   /// which faces touch the triangle's edges (of piece `p`).
@@ -1103,9 +1106,9 @@ class FaceBuilder {
       local_[faceOf_[e]].integrals.add(origin, elements_[e].p, elements_[e].q);
       if (elements_[e].segment == kNoSegment) touchesEdge_[faceOf_[e]] = true;
     }
-    const double magnitude = faceMagnitude(side_.triangle(pieces_[p].sorted).local, origin);
+    const std::array<Vec3, 3>& local = side_.triangle(pieces_[p].sorted).local;
     for (Face& face : local_)
-      face.integrals.closeFace(magnitude);
+      closeFace(face.integrals, local, origin);
   }
 
   /// Phase 4: the holes (cycles inside the triangle that run clockwise) join the smallest face
@@ -1182,7 +1185,7 @@ class FaceBuilder {
     const Vec3 origin = fanOrigin();
     for (const Element& element : elements_)
       face.integrals.add(origin, element.p, element.q);
-    face.integrals.closeFace(faceMagnitude(side_.triangle(pieces_[p].sorted).local, origin));
+    closeFace(face.integrals, side_.triangle(pieces_[p].sorted).local, origin);
     const std::size_t index = faces_.size();
     faces_.push_back(face);
     std::size_t edge = 0;
@@ -1240,7 +1243,6 @@ class FaceBuilder {
   const std::vector<Piece>& pieces_;
   const std::vector<EdgeCrossing>& crossings_;
   const std::size_t count_;
-  const double base_;  ///< faceMagnitude's share of the placing and the reference point
   // The scratch, kept from call to call on this thread (recycled).
   std::vector<std::uint32_t>& crossingStart_ = recycled<std::uint32_t, 1>();
   std::vector<std::uint32_t>& segmentStart_ = recycled<std::uint32_t, 2>();
@@ -1554,13 +1556,13 @@ OverlapRegion regionOf(const Query& query, const Sums& sums) {
 }
 
 /// Phase 6: the regions into `result`, largest first, and their total. A region whose volume is
-/// within the rounding its terms may carry (1024 ulps of Integrals::volumeScale) encloses nothing
-/// we can be sure of (surfaces that touch, or faces that lie on one another: the perturbation
-/// puts them a zero distance apart): counted as touching.
-/// Returns, per root, its region's index in result.regions (kNoSegment for none).
+/// within the rounding its terms may carry (16 ulps of Integrals::volumeScale, whose norms and
+/// magnitudes are generous already) encloses nothing we can be sure of (surfaces that touch, or
+/// faces that lie on one another: the perturbation puts them a zero distance apart): counted as
+/// touching. Returns, per root, its region's index in result.regions (kNoSegment for none).
 std::vector<std::size_t>& reportRegions(const Query& query, const std::vector<Sums>& byRoot,
                                         Overlap& result) {
-  constexpr double kRoundingFactor = 1024.0 * std::numeric_limits<double>::epsilon();
+  constexpr double kRoundingFactor = 16.0 * std::numeric_limits<double>::epsilon();
   std::vector<std::pair<std::size_t, Sums>>& kept = recycled<std::pair<std::size_t, Sums>, 0>();
   std::vector<Sums>& cavities = recycled<Sums, 1>();
   for (std::size_t root = 0; root < byRoot.size(); ++root) {

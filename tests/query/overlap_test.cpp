@@ -142,24 +142,31 @@ TEST(Overlap, CubesTurnedAlikeAndTouchingFaceToFaceShareNoVolume) {
   // The shared face's four corners are the same doubles in both and exactly coplanar; with B
   // displaced into A the faces' fans cancel but for their rounding, and a region of 9.5e-18
   // with the whole face's area vector came out where the reference point lay near the faces'
-  // plane (its terms o·a were near 0, and their rounding scale with them). Both orders now agree
-  // with the exact answer: nothing, or a touching piece.
-  const Quaternion turn = Quaternion::fromComponents(0.26475914304120585, -0.52192719953169997,
-                                                     -0.56913681010804329, -0.57756201913311822);
-  for (const Vec3& offset : {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{1, 1, 0}, Vec3{0, 0, -1}}) {
-    for (const double scale : {1e-6, 1.0, 1e3}) {
-      Mesh first = primitives::box(Vec3{1, 1, 1} * scale, Vec3{0.5, 0.5, 0.5} * scale);
-      Mesh second = primitives::box(Vec3{1, 1, 1} * scale, (Vec3{0.5, 0.5, 0.5} + offset) * scale);
-      first.rotate(turn);
-      second.rotate(turn);
-      const QueryMesh a(first), b(second);
-      for (const Overlap& o : {overlap(a, b), overlap(b, a)}) {
-        EXPECT_EQ(o.regions.size(), 0u) << toString(offset) << " " << scale;
-        EXPECT_EQ(o.total.volume, 0.0) << toString(offset) << " " << scale;
-        EXPECT_LE(o.touching, 2u);
+  // plane (its terms o·a were near 0, and their rounding scale with them). Sharing an edge
+  // (offset (1, 1, 0)), a face's piece came out ulps wide on one mesh and of no area on the
+  // other: regions of 1.7e-19 and 3.8e-19 under the two last turns. Both orders now agree with
+  // the exact answer: nothing, or a touching piece.
+  for (const Quaternion& turn :
+       {Quaternion::fromComponents(0.26475914304120585, -0.52192719953169997, -0.56913681010804329,
+                                   -0.57756201913311822),
+        Quaternion::fromComponents(0.11769036405236692, -0.73562713584432693, -0.46045998585028697,
+                                   0.48267825375652385),
+        Quaternion::fromComponents(0.50595210297633386, 0.68503684263040965, -0.083722381338367777,
+                                   -0.51742396213918962)})
+    for (const Vec3& offset : {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{1, 1, 0}, Vec3{0, 0, -1}})
+      for (const double scale : {1e-6, 1.0, 1e3}) {
+        Mesh first = primitives::box(Vec3{1, 1, 1} * scale, Vec3{0.5, 0.5, 0.5} * scale);
+        Mesh second =
+            primitives::box(Vec3{1, 1, 1} * scale, (Vec3{0.5, 0.5, 0.5} + offset) * scale);
+        first.rotate(turn);
+        second.rotate(turn);
+        const QueryMesh a(first), b(second);
+        for (const Overlap& o : {overlap(a, b), overlap(b, a)}) {
+          EXPECT_EQ(o.regions.size(), 0u) << toString(offset) << " " << scale;
+          EXPECT_EQ(o.total.volume, 0.0) << toString(offset) << " " << scale;
+          EXPECT_LE(o.touching, 2u);
+        }
       }
-    }
-  }
 }
 
 TEST(Overlap, DisjointAndTouchingMeshesShareNothing) {

@@ -78,11 +78,13 @@ struct Overlap {
   /// here. Surfaces that only touch (faces lying on one another, a vertex on a face) give either
   /// such a piece or nothing, as the symbolic displacement of B (along +x first) moves B into A
   /// or away from it: two unit cubes side by side give 1 with B on A's −x side, 0 on its +x side.
-  /// A region whose volume is within 1024 ulps of the rounding its terms may carry (each fan
-  /// triangle (o, p, q) of its faces, about the query's reference point, some ulps of
-  /// |o|·(|o|·(|p − o| + |q − o|) + |p − o|·|q − o|)) counts here too: its volume and sign would
-  /// not be sure. Two unit cubes overlapping by a slab 10⁻¹¹ deep still give their region; by
-  /// one 2⁻⁵⁰ deep (8.9e-16), only as exact as that where their coordinates are, they touch.
+  /// A region whose volume is within the rounding its points may carry counts here too: 16
+  /// ulps of its faces' area and of their boundaries' length times their distance from the
+  /// query's reference point near the overlap, times the magnitude the points round at (their
+  /// coordinates about that point); its volume and sign would not be sure. Two unit cubes
+  /// overlapping by a slab 10⁻¹¹ deep still give their region; by one 2⁻⁵⁰ deep (8.9e-16),
+  /// only as exact as that where their coordinates are, they touch, and so does a slab 10⁻¹²
+  /// deep between faces of many triangles (the scale grows with their boundaries' length).
   std::size_t touching = 0;
   bool any() const noexcept { return !regions.empty(); }
 };
