@@ -222,6 +222,33 @@ TEST(LeafCylinder, BoundNeverExceedsTheLeafsTriangles) {
   EXPECT_GT(raised, 100u);
 }
 
+/// How many leaves of `query` the boxes admit, and how many the boxes and cylinders admit, for a
+/// search from each of `points` whose pruning bound is its exact distance (summed over them).
+struct Admitted {
+  std::size_t byBoxes = 0, byCylinders = 0;
+};
+
+Admitted admittedLeaves(const QueryMesh& query, const std::vector<Vec3>& points) {
+  const QueryMeshData& data = query.data();
+  Admitted admitted;
+  for (const Vec3& p : points) {
+    const Vec3 local = p - data.lanes.origin;  // the octets' frame
+    double nearest = kInfinity;
+    for (std::size_t k = 0; k < data.size(); ++k)
+      nearest =
+          std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
+    for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
+      double boxes[kFanout], bounds[kFanout];
+      admitted.byBoxes += static_cast<std::size_t>(
+          std::popcount(PlainBounds::children(data.childOctets[0][node], local, nearest, boxes)));
+      admitted.byCylinders += static_cast<std::size_t>(
+          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node],
+                                            local, cylinderShrink(data, p), nearest, bounds)));
+    }
+  }
+  return admitted;
+}
+
 TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
   // Far above a flat tilted patch, the boxes of the leaves around the nearest point come closer
   // than the nearest triangle; the cylinders of a flat patch are flat.
@@ -230,27 +257,15 @@ TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveATiltedPatch) {
   const Vec3 normal = normalized(data.triangle(0).areaVector());
   std::mt19937_64 random(11);
   std::uniform_real_distribution<double> unit(0.1, 0.9);
-  std::size_t byBoxes = 0, byCylinders = 0;
+  std::vector<Vec3> points;
   for (int round = 0; round < 50; ++round) {
     const Triangle t = data.triangle(random() % data.size());
-    const Vec3 p = t.a + normal * (unit(random) * 0.5);
-    const Vec3 local = p - data.lanes.origin;  // the octets' frame
-    double nearest = kInfinity;
-    for (std::size_t k = 0; k < data.size(); ++k)
-      nearest =
-          std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
-    for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
-      double boxes[kFanout], bounds[kFanout];
-      const unsigned admitted =
-          PlainBounds::children(data.childOctets[0][node], local, nearest, boxes);
-      byBoxes += static_cast<std::size_t>(std::popcount(admitted));
-      byCylinders += static_cast<std::size_t>(
-          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node],
-                                            local, cylinderShrink(data, p), nearest, bounds)));
-    }
+    points.push_back(t.a + normal * (unit(random) * 0.5));
   }
-  EXPECT_GE(byCylinders, 50u);  // at least the leaf of the nearest triangle
-  EXPECT_LT(3 * byCylinders, byBoxes) << byCylinders << " of " << byBoxes;
+  const Admitted admitted = admittedLeaves(query, points);
+  EXPECT_GE(admitted.byCylinders, 50u);  // at least the leaf of the nearest triangle
+  EXPECT_LT(3 * admitted.byCylinders, admitted.byBoxes)
+      << admitted.byCylinders << " of " << admitted.byBoxes;
 }
 
 TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveAFanOfSlivers) {
@@ -258,29 +273,15 @@ TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveAFanOfSlivers) {
   // plane wherever the point's foot lies in the box (a fifth of the leaves); a rod along the
   // leaf's slivers does not.
   const QueryMesh query(fan(16384, {0, 0, 0}));
-  const QueryMeshData& data = query.data();
   std::mt19937_64 random(12);
   std::uniform_real_distribution<double> unit(-0.5, 0.5);
-  std::size_t byBoxes = 0, byCylinders = 0;
-  for (int round = 0; round < 20; ++round) {
-    const Vec3 p{unit(random), unit(random), 0.3};
-    const Vec3 local = p - data.lanes.origin;  // the octets' frame
-    double nearest = kInfinity;
-    for (std::size_t k = 0; k < data.size(); ++k)
-      nearest =
-          std::min(nearest, kernels::closestPointOnTriangle(p, data.triangle(k)).distanceSquared);
-    for (std::size_t node = 0; node < data.leafCylinders.size(); ++node) {
-      double boxes[kFanout], bounds[kFanout];
-      const unsigned admitted =
-          PlainBounds::children(data.childOctets[0][node], local, nearest, boxes);
-      byBoxes += static_cast<std::size_t>(std::popcount(admitted));
-      byCylinders += static_cast<std::size_t>(
-          std::popcount(PlainBounds::leaves(data.childOctets[0][node], data.leafCylinders[node],
-                                            local, cylinderShrink(data, p), nearest, bounds)));
-    }
-  }
-  EXPECT_GE(byCylinders, 20u);  // at least the leaf of the nearest triangle
-  EXPECT_LT(4 * byCylinders, byBoxes) << byCylinders << " of " << byBoxes;
+  std::vector<Vec3> points;
+  for (int round = 0; round < 20; ++round)
+    points.push_back({unit(random), unit(random), 0.3});
+  const Admitted admitted = admittedLeaves(query, points);
+  EXPECT_GE(admitted.byCylinders, 20u);  // at least the leaf of the nearest triangle
+  EXPECT_LT(4 * admitted.byCylinders, admitted.byBoxes)
+      << admitted.byCylinders << " of " << admitted.byBoxes;
 }
 
 }  // namespace

@@ -79,29 +79,29 @@ template <std::size_t N>
   h.size = out;
 }
 
-/// e + f: every component of f grown into e (fast_expansion_sum_zeroelim's result, by grow
-/// steps done plainly).
-template <std::size_t N, std::size_t M>
-[[gnu::always_inline]] inline Expansion<N + M> sum(const Expansion<N>& e,
-                                                   const Expansion<M>& f) noexcept {
-  Expansion<N + M> h;
-  std::copy(e.begin(), e.end(), h.terms.begin());
-  h.size = e.size;
-  for (const double component : f)
-    grow(h, component);
-  return h;
-}
-
-/// e − f: sum's steps with f's components negated (exactly).
-template <std::size_t N, std::size_t M>
-[[gnu::always_inline]] inline Expansion<N + M> subtract(const Expansion<N>& e,
+/// e + f, or e − f where `kNegated`: every component of f (negated: exactly) grown into e
+/// (fast_expansion_sum_zeroelim's result, by grow steps done plainly).
+template <bool kNegated, std::size_t N, std::size_t M>
+[[gnu::always_inline]] inline Expansion<N + M> combined(const Expansion<N>& e,
                                                         const Expansion<M>& f) noexcept {
   Expansion<N + M> h;
   std::copy(e.begin(), e.end(), h.terms.begin());
   h.size = e.size;
   for (const double component : f)
-    grow(h, -component);
+    grow(h, kNegated ? -component : component);
   return h;
+}
+
+template <std::size_t N, std::size_t M>
+[[gnu::always_inline]] inline Expansion<N + M> sum(const Expansion<N>& e,
+                                                   const Expansion<M>& f) noexcept {
+  return combined<false>(e, f);
+}
+
+template <std::size_t N, std::size_t M>
+[[gnu::always_inline]] inline Expansion<N + M> subtract(const Expansion<N>& e,
+                                                        const Expansion<M>& f) noexcept {
+  return combined<true>(e, f);
 }
 
 /// e·b (scale_expansion_zeroelim).
