@@ -1084,6 +1084,7 @@ class FaceBuilder {
     const auto sum = [](const Vec3& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
     integrals.closeFace(sum(origin) + 2.0 * (sum(local[1] - local[0]) + sum(local[2] - local[0])));
   }
+
   /// Phase 3: the chain's cycles, a face per cycle (`local_`, `faceOf_` of each element), and
   /// which faces touch the triangle's edges (of piece `p`).
   void facesOfCycles(std::size_t p) {
