@@ -464,6 +464,10 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) 
   // A difference of doubles rounds to 0 only where it is 0: where each of the determinant's six
   // products has a zero difference among its factors (four points in a plane of constant z, the
   // overlap of faces coplanar in it), the determinant is exactly 0 without evaluating it.
+  // Two of the points the same (a mesh against a copy of itself, a vertex of one mesh on a
+  // corner of the other's triangle): 0, where the adaptive stages would each fail before the
+  // full expansion found it.
+  if (q == p || r == p || s == p || r == q || s == q || s == r) return 0;
   const Vec3 u = q - p, v = r - p, w = s - p;
   const auto zeroProducts = [](double a, double b, double c, double d, double e, double f) {
     return (a == 0.0 || b == 0.0 || c == 0.0) && (d == 0.0 || e == 0.0 || f == 0.0);
