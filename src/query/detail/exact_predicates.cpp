@@ -17,7 +17,7 @@ namespace {
 //
 // An expansion's capacity is part of its type, carried through every operation (a sum's is the
 // sum of its operands', a product's twice their product), so every predicate's numbers live on
-// the stack: held in std::vector, as they were, their allocations were nine tenths of an
+// the stack: held in std::vector, as they were, malloc and free were half the profile of an
 // overlap query between coplanar faces (169 µs for two turned cubes, 20 µs a hair apart).
 
 /// At most N components, in terms[0, size).
@@ -63,20 +63,27 @@ struct Expansion {
 #endif
 }
 
-/// h += component, in place (grow_expansion_zeroelim): h needs room for one more term. The
-/// output's k-th term is written after the input's k-th is read, so one array serves both.
-template <std::size_t N>
-[[gnu::always_inline]] inline void grow(Expansion<N>& h, double component) noexcept {
+/// terms[0, size) += component, in place (grow_expansion_zeroelim); returns the new size, at
+/// most size + 1, for which `terms` needs room. The output's k-th term is written after the
+/// input's k-th is read, so one array serves both.
+[[gnu::always_inline]] inline std::size_t growTerms(double* terms, std::size_t size,
+                                                    double component) noexcept {
   double q = component;
   std::size_t out = 0;
-  for (std::size_t i = 0; i < h.size; ++i) {
+  for (std::size_t i = 0; i < size; ++i) {
     double sumHigh, sumLow;
-    twoSum(q, h.terms[i], sumHigh, sumLow);
-    if (sumLow != 0.0) h.terms[out++] = sumLow;
+    twoSum(q, terms[i], sumHigh, sumLow);
+    if (sumLow != 0.0) terms[out++] = sumLow;
     q = sumHigh;
   }
-  if (q != 0.0 || out == 0) h.terms[out++] = q;
-  h.size = out;
+  if (q != 0.0 || out == 0) terms[out++] = q;
+  return out;
+}
+
+/// h += component (growTerms): h needs room for one more term.
+template <std::size_t N>
+[[gnu::always_inline]] inline void grow(Expansion<N>& h, double component) noexcept {
+  h.size = growTerms(h.terms.data(), h.size, component);
 }
 
 /// e + f, or e − f where `kNegated`: every component of f (negated: exactly) grown into e
@@ -148,11 +155,16 @@ Expansion<2> difference(double x, double y) noexcept {
   return e;
 }
 
+/// The sign of the expansion terms[0, size): its largest non-zero term's.
+int signOfTerms(const double* terms, std::size_t size) noexcept {
+  for (std::size_t i = size; i-- > 0;)
+    if (terms[i] != 0.0) return terms[i] > 0.0 ? 1 : -1;
+  return 0;
+}
+
 template <std::size_t N>
 int signOf(const Expansion<N>& e) noexcept {
-  for (std::size_t i = e.size; i-- > 0;)
-    if (e.terms[i] != 0.0) return e.terms[i] > 0.0 ? 1 : -1;
-  return 0;
+  return signOfTerms(e.terms.data(), e.size);
 }
 
 template <std::size_t N>
@@ -461,13 +473,13 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
 }
 
 int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
-  // A difference of doubles rounds to 0 only where it is 0: where each of the determinant's six
-  // products has a zero difference among its factors (four points in a plane of constant z, the
-  // overlap of faces coplanar in it), the determinant is exactly 0 without evaluating it.
   // Two of the points the same (a mesh against a copy of itself, a vertex of one mesh on a
   // corner of the other's triangle): 0, where the adaptive stages would each fail before the
   // full expansion found it.
   if (q == p || r == p || s == p || r == q || s == q || s == r) return 0;
+  // A difference of doubles rounds to 0 only where it is 0: where each of the determinant's six
+  // products has a zero difference among its factors (four points in a plane of constant z, the
+  // overlap of faces coplanar in it), the determinant is exactly 0 without evaluating it.
   const Vec3 u = q - p, v = r - p, w = s - p;
   const auto zeroProducts = [](double a, double b, double c, double d, double e, double f) {
     return (a == 0.0 || b == 0.0 || c == 0.0) && (d == 0.0 || e == 0.0 || f == 0.0);
@@ -487,25 +499,16 @@ void ExactTripleProductSum::add(const Vec3& a, const Vec3& b, const Vec3& c) {
       exactCross(ExactVector<1>{Expansion<1>{b.x}, Expansion<1>{b.y}, Expansion<1>{b.z}},
                  ExactVector<1>{Expansion<1>{c.x}, Expansion<1>{c.y}, Expansion<1>{c.z}});
   const auto term = sum(sum(scale(n[0], a.x), scale(n[1], a.y)), scale(n[2], a.z));
-  // grow_expansion_zeroelim into the running sum, which may grow without limit.
+  // Into the running sum, which may grow without limit: room for one more term each time.
   for (const double component : term) {
-    double q = component;
-    std::size_t out = 0;
-    for (std::size_t i = 0; i < sum_.size(); ++i) {
-      double sumHigh, sumLow;
-      twoSum(q, sum_[i], sumHigh, sumLow);
-      if (sumLow != 0.0) sum_[out++] = sumLow;
-      q = sumHigh;
-    }
-    sum_.resize(out);
-    if (q != 0.0 || out == 0) sum_.push_back(q);
+    const std::size_t size = sum_.size();
+    sum_.push_back(0.0);
+    sum_.resize(growTerms(sum_.data(), size, component));
   }
 }
 
 int ExactTripleProductSum::sign() const noexcept {
-  for (std::size_t i = sum_.size(); i-- > 0;)
-    if (sum_[i] != 0.0) return sum_[i] > 0.0 ? 1 : -1;
-  return 0;
+  return signOfTerms(sum_.data(), sum_.size());
 }
 
 int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {

@@ -47,7 +47,9 @@ inline bool predicatesExactAt(const Vec3& p) noexcept {
   return exact(p.x) && exact(p.y) && exact(p.z);
 }
 
-/// The exact sign of orient(p, q, r, s) (−1, 0, +1), always by expansion arithmetic.
+/// The exact sign of orient(p, q, r, s) (−1, 0, +1), without orientSign's filter: 0 at once for
+/// two equal points or a zero factor in every product, else Shewchuk's adaptive stages B and C,
+/// else expansion arithmetic.
 int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
 /// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
