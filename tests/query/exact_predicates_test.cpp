@@ -1,10 +1,12 @@
 // The overlap query's exact predicates (query/detail/exact_predicates.h) against exact rational
 // arithmetic (CGAL's Gmpq on the given doubles): orient's sign by the filter and by the
-// expansions, the leading sign of a cross product of differences, and the exact sum of triple
-// products, on random points and on adversarial ones: exactly coplanar in an axis plane and in
-// a lattice plane, nearly coplanar (the fourth point rounded into the plane of the others),
-// collinear, repeated, huge offsets, tiny scales, and coordinates whose exponents span the whole
-// range the predicates take (2⁻²⁵⁰ to 2²⁰⁰), where a difference is not a double.
+// expansions, the leading sign of a cross product of differences, the exact sum of triple
+// products, and the order of an edge's crossings with two planes (filter and integers), on random
+// points and on adversarial ones: exactly coplanar in an axis plane and in a lattice plane, exactly
+// coplanar where no difference is a double, nearly coplanar (the fourth point rounded into the
+// plane of the others), collinear, repeated, huge offsets, tiny scales, and coordinates whose
+// exponents span the whole range the predicates take (2⁻²⁵⁰ to 2²⁰⁰), where a difference is not a
+// double.
 
 #include "query/detail/exact_predicates.h"
 
@@ -14,7 +16,9 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <random>
+#include <utility>
 
 #include "delta/core/vec3.h"
 
@@ -70,6 +74,9 @@ class Quadruples {
     kHugeOffset,      ///< kNearlyCoplanar moved by 10⁶ to 2¹⁰⁰
     kTinyScale,  ///< kNearlyCoplanar scaled by 2⁻²⁰⁰ (every coordinate ≥ 2⁻²⁵⁰)
     kMixedExponents,  ///< coordinates 0 or ±2^e · m, e anywhere in [−250, 200]
+    /// on the plane z = ±2^k x exactly, with x and y of exponents from −40 to 40, so that no
+    /// difference is a double: the determinant is 0 and every evaluation short of exact rounds
+    kInexactPlane,
     kKinds
   };
 
@@ -127,6 +134,19 @@ class Quadruples {
             if (std::abs(*c) < detail::kSmallestExactCoordinate) *c = 0.0;
         return p;
       }
+      case kInexactPlane: {
+        const double slope =
+            std::copysign(std::ldexp(1.0, static_cast<int>(random_() % 5) - 2), unit_(random_));
+        std::array<Vec3, 4> p;
+        for (Vec3& v : p) {
+          const auto draw = [&] {
+            return std::ldexp(unit_(random_), static_cast<int>(random_() % 81) - 40);
+          };
+          const double x = draw();
+          v = Vec3{x, draw(), slope * x};
+        }
+        return p;
+      }
       case kMixedExponents:
       default: {
         std::array<Vec3, 4> p;
@@ -179,7 +199,7 @@ TEST(ExactPredicates, OrientSignsAreTheRationalSigns) {
     }
     // The adversarial kinds reach the exact evaluation and its zeros.
     if (kind == Quadruples::kAxisPlane || kind == Quadruples::kLatticePlane ||
-        kind == Quadruples::kRepeated) {
+        kind == Quadruples::kRepeated || kind == Quadruples::kInexactPlane) {
       EXPECT_GT(zeros, kTrials / 2) << kind;
     }
   }
@@ -219,6 +239,68 @@ TEST(ExactPredicates, TripleProductSumsAreTheRationalSums) {
       }
       ASSERT_EQ(sum.sign(), signOf(expected)) << kind << " " << trial;
     }
+}
+
+/// crossingOrder's answer from its definition (exact_predicates.h), in rationals: where the edge
+/// e0 → e1 crosses the planes of `first` and `second`, λ_k = at_k / along_k, the order is the
+/// sign of (λ_first − λ_second) = along_1·along_2·F, F = at_1·along_2 − at_2·along_1, and where
+/// F = 0 that of the displacement's term; nullopt where a plane is parallel to the edge (not
+/// asked).
+std::optional<int> oracleCrossingOrder(const Vec3& e0, const Vec3& e1,
+                                       const std::array<Vec3, 3>& first,
+                                       const std::array<Vec3, 3>& second, bool edgeOfA) {
+  const RationalVector re0 = rational(e0), along = minus(re0, rational(e1));
+  const auto plane = [&](const std::array<Vec3, 3>& t) {
+    const RationalVector t0 = rational(t[0]);
+    const RationalVector normal = cross(minus(rational(t[1]), t0), minus(rational(t[2]), t0));
+    return std::array<Rational, 2>{dot(minus(re0, t0), normal), dot(along, normal)};
+  };
+  const auto normalOf = [](const std::array<Vec3, 3>& t) {
+    const RationalVector t0 = rational(t[0]);
+    return cross(minus(rational(t[1]), t0), minus(rational(t[2]), t0));
+  };
+  const auto [atS, alongS] = plane(first);
+  const auto [atT, alongT] = plane(second);
+  const int signs = signOf(alongS) * signOf(alongT);
+  if (signs == 0) return std::nullopt;
+  if (const int sign = signOf(atS * alongT - atT * alongS); sign != 0) return signs * sign;
+  const RationalVector normalS = normalOf(first), normalT = normalOf(second);
+  for (const auto& [s, t] : {std::pair{&normalS.x, &normalT.x}, std::pair{&normalS.y, &normalT.y},
+                             std::pair{&normalS.z, &normalT.z}})
+    if (const int sign = signOf(alongT * *s - alongS * *t); sign != 0)
+      return signs * (edgeOfA ? -sign : sign);
+  return 0;
+}
+
+TEST(ExactPredicates, CrossingOrdersAreTheRationalOrders) {
+  // Each kind's points as two triangles (sharing an edge, and a plane where the kind is
+  // coplanar) and an edge from the next draw: through a shared corner in a third of the trials
+  // (both crossings at one point: F = 0, the displacement decides), otherwise across the
+  // plane(s), where nearly coplanar triangles put the crossings within their rounding of one
+  // another and the integers decide.
+  Quadruples quadruples(38);
+  std::mt19937_64 random(39);
+  for (int kind = 0; kind < Quadruples::kKinds; ++kind) {
+    int asked = 0, ties = 0;
+    for (int trial = 0; trial < kTrials; ++trial) {
+      const auto [p, q, r, s] = quadruples.next(static_cast<Quadruples::Kind>(kind));
+      const auto [e0Drawn, e1, x, y] = quadruples.next(static_cast<Quadruples::Kind>(kind));
+      const Vec3 e0 = random() % 3 == 0 ? p : e0Drawn;
+      const std::array<Vec3, 3> first{p, q, r}, second{p, r, s};
+      for (const bool edgeOfA : {true, false}) {
+        const std::optional<int> expected = oracleCrossingOrder(e0, e1, first, second, edgeOfA);
+        if (!expected) continue;
+        ++asked;
+        ties += e0 == p;
+        ASSERT_EQ(detail::crossingOrder(e0, e1, first, second, edgeOfA), *expected)
+            << kind << " " << trial;
+        ASSERT_EQ(detail::crossingOrder(e0, e1, second, first, edgeOfA), -*expected)
+            << kind << " " << trial;
+      }
+    }
+    EXPECT_GT(asked, kTrials / 5) << kind;
+    EXPECT_GT(ties, kTrials / 10) << kind;
+  }
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "delta/core/error.h"
+
 namespace delta::detail {
 namespace {
 
@@ -181,129 +183,168 @@ ExactVector<4 * N * N> exactCross(const ExactVector<N>& u, const ExactVector<N>&
           subtract(product(u[0], v[1]), product(u[1], v[0]))};
 }
 
-/// An integer of any size, for the products of degree 6 that leave a double's exponent range
-/// (crossingOrder): a sign and a magnitude in 32-bit limbs, least significant first, no leading
-/// zero limb (0 has none).
-class BigInteger {
- public:
-  BigInteger() = default;
-  /// x·2^shift, which must be an integer (x's lowest bit at 2^−shift or above).
-  static BigInteger scaled(double x, int shift) {
-    BigInteger result;
-    if (x == 0.0) return result;
-    int exponent = 0;
-    const auto mantissa =
-        static_cast<std::uint64_t>(std::ldexp(std::abs(std::frexp(x, &exponent)), 53));
-    const int position = exponent - 53 + shift;  // of the mantissa's lowest bit, ≥ 0
-    result.limbs_.assign(static_cast<std::size_t>(position / 32) + 3, 0);
-    const int bit = position % 32;
-    const std::size_t limb = static_cast<std::size_t>(position / 32);
-    result.limbs_[limb] = static_cast<std::uint32_t>(mantissa << bit);
-    result.limbs_[limb + 1] = static_cast<std::uint32_t>(mantissa >> (32 - bit));
-    result.limbs_[limb + 2] = static_cast<std::uint32_t>((mantissa >> (32 - bit)) >> 32);
-    result.negative_ = x < 0.0;
-    result.trim();
-    return result;
-  }
+/// An integer of up to 32·N bits, for crossingOrder's products of degree 6, which leave a double's
+/// exponent range: a sign and a magnitude in 32-bit limbs, limbs[0, size), least significant
+/// first, no leading zero limb (0 has none). As with Expansion, the capacity is in the type and
+/// grows with each operation (a sum's by one limb, a product's to the sum of its operands'), so
+/// that the numbers live on the stack: held in std::vector, they were a third of an overlap
+/// between cylinders' caps turned alike (malloc, free and copies), whose crossings along an edge
+/// lie within their rounding of one another and are ordered here.
+template <std::size_t N>
+struct Integer {
+  std::array<std::uint32_t, N> limbs;
+  std::size_t size = 0;
+  bool negative = false;
 
-  int sign() const noexcept { return limbs_.empty() ? 0 : negative_ ? -1 : 1; }
-
-  friend BigInteger operator-(BigInteger a) {
-    a.negative_ = !a.negative_;
-    return a;
-  }
-  friend BigInteger operator+(const BigInteger& a, const BigInteger& b) {
-    BigInteger result;
-    if (a.negative_ == b.negative_) {
-      result.limbs_ = addMagnitudes(a.limbs_, b.limbs_);
-      result.negative_ = a.negative_;
-    } else if (lessInMagnitude(a.limbs_, b.limbs_)) {
-      result.limbs_ = subtractMagnitudes(b.limbs_, a.limbs_);
-      result.negative_ = b.negative_;
-    } else {
-      result.limbs_ = subtractMagnitudes(a.limbs_, b.limbs_);
-      result.negative_ = a.negative_;
-    }
-    result.trim();
-    return result;
-  }
-  friend BigInteger operator-(const BigInteger& a, const BigInteger& b) { return a + -b; }
-  friend BigInteger operator*(const BigInteger& a, const BigInteger& b) {
-    BigInteger result;
-    if (a.limbs_.empty() || b.limbs_.empty()) return result;
-    result.limbs_.assign(a.limbs_.size() + b.limbs_.size(), 0);
-    for (std::size_t i = 0; i < a.limbs_.size(); ++i) {
-      std::uint64_t carry = 0;
-      for (std::size_t j = 0; j < b.limbs_.size(); ++j) {
-        // At most (2³² − 1)² + 2·(2³² − 1) = 2⁶⁴ − 1: no overflow.
-        const std::uint64_t sum =
-            std::uint64_t{result.limbs_[i + j]} + std::uint64_t{a.limbs_[i]} * b.limbs_[j] + carry;
-        result.limbs_[i + j] = static_cast<std::uint32_t>(sum);
-        carry = sum >> 32;
-      }
-      result.limbs_[i + b.limbs_.size()] = static_cast<std::uint32_t>(carry);
-    }
-    result.negative_ = a.negative_ != b.negative_;
-    result.trim();
-    return result;
-  }
-
- private:
-  using Limbs = std::vector<std::uint32_t>;
-
+  int sign() const noexcept { return size == 0 ? 0 : negative ? -1 : 1; }
   void trim() noexcept {
-    while (!limbs_.empty() && limbs_.back() == 0)
-      limbs_.pop_back();
+    while (size > 0 && limbs[size - 1] == 0)
+      --size;
   }
-  static bool lessInMagnitude(const Limbs& a, const Limbs& b) noexcept {
-    if (a.size() != b.size()) return a.size() < b.size();
-    for (std::size_t i = a.size(); i-- > 0;)
-      if (a[i] != b[i]) return a[i] < b[i];
-    return false;
-  }
-  static Limbs addMagnitudes(const Limbs& a, const Limbs& b) {
-    const Limbs& longer = a.size() < b.size() ? b : a;
-    const Limbs& shorter = a.size() < b.size() ? a : b;
-    Limbs sum(longer.size() + 1, 0);
-    std::uint64_t carry = 0;
-    for (std::size_t i = 0; i < longer.size(); ++i) {
-      carry += std::uint64_t{longer[i]} + (i < shorter.size() ? shorter[i] : 0u);
-      sum[i] = static_cast<std::uint32_t>(carry);
-      carry >>= 32;
-    }
-    sum[longer.size()] = static_cast<std::uint32_t>(carry);
-    return sum;
-  }
-  /// |a| − |b| for |a| ≥ |b|.
-  static Limbs subtractMagnitudes(const Limbs& a, const Limbs& b) {
-    Limbs difference(a.size(), 0);
-    std::uint32_t borrow = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      const std::uint64_t subtrahend = std::uint64_t{i < b.size() ? b[i] : 0u} + borrow;
-      borrow = std::uint64_t{a[i]} < subtrahend ? 1u : 0u;
-      difference[i] = static_cast<std::uint32_t>(
-          (std::uint64_t{a[i]} + (std::uint64_t{borrow} << 32)) - subtrahend);
-    }
-    return difference;
-  }
-
-  Limbs limbs_;
-  bool negative_ = false;
 };
 
-using BigVector = std::array<BigInteger, 3>;
+/// The least shift (crossingOrder's: every coordinate is an integer times 2^−shift) and the
+/// limbs a coordinate needs with it. A coordinate is below 2²⁰¹ in magnitude (kLargestCoordinate)
+/// and 0 or at least 2⁻²⁵⁰ (kSmallestExactCoordinate), so the shift is at most 52 + 250 and the
+/// mantissa's lowest bit at most 2⁴⁵⁰: its 53 bits end in limb 16.
+constexpr int kMostShift = 52 + 250;
+constexpr int kMostCoordinateExponent = 201;  // frexp's, of 2²⁰⁰
+constexpr std::size_t kCoordinateLimbs =
+    static_cast<std::size_t>((kMostCoordinateExponent - 53 + kMostShift) / 32) + 3;
+static_assert(kCoordinateLimbs == 17);
 
-BigVector bigPoint(const Vec3& p, int shift) {
-  return {BigInteger::scaled(p.x, shift), BigInteger::scaled(p.y, shift),
-          BigInteger::scaled(p.z, shift)};
+/// The exponent of a normal double x (std::ilogb's, from its bits: ilogb is a call into libm);
+/// −1023 for 0 and subnormals.
+int exponentOf(double x) noexcept {
+  return static_cast<int>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7ff) - 1023;
 }
-BigVector bigDifference(const BigVector& u, const BigVector& v) {
+
+/// x·2^shift, which must be an integer (x's lowest bit at 2^−shift or above) below 2^(32·17):
+/// crossingOrder's bounds above. x is 0 or normal.
+Integer<kCoordinateLimbs> scaledInteger(double x, int shift) noexcept {
+  Integer<kCoordinateLimbs> result;
+  if (x == 0.0) return result;
+  // |x| = mantissa·2^(exponent − 52), the mantissa's 53 bits with the implicit one.
+  const auto bits = std::bit_cast<std::uint64_t>(x);
+  const std::uint64_t mantissa = (bits & ((std::uint64_t{1} << 52) - 1)) | (std::uint64_t{1} << 52);
+  const int position = exponentOf(x) - 52 + shift;  // of the mantissa's lowest bit, ≥ 0
+  const int bit = position % 32;
+  const std::size_t limb = static_cast<std::size_t>(position / 32);
+  std::fill(result.limbs.begin(), result.limbs.begin() + static_cast<std::ptrdiff_t>(limb), 0u);
+  result.limbs[limb] = static_cast<std::uint32_t>(mantissa << bit);
+  result.limbs[limb + 1] = static_cast<std::uint32_t>(mantissa >> (32 - bit));
+  result.limbs[limb + 2] = static_cast<std::uint32_t>((mantissa >> (32 - bit)) >> 32);
+  result.size = limb + 3;
+  result.negative = x < 0.0;
+  result.trim();
+  return result;
+}
+
+/// |a| < |b|.
+template <std::size_t N, std::size_t M>
+bool lessInMagnitude(const Integer<N>& a, const Integer<M>& b) noexcept {
+  if (a.size != b.size) return a.size < b.size;
+  for (std::size_t i = a.size; i-- > 0;)
+    if (a.limbs[i] != b.limbs[i]) return a.limbs[i] < b.limbs[i];
+  return false;
+}
+
+/// |a| + |b| into `out` (room for the longer's size + 1).
+template <std::size_t K, std::size_t N, std::size_t M>
+void addMagnitudes(const Integer<N>& a, const Integer<M>& b, Integer<K>& out) noexcept {
+  const std::size_t longest = std::max(a.size, b.size);
+  std::uint64_t carry = 0;
+  for (std::size_t i = 0; i < longest; ++i) {
+    carry += std::uint64_t{i < a.size ? a.limbs[i] : 0u} + (i < b.size ? b.limbs[i] : 0u);
+    out.limbs[i] = static_cast<std::uint32_t>(carry);
+    carry >>= 32;
+  }
+  out.limbs[longest] = static_cast<std::uint32_t>(carry);
+  out.size = longest + 1;
+}
+
+/// |a| − |b| into `out`, for |a| ≥ |b|.
+template <std::size_t K, std::size_t N, std::size_t M>
+void subtractMagnitudes(const Integer<N>& a, const Integer<M>& b, Integer<K>& out) noexcept {
+  std::uint32_t borrow = 0;
+  for (std::size_t i = 0; i < a.size; ++i) {
+    const std::uint64_t subtrahend = std::uint64_t{i < b.size ? b.limbs[i] : 0u} + borrow;
+    borrow = std::uint64_t{a.limbs[i]} < subtrahend ? 1u : 0u;
+    out.limbs[i] = static_cast<std::uint32_t>(
+        (std::uint64_t{a.limbs[i]} + (std::uint64_t{borrow} << 32)) - subtrahend);
+  }
+  out.size = a.size;
+}
+
+/// a + b, or a − b where `kNegated`.
+template <bool kNegated, std::size_t N, std::size_t M>
+Integer<std::max(N, M) + 1> combined(const Integer<N>& a, const Integer<M>& b) noexcept {
+  Integer<std::max(N, M) + 1> result;
+  const bool bNegative = kNegated != b.negative;
+  if (a.negative == bNegative) {
+    addMagnitudes(a, b, result);
+    result.negative = a.negative;
+  } else if (lessInMagnitude(a, b)) {
+    subtractMagnitudes(b, a, result);
+    result.negative = bNegative;
+  } else {
+    subtractMagnitudes(a, b, result);
+    result.negative = a.negative;
+  }
+  result.trim();
+  return result;
+}
+
+template <std::size_t N, std::size_t M>
+Integer<std::max(N, M) + 1> operator+(const Integer<N>& a, const Integer<M>& b) noexcept {
+  return combined<false>(a, b);
+}
+template <std::size_t N, std::size_t M>
+Integer<std::max(N, M) + 1> operator-(const Integer<N>& a, const Integer<M>& b) noexcept {
+  return combined<true>(a, b);
+}
+template <std::size_t N, std::size_t M>
+Integer<N + M> operator*(const Integer<N>& a, const Integer<M>& b) noexcept {
+  Integer<N + M> result;
+  if (a.size == 0 || b.size == 0) return result;
+  // Row i adds a's limb i times b into limbs [i, i + b.size]; all but the last were written by
+  // row i − 1, and row 0's are zeroed here.
+  std::fill(result.limbs.begin(), result.limbs.begin() + static_cast<std::ptrdiff_t>(b.size), 0u);
+  for (std::size_t i = 0; i < a.size; ++i) {
+    std::uint64_t carry = 0;
+    for (std::size_t j = 0; j < b.size; ++j) {
+      // At most (2³² − 1)² + 2·(2³² − 1) = 2⁶⁴ − 1: no overflow.
+      const std::uint64_t sum =
+          std::uint64_t{result.limbs[i + j]} + std::uint64_t{a.limbs[i]} * b.limbs[j] + carry;
+      result.limbs[i + j] = static_cast<std::uint32_t>(sum);
+      carry = sum >> 32;
+    }
+    result.limbs[i + b.size] = static_cast<std::uint32_t>(carry);
+  }
+  result.size = a.size + b.size;
+  result.negative = a.negative != b.negative;
+  result.trim();
+  return result;
+}
+
+template <std::size_t N>
+using IntegerVector = std::array<Integer<N>, 3>;
+
+IntegerVector<kCoordinateLimbs> integerPoint(const Vec3& p, int shift) noexcept {
+  return {scaledInteger(p.x, shift), scaledInteger(p.y, shift), scaledInteger(p.z, shift)};
+}
+template <std::size_t N>
+IntegerVector<N + 1> integerDifference(const IntegerVector<N>& u,
+                                       const IntegerVector<N>& v) noexcept {
   return {u[0] - v[0], u[1] - v[1], u[2] - v[2]};
 }
-BigVector bigCross(const BigVector& u, const BigVector& v) {
+template <std::size_t N>
+IntegerVector<2 * N + 1> integerCross(const IntegerVector<N>& u,
+                                      const IntegerVector<N>& v) noexcept {
   return {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
 }
-BigInteger bigDot(const BigVector& u, const BigVector& v) {
+template <std::size_t N, std::size_t M>
+Integer<N + M + 2> integerDot(const IntegerVector<N>& u, const IntegerVector<M>& v) noexcept {
   return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
 }
 
@@ -349,18 +390,34 @@ int filteredCrossingOrder(const PlaneCrossing& first, const PlaneCrossing& secon
   return static_cast<int>(difference > margin) - static_cast<int>(-difference > margin);
 }
 
-/// Shewchuk's adaptive stages B and C of orient3d ("Adaptive Precision Floating-Point Arithmetic
-/// and Fast Robust Geometric Predicates", 1997, section 4.3), for the determinant
-/// det[u; v; w] = orient(p, q, r, s) of the rounded differences u = q − p, v = r − p, w = s − p:
-/// B evaluates it exactly from the rounded differences and decides where that is beyond
-/// (3 + 28ε)ε of the permanent; C adds the differences' rounding errors to first order and
-/// decides beyond (26 + 288ε)ε² of the permanent and (3 + 8ε)ε of the result. 0 where neither
-/// decides (the full expansion then does), and where the permanent is below 2⁻⁹⁰⁰, so that the
-/// bounds stay far above any product's underflow. Faces coplanar but for the rounding of turned
-/// corners put four points a few ulps off a plane: C decides them, where the full expansion of
-/// differences that are not doubles took a tenth of a microsecond each.
-int adaptiveOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, const Vec3& u,
-                       const Vec3& v, const Vec3& w) noexcept {
+/// The sign of orient(p, q, r, s) from the rounded differences u = q − p, v = r − p, w = s − p
+/// in double-double arithmetic, where its error bound decides it; 0 where it cannot (the full
+/// expansion then does), and where the permanent P (of the rounded differences, as the filter's)
+/// is below 2⁻⁹⁰⁰, so that every bound stays far above any product's underflow (2⁻¹⁰⁷⁴ each).
+///
+/// det[u; v; w] expanded along z, as Shewchuk's orient3d: Σ f·M over the rows, f a row's z and M
+/// the 2×2 minor of the other two rows' x and y. The exact determinant of the given points is
+/// that of the exact differences u + uₜ (uₜ = the tail twoSum leaves, |uₜ| ≤ ε|u|, ε = 2⁻⁵³),
+/// trilinear in them: the determinant B of the rounded differences, the three terms of first
+/// order in the tails (Shewchuk's stage C's expression, evaluated plainly), and terms of second
+/// and third order, at most 3.01ε²P together, left out. With u the unit roundoff ε:
+/// - each minor a·b − c·d as two products exactly (twoProduct), their heads' difference exactly
+///   (twoSum) and the rest plainly: within 3.1ε²m of it, m = |ab| + |cd|, its low part below
+///   2.2εm;
+/// - each f·M as f times the head exactly and f·low added plainly: within 6.5ε²|f|m, so the
+///   three within 6.5ε²P (Σ|f|m = P);
+/// - the heads summed exactly (twoSum) and the five low parts (each below 3.3ε|f|m, the twoSums'
+///   below 2.01εP together) in three rounding steps: 16ε²P;
+/// - the first-order terms, below 3εP in all, in at most six rounding steps: 18ε²P;
+/// - adding them to the low parts: 8.6ε²P.
+/// In all within 56ε²P before the last addition, which rounds by ε of the result: a computed
+/// value beyond 128ε²P (P's own rounding is a few ε of it) + 4ε of itself has the exact sign.
+/// It decides what Shewchuk's stages B and C decided here (they stopped at 3ε and 26ε² of P),
+/// but without their exact expansion of B: its sums of components one after the other (forty
+/// dependent steps) made an exact orientation of four points a few ulps off a plane, the overlap
+/// of faces coplanar but for the rounding of their turned corners, cost 300 ns.
+int doubleDoubleOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s,
+                           const Vec3& u, const Vec3& v, const Vec3& w) noexcept {
   // Shewchuk's names: a, b, c the rows u, v, w, expanded along z.
   const double adx = u.x, ady = u.y, adz = u.z, bdx = v.x, bdy = v.y, bdz = v.z, cdx = w.x,
                cdy = w.y, cdz = w.z;
@@ -370,41 +427,46 @@ int adaptiveOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& 
                            (std::abs(cdxady) + std::abs(adxcdy)) * std::abs(bdz) +
                            (std::abs(adxbdy) + std::abs(bdxady)) * std::abs(cdz);
   if (!(permanent >= 0x1p-900)) return 0;
-  constexpr double kEpsilon = 0x1p-53;
-  constexpr double kBoundB = (3.0 + 28.0 * kEpsilon) * kEpsilon;
-  constexpr double kBoundC = (26.0 + 288.0 * kEpsilon) * kEpsilon * kEpsilon;
-  constexpr double kResultBound = (3.0 + 8.0 * kEpsilon) * kEpsilon;
-  const auto minor = [](double a, double b, double c, double d) {  // a·b − c·d, exactly
-    return subtract(product(Expansion<1>{a}, Expansion<1>{b}),
-                    product(Expansion<1>{c}, Expansion<1>{d}));
-  };
-  const auto whole =
-      sum(sum(scale(minor(bdx, cdy, cdx, bdy), adz), scale(minor(cdx, ady, adx, cdy), bdz)),
-          scale(minor(adx, bdy, bdx, ady), cdz));
-  double det = 0.0;
-  for (const double term : whole)
-    det += term;
-  const double boundB = kBoundB * permanent;
-  if (det > boundB) return 1;
-  if (-det > boundB) return -1;
-  const auto tail = [](double x, double y) {  // (x − y) − fl(x − y), exactly
+  struct DoubleDouble {
     double high, low;
-    twoSum(x, -y, high, low);
+  };
+  const auto minor = [](double a, double b, double c, double d) {  // a·b − c·d
+    double x1, x0, y1, y0, high, low;
+    twoProduct(a, b, x1, x0);
+    twoProduct(c, d, y1, y0);
+    twoSum(x1, -y1, high, low);
+    return DoubleDouble{high, low + (x0 - y0)};
+  };
+  const auto times = [](double f, const DoubleDouble& m) {  // f·m
+    double high, low;
+    twoProduct(f, m.high, high, low);
+    return DoubleDouble{high, low + f * m.low};
+  };
+  const DoubleDouble x = times(adz, minor(bdx, cdy, cdx, bdy));
+  const DoubleDouble y = times(bdz, minor(cdx, ady, adx, cdy));
+  const DoubleDouble z = times(cdz, minor(adx, bdy, bdx, ady));
+  double partial, partialLow, head, headLow;
+  twoSum(x.high, y.high, partial, partialLow);
+  twoSum(partial, z.high, head, headLow);
+  const double lows = (partialLow + headLow) + ((x.low + y.low) + z.low);
+  const auto tail = [](double a, double b) {  // (a − b) − fl(a − b), exactly
+    double high, low;
+    twoSum(a, -b, high, low);
     return low;
   };
   const double adxt = tail(q.x, p.x), adyt = tail(q.y, p.y), adzt = tail(q.z, p.z);
   const double bdxt = tail(r.x, p.x), bdyt = tail(r.y, p.y), bdzt = tail(r.z, p.z);
   const double cdxt = tail(s.x, p.x), cdyt = tail(s.y, p.y), cdzt = tail(s.z, p.z);
-  const double boundC = kBoundC * permanent + kResultBound * std::abs(det);
-  det += (adz * ((bdx * cdyt + cdy * bdxt) - (bdy * cdxt + cdx * bdyt)) +
-          adzt * (bdx * cdy - bdy * cdx)) +
-         (bdz * ((cdx * adyt + ady * cdxt) - (cdy * adxt + adx * cdyt)) +
-          bdzt * (cdx * ady - cdy * adx)) +
-         (cdz * ((adx * bdyt + bdy * adxt) - (ady * bdxt + bdx * adyt)) +
-          cdzt * (adx * bdy - ady * bdx));
-  if (det > boundC) return 1;
-  if (-det > boundC) return -1;
-  return 0;
+  const double firstOrder = (adz * ((bdx * cdyt + cdy * bdxt) - (bdy * cdxt + cdx * bdyt)) +
+                             adzt * (bdx * cdy - bdy * cdx)) +
+                            (bdz * ((cdx * adyt + ady * cdxt) - (cdy * adxt + adx * cdyt)) +
+                             bdzt * (cdx * ady - cdy * adx)) +
+                            (cdz * ((adx * bdyt + bdy * adxt) - (ady * bdxt + bdx * adyt)) +
+                             cdzt * (adx * bdy - ady * bdx));
+  const double det = head + (lows + firstOrder);
+  constexpr double kEpsilon = 0x1p-53;
+  const double bound = 128.0 * kEpsilon * kEpsilon * permanent + 4.0 * kEpsilon * std::abs(det);
+  return static_cast<int>(det > bound) - static_cast<int>(-det > bound);
 }
 
 }  // namespace
@@ -451,16 +513,21 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
   int shift = 0;
   for (const Vec3& q : given)
     for (std::size_t axis = 0; axis < 3; ++axis)
-      if (q[axis] != 0.0) shift = std::max(shift, 52 - std::ilogb(q[axis]));
-  std::array<BigVector, 8> big;
+      if (q[axis] != 0.0) shift = std::max(shift, 52 - exponentOf(q[axis]));
+  // The integers' capacities hold for coordinates the predicates take; others would not fit.
+  if (shift > kMostShift || !(largest < std::ldexp(1.0, kMostCoordinateExponent)))
+    throw Error("crossingOrder: a coordinate outside the predicates' range (internal error)");
+  std::array<IntegerVector<kCoordinateLimbs>, 8> big;
   for (std::size_t k = 0; k < 8; ++k)
-    big[k] = bigPoint(given[k], shift);
-  const BigVector along = bigDifference(big[0], big[1]);
-  const BigVector normalS = bigCross(bigDifference(big[3], big[2]), bigDifference(big[4], big[2]));
-  const BigVector normalT = bigCross(bigDifference(big[6], big[5]), bigDifference(big[7], big[5]));
-  const BigInteger atS = bigDot(bigDifference(big[0], big[2]), normalS);
-  const BigInteger atT = bigDot(bigDifference(big[0], big[5]), normalT);
-  const BigInteger alongS = bigDot(along, normalS), alongT = bigDot(along, normalT);
+    big[k] = integerPoint(given[k], shift);
+  const auto along = integerDifference(big[0], big[1]);
+  const auto normalS =
+      integerCross(integerDifference(big[3], big[2]), integerDifference(big[4], big[2]));
+  const auto normalT =
+      integerCross(integerDifference(big[6], big[5]), integerDifference(big[7], big[5]));
+  const auto atS = integerDot(integerDifference(big[0], big[2]), normalS);
+  const auto atT = integerDot(integerDifference(big[0], big[5]), normalT);
+  const auto alongS = integerDot(along, normalS), alongT = integerDot(along, normalT);
   const int signs = alongS.sign() * alongT.sign();
   if (signs == 0) return 0;  // a plane parallel to the edge: not asked
   if (const int sign = (atS * alongT - atT * alongS).sign(); sign != 0) return signs * sign;
@@ -487,7 +554,7 @@ int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) 
   if (zeroProducts(u.x, v.y, w.z, u.x, v.z, w.y) && zeroProducts(u.y, v.z, w.x, u.y, v.x, w.z) &&
       zeroProducts(u.z, v.x, w.y, u.z, v.y, w.x))
     return 0;
-  if (const int sign = adaptiveOrientSign(p, q, r, s, u, v, w); sign != 0) return sign;
+  if (const int sign = doubleDoubleOrientSign(p, q, r, s, u, v, w); sign != 0) return sign;
   const ExactVector<2> eu = exactDifference(q, p), ev = exactDifference(r, p),
                        ew = exactDifference(s, p);
   const ExactVector<16> n = exactCross(eu, ev);

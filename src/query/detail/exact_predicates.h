@@ -48,8 +48,8 @@ inline bool predicatesExactAt(const Vec3& p) noexcept {
 }
 
 /// The exact sign of orient(p, q, r, s) (−1, 0, +1), without orientSign's filter: 0 at once for
-/// two equal points or a zero factor in every product, else Shewchuk's adaptive stages B and C,
-/// else expansion arithmetic.
+/// two equal points or a zero factor in every product, else a double-double evaluation where its
+/// error bound decides (128ε² of the permanent), else expansion arithmetic.
 int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
 /// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
@@ -64,13 +64,13 @@ int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec
 /// may be parallel to the edge (both cross it, where the callers ask).
 ///
 /// Its sign is exact: a floating-point filter (Shewchuk's bounds on the determinants of degree
-/// 3, carried through the products), then integer arithmetic of any size (the products of six
+/// 3, carried through the products), then integer arithmetic on the stack (the products of six
 /// coordinate differences span up to some 3,000 bits, beyond a double's exponents, which the
-/// expansions would need). Every coordinate as the other predicates take them (0 or at least
-/// kSmallestExactCoordinate in magnitude, within the coordinate range). For crossings that lie
-/// on one another to within their rounding: where an edge lies in the other's plane to an ulp
-/// (faces coplanar but for the rounding of their turned corners), the rounded crossing points
-/// are anywhere along it, and no tolerance orders them.
+/// expansions would need); a coordinate outside that range throws delta::Error. Every coordinate as
+/// the other predicates take them (0 or at least kSmallestExactCoordinate in magnitude, within the
+/// coordinate range). For crossings that lie on one another to within their rounding: where an edge
+/// lies in the other's plane to an ulp (faces coplanar but for the rounding of their turned
+/// corners), the rounded crossing points are anywhere along it, and no tolerance orders them.
 int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& first,
                   const std::array<Vec3, 3>& second, bool edgeOfA);
 
