@@ -115,6 +115,36 @@ TEST(PointTriangle, SliverFaceIsExact) {
   }
 }
 
+TEST(PointTriangle, NeedlesAreMeasuredToTheirTips) {
+  // A needle 1 long whose third corner lies h off its middle, its edges' lines meeting at its
+  // tips at angles of about 2h: a point just beyond a tip projects within rounding of both lines.
+  // The face test took such a point for one over the face, and measured it to the plane: 1.0e-11
+  // for a point 2.9e-11 from the tip of a needle 1e-12 high (found by an audit, with this
+  // sweep: up to 7.7e6 ε·(L + d) off at h = 1e-9).
+  test::PairRandom random(5);
+  for (const double height : {1e-3, 1e-6, 1e-9, 1e-12}) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < test::scaledCount(4000); ++i) {
+      const Vec3 a = random.inCube(1.0), along = normalized(random.unitVector());
+      const Vec3 across = normalized(cross(along, random.unitVector()));
+      const Triangle needle{a, a + along, a + along * 0.5 + across * height};
+      const Vec3 tip = random.below(2) == 0 ? needle.a : needle.b;
+      const double reach = height * std::pow(10.0, random.uniform(-2, 2));
+      const Vec3 normal = normalized(needle.areaVector());
+      const Vec3 p = i % 2 == 0 ? tip + random.unitVector() * reach
+                                : needle.b + (needle.b - needle.a) * (reach * random.uniform()) +
+                                      normal * (random.uniform(-20, 20) * reach);
+      const double exact = std::sqrt(test::exactSquaredDistance(p, needle));
+      const double error =
+          std::fabs(std::sqrt(closestPointOnTriangle(p, needle).distanceSquared) - exact) /
+          (kEpsilon * (1.0 + exact));
+      worst = std::max(worst, error);
+      ASSERT_LE(error, 16.0) << "height " << height << "\n" << pasteablePoint(p, needle);
+    }
+    std::printf("[ stats    ] needles %-8g: max |d - exact| = %.3g eps (L + d)\n", height, worst);
+  }
+}
+
 TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
   const Vec3 o{-1e6, 2e6, 3e6};
   const Triangle t{o, o + Vec3{2, 0, 0}, o + Vec3{0, 2, 0}};

@@ -1,8 +1,8 @@
 // The exact point–triangle kernel in lanes (query/detail/exact_lanes.h: AVX-512's eight, AVX2's
 // four, NEON's two; each ISA's point table), against the scalar kernel, bit for bit, on random and
 // adversarial triangles and points: slivers, needles, zero-area and repeated-vertex triangles,
-// points on vertices, edges and faces and just off them, far points, coordinates far from the
-// origin and tiny triangles.
+// points on vertices, edges and faces and just off them, just beyond a needle's tip, far points,
+// coordinates far from the origin and tiny triangles.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -36,7 +36,10 @@ std::vector<Triangle> awkwardTriangles(std::mt19937_64& random, const Vec3& cent
     triangles.push_back({a, a, c});                                                 // repeated
     triangles.push_back({a, a, a});                                                 // a point
     triangles.push_back({a, b, a + (c - a) * 1e-12});                               // thin
-    triangles.push_back({a, {a.x, a.y, c.z}, {b.x, a.y, c.z}});                     // axis-aligned
+    // A needle whose third corner lies off its middle: points beyond its tips project within
+    // rounding of both edges' lines there (the face test's bound).
+    triangles.push_back({a, b, (a + b) * 0.5 + cross(b - a, c - a) * (1e-12 / scale)});
+    triangles.push_back({a, {a.x, a.y, c.z}, {b.x, a.y, c.z}});  // axis-aligned
   }
   return triangles;
 }
@@ -57,7 +60,8 @@ std::vector<Vec3> probes(std::mt19937_64& random, const std::vector<Triangle>& t
     const Vec3 normal = x.areaVector();
     const double length = std::sqrt(lengthSquared(normal));
     const Vec3 up = length > 0.0 ? normal * (1.0 / length) : Vec3{0, 0, 1};
-    for (const Vec3& on : {x.a, x.b, (x.a + x.b) * 0.5, x.centroid(), x.a + (x.a - x.c) * 0.5})
+    for (const Vec3& on : {x.a, x.b, (x.a + x.b) * 0.5, x.centroid(), x.a + (x.a - x.c) * 0.5,
+                           x.b + (x.b - x.a) * 1e-11})
       for (const double offset : {0.0, 1e-15, 1e-9, 1e-3, 1.0})
         points.push_back(on + up * (offset * scale));
   }

@@ -616,6 +616,28 @@ TEST(PointDistance, TinyTrianglesOffAnEdgeAreNotTouched) {
   }
 }
 
+TEST(PointDistance, APointBeyondANeedlesTipIsNotTakenForOneOverItsFace) {
+  // An audit's case: a needle 1 long, its third corner 1e-12 off its middle, and a point 2.905e-11
+  // beyond its tip, where the edges' lines lie within rounding of each other; a plain triangle
+  // 2e-11 from the point. The face test took the point for one over the needle's face and
+  // measured 1.0e-11 to its plane: the needle won, and ε = 1.5e-11 found it.
+  const Vec3 a{-0x1.bf5c869a397aap-1, 0x1.ef34bc49cd08p-4, -0x1.b04c9c28fe40ep-1};
+  const Vec3 b{0x1.c1dca28d6d9ep-5, 0x1.d0bf663edb8c5p-2, -0x1.5c9c4e45d99a3p-1};
+  const Vec3 c{-0x1.a33ebc7161b01p-2, 0x1.26464aa8a6dfap-2, -0x1.867475376e0f4p-1};
+  const Vec3 p{0x1.c1dca291536b7p-5, 0x1.d0bf663eda42bp-2, -0x1.5c9c4e45cbc5p-1};
+  const Vec3 up = normalized(Vec3{0.3, -0.5, 0.8}), side = normalized(cross(up, Vec3{1, 0, 0}));
+  const Vec3 o = p + up * 2e-11, other = cross(up, side);
+  const QueryMesh mesh(Mesh(
+      {a, b, c, o + side * 1e-3, o - side * 1e-3 + other * 1e-3, o - side * 1e-3 - other * 1e-3},
+      {{0, 1, 2}, {3, 4, 5}}));
+  const PointDistance nearest = distance(mesh, p);
+  EXPECT_EQ(nearest.triangle, 1u);
+  EXPECT_NEAR(nearest.distance, 2e-11, 1e-15);
+  EXPECT_FALSE(distance(mesh, p, {.epsilon = 1.5e-11}).found());
+  EXPECT_NEAR(std::sqrt(kernels::closestPointOnTriangle(p, {a, b, c}).distanceSquared), 2.905e-11,
+              1e-14);
+}
+
 TEST(PointDistance, SubnormalSquaresAreRankedByTheirDistancesAtScale) {
   // Two triangles 1e-160 across, 4.5e-162 (id 0) and 4.19e-162 (id 1) from a point: their
   // squares round to the same subnormal, and the smaller id won at 7% too far.

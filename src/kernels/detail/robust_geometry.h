@@ -133,18 +133,41 @@ struct FaceAreas {
   double a = 0.0, b = 0.0, c = 0.0;
 };
 
+/// The largest error of a face area n·(eᵢ × (p − vᵢ)) of insideLocalFace, against the exact area
+/// of the exact triangle and point the local ones stand for: 128ε·|n|₁·E·(|p|₁ + 2E), E the
+/// largest |component| of an edge (L ≤ √3·E). Derived: p, the vertices and the edges are off by
+/// at most ε·(|p| + L), εL and 3εL (their differences from the frame's origin rounded), the
+/// accurate normal by 8ε of itself, and the cross and dot products round by 6ε of |n|·|e|·|p − v|:
+/// 25ε·|n|·L·(|p| + L) in all. Written out once for the scalar kernel and once in lanes
+/// (query/detail/exact_lanes_body.h), in the same operations, so that both give the same bits.
+inline double faceAreaBound(const Vec3& p, const LocalTriangle& t) noexcept {
+  const double normal = (std::abs(t.normal.x) + std::abs(t.normal.y)) + std::abs(t.normal.z);
+  double edge = 0.0;
+  for (const Vec3& e : t.edge)
+    edge = std::max({edge, std::abs(e.x), std::abs(e.y), std::abs(e.z)});
+  const double point = (std::abs(p.x) + std::abs(p.y)) + std::abs(p.z);
+  return 128.0 * kEpsilon * normal * edge * (point + 2.0 * edge);
+}
+
 /// Whether the projection of p onto a non-flat local triangle falls inside it (the face region
 /// of closestOnLocalTriangle), with the areas that decide it (set where it does); false
-/// otherwise, or for a flat triangle. The signs are exact up to a displacement of ε·|p − v|.
+/// otherwise, for a flat triangle, and where an area lies within its rounding of 0
+/// (faceAreaBound): there the projection is within that rounding of an edge's line, and the
+/// edges give the distance to the same rounding where the projection lies by the edge. Where it
+/// lies beyond the edge's end, near the tip of a needle whose edges' lines meet at an angle below
+/// the rounding, the face's answer would be the distance to the plane, not to the tip: a point
+/// 2.9e-11 from the tip of a needle 1 long and 1e-12 high measured 1.0e-11 (and won a search
+/// against a triangle 2e-11 away).
 inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
   if (t.flat) return false;
   const Vec3* v = t.vertex;
+  const double bound = faceAreaBound(p, t);
   areas.c = dot(t.normal, cross(t.edge[0], p - v[0]));
-  if (!(areas.c >= 0.0)) return false;
+  if (!(areas.c > bound)) return false;
   areas.a = dot(t.normal, cross(t.edge[1], p - v[1]));
-  if (!(areas.a >= 0.0)) return false;
+  if (!(areas.a > bound)) return false;
   areas.b = dot(t.normal, cross(t.edge[2], p - v[2]));
-  return areas.b >= 0.0 && areas.a + areas.b + areas.c > 0.0;
+  return areas.b > bound;
 }
 
 /// The projection of p onto a non-flat local triangle when it falls inside (the face region of
@@ -203,11 +226,11 @@ inline kernels::PointTriangleResult closestOnLocalEdges(const Vec3& p,
 /// The closest point of a local triangle to p, with its barycentrics (point ≈ v0 + u·(v1 − v0) +
 /// v·(v2 − v0)) and feature.
 ///
-/// The face is chosen when the projection of p lies inside all three edges (signs of
-/// n·(e × (p − v)), exact up to a displacement of ε·|p − v| of p); the point is then p's
-/// projection along the accurate normal. Otherwise the nearest of the three edges, which is the
-/// answer whenever the projection is outside. A misclassification can only happen within
-/// rounding of an edge, where both answers agree to that rounding.
+/// The face is chosen when the projection of p lies inside all three edges by more than the
+/// areas' rounding (n·(e × (p − v)) beyond faceAreaBound); the point is then p's projection
+/// along the accurate normal. Otherwise the nearest of the three edges, which is the answer
+/// whenever the projection is outside, and within rounding of it where the projection lies
+/// inside within rounding of an edge.
 ///
 /// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
 /// in the triangle (to an ulp); for a needle of height h they carry the needle's conditioning, an

@@ -96,15 +96,25 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   const Lanes flatBound = splat(4.0 * std::numeric_limits<double>::epsilon()) * longest;
   const Mask notFlat = greater(normalSquared, flatBound * flatBound);
 
-  // closestOnLocalFace: the projection, where it lies inside all three edges.
+  // closestOnLocalFace: the projection, where it lies inside all three edges by more than the
+  // areas' rounding (faceAreaBound, in its operations).
+  const auto magnitude = [&zero](const Lanes& x) { return select(less(x, zero), -x, x); };
+  const Lanes normalSize = (magnitude(normal.x) + magnitude(normal.y)) + magnitude(normal.z);
+  Lanes edgeSize = zero;
+  for (const Vec* e : {&edge0, &edge1, &edge2})
+    for (const Lanes* component : {&e->x, &e->y, &e->z}) {
+      const Lanes size = magnitude(*component);
+      edgeSize = select(less(edgeSize, size), size, edgeSize);  // std::max's
+    }
+  const Lanes pointSize = (magnitude(r.x) + magnitude(r.y)) + magnitude(r.z);
+  const Lanes bound = splat(128.0 * std::numeric_limits<double>::epsilon()) * normalSize *
+                      edgeSize * (pointSize + splat(2.0) * edgeSize);
   const Vec ap = minus(r, origin);
   const Lanes areaC = dot(normal, cross(edge0, ap));
   const Lanes areaA = dot(normal, cross(edge1, minus(r, u)));
   const Lanes areaB = dot(normal, cross(edge2, minus(r, v)));
-  const Lanes sum = areaA + areaB + areaC;
-  const Mask inside = both(
-      both(notFlat, greaterOrEqual(areaC, zero)),
-      both(both(greaterOrEqual(areaA, zero), greaterOrEqual(areaB, zero)), greater(sum, zero)));
+  const Mask inside = both(both(notFlat, greater(areaC, bound)),
+                           both(greater(areaA, bound), greater(areaB, bound)));
   const Lanes safeSquared = select(notFlat, normalSquared, splat(1.0));
   const Vec foot = minus(r, times(normal, dot(normal, ap) / safeSquared));
   const Lanes face = lengthSquared(minus(r, foot));
