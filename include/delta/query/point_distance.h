@@ -73,12 +73,13 @@ std::optional<Sign> parseSign(std::string_view text) noexcept;
 ///
 /// Threading: a value type; no shared state.
 struct PointQuery {
-  /// Answer only points closer than ε (strictly: their squared distance below ε²; the distance
-  /// reported, a rounded square root, may then equal ε); the others get distance +∞ and no
-  /// triangle.
+  /// Answer only points closer than ε (strictly: the kernel's squared distance below ε·ε as a
+  /// double rounds it, so a point whose squared distance rounds to that double is not answered
+  /// even where the exact ε² is a hair larger; the distance reported, a rounded square root, may
+  /// equal ε); the others get distance +∞ and no triangle.
   /// A finite ε lets the search stop near the root for points far from the mesh. Any positive ε
-  /// is exact: one whose square underflows (below about 1e-154) is compared with the distance
-  /// itself, not its square.
+  /// is taken as given: one whose square underflows (below about 1e-154) is compared with the
+  /// distance itself, not its square.
   double epsilon = std::numeric_limits<double>::infinity();
   /// Also decide inside/outside, as `sign` says. Sign::pseudonormal (the mesh must be closed and
   /// not cross itself): by the angle-weighted pseudonormal of the feature (vertex, edge or face)
