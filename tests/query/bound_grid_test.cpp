@@ -190,9 +190,8 @@ TEST(BoundGrid, AFanOfManySliversIsBuiltInBoundedWork) {
   for (std::size_t k = 0; k < spokes; ++k) {
     const double a0 = 2.0 * std::numbers::pi * static_cast<double>(k) / spokes;
     const double a1 = 2.0 * std::numbers::pi * static_cast<double>(k + 1) / spokes;
-    fan.push_back({{0.0, 0.0, 0.0},
-                   {std::cos(a0), std::sin(a0), 0.0},
-                   {std::cos(a1), std::sin(a1), 0.0}});
+    fan.push_back(
+        {{0.0, 0.0, 0.0}, {std::cos(a0), std::sin(a0), 0.0}, {std::cos(a1), std::sin(a1), 0.0}});
   }
   const TriangleSoA triangles = soaOf(fan);
   const BoundGrid grid(triangles, boundsOf(triangles));

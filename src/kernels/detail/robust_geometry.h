@@ -134,17 +134,15 @@ struct FaceAreas {
 };
 
 /// The largest error of a face area n·(eᵢ × (p − vᵢ)) of insideLocalFace, against the exact area
-/// of the exact triangle and point the local ones stand for: 128ε·|n|₁·E·(|p|₁ + 2E), E the
-/// largest |component| of an edge (L ≤ √3·E). Derived: p, the vertices and the edges are off by
-/// at most ε·(|p| + L), εL and 3εL (their differences from the frame's origin rounded), the
-/// accurate normal by 8ε of itself, and the cross and dot products round by 6ε of |n|·|e|·|p − v|:
-/// 25ε·|n|·L·(|p| + L) in all. Written out once for the scalar kernel and once in lanes
-/// (query/detail/exact_lanes_body.h), in the same operations, so that both give the same bits.
+/// of the exact triangle and point the local ones stand for: 128ε·|n|₁·L·(|p|₁ + 2L), L the
+/// longest edge. Derived: p, the vertices and the edges are off by at most ε·(|p| + L), εL and
+/// 3εL (their differences from the frame's origin rounded), the accurate normal by 8ε of itself,
+/// and the cross and dot products round by 6ε of |n|·|e|·|p − v|: 25ε·|n|·L·(|p| + L) in all.
+/// Written out once for the scalar kernel and once in lanes (query/detail/exact_lanes_body.h), in
+/// the same operations, so that both give the same bits.
 inline double faceAreaBound(const Vec3& p, const LocalTriangle& t) noexcept {
   const double normal = (std::abs(t.normal.x) + std::abs(t.normal.y)) + std::abs(t.normal.z);
-  double edge = 0.0;
-  for (const Vec3& e : t.edge)
-    edge = std::max({edge, std::abs(e.x), std::abs(e.y), std::abs(e.z)});
+  const double edge = std::sqrt(t.longestEdgeSquared);
   const double point = (std::abs(p.x) + std::abs(p.y)) + std::abs(p.z);
   return 128.0 * kEpsilon * normal * edge * (point + 2.0 * edge);
 }

@@ -60,6 +60,9 @@ constexpr std::size_t kWidth = 8;
 [[gnu::always_inline]] inline Lanes fmadd(const Lanes& a, const Lanes& b, const Lanes& c) {
   return _mm512_fmadd_pd(a, b, c);
 }
+[[gnu::always_inline]] inline Lanes squareRoot(const Lanes& a) {
+  return _mm512_sqrt_pd(a);
+}
 [[gnu::always_inline]] inline Lanes select(Mask mask, const Lanes& yes, const Lanes& no) {
   return _mm512_mask_blend_pd(mask, no, yes);
 }
@@ -109,6 +112,9 @@ constexpr std::size_t kWidth = 4;
 [[gnu::always_inline]] inline Lanes fmadd(const Lanes& a, const Lanes& b, const Lanes& c) {
   return _mm256_fmadd_pd(a, b, c);
 }
+[[gnu::always_inline]] inline Lanes squareRoot(const Lanes& a) {
+  return _mm256_sqrt_pd(a);
+}
 [[gnu::always_inline]] inline Lanes select(const Mask& mask, const Lanes& yes, const Lanes& no) {
   return _mm256_blendv_pd(no, yes, mask);
 }
@@ -157,6 +163,9 @@ constexpr std::size_t kWidth = 2;
 }
 [[gnu::always_inline]] inline Lanes fmadd(const Lanes& a, const Lanes& b, const Lanes& c) {
   return vfmaq_f64(c, a, b);  // c + a·b, one rounding: std::fma(a, b, c)
+}
+[[gnu::always_inline]] inline Lanes squareRoot(const Lanes& a) {
+  return vsqrtq_f64(a);  // correctly rounded, as std::sqrt
 }
 [[gnu::always_inline]] inline Lanes select(const Mask& mask, const Lanes& yes, const Lanes& no) {
   return vbslq_f64(mask, yes, no);

@@ -1,9 +1,9 @@
 // The exact point–triangle kernel in lanes (exact_lanes.h), written once and included once per
 // ISA, inside a namespace that first defines, for that ISA: Lanes (kWidth doubles), Mask, and
-// splat, load (aligned), store (aligned), fmadd, select (mask, yes, no), both (the lanes set in
-// both masks), bits (lane i → bit i) and the ordered comparisons greaterOrEqual, greater, less,
-// lessOrEqual and equal (false where a lane is NaN). No include guard: it is meant to be
-// included once per ISA.
+// splat, load (aligned), store (aligned), fmadd, squareRoot, select (mask, yes, no), both (the
+// lanes set in both masks), bits (lane i → bit i) and the ordered comparisons greaterOrEqual,
+// greater, less, lessOrEqual and equal (false where a lane is NaN). No include guard: it is meant
+// to be included once per ISA.
 
 struct Vec {
   Lanes x, y, z;
@@ -100,12 +100,7 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   // areas' rounding (faceAreaBound, in its operations).
   const auto magnitude = [&zero](const Lanes& x) { return select(less(x, zero), -x, x); };
   const Lanes normalSize = (magnitude(normal.x) + magnitude(normal.y)) + magnitude(normal.z);
-  Lanes edgeSize = zero;
-  for (const Vec* e : {&edge0, &edge1, &edge2})
-    for (const Lanes* component : {&e->x, &e->y, &e->z}) {
-      const Lanes size = magnitude(*component);
-      edgeSize = select(less(edgeSize, size), size, edgeSize);  // std::max's
-    }
+  const Lanes edgeSize = squareRoot(longest);
   const Lanes pointSize = (magnitude(r.x) + magnitude(r.y)) + magnitude(r.z);
   const Lanes bound = splat(128.0 * std::numeric_limits<double>::epsilon()) * normalSize *
                       edgeSize * (pointSize + splat(2.0) * edgeSize);
