@@ -145,6 +145,32 @@ TEST(PointTriangle, NeedlesAreMeasuredToTheirTips) {
   }
 }
 
+TEST(PointTriangle, PointsOverANeedleNearItsShortEdgeAreOverTheFace) {
+  // One rounding bound for the three edges' areas (the longest edge's) took points over a
+  // needle's face within 1e-13·L²/h of its short edge (h long) for points off it, and measured
+  // them to a long edge: 1.0e-8 for a point 1e-12 above the face, 1e-8 in from the short edge
+  // (an audit's case).
+  const Triangle needle{{0, 0, 0}, {1, 0, 0}, {1, 0x1.ad7f29abcaf48p-24, 0}};  // h = 1e-7
+  const Vec3 p{0x1.ffffffaa19c47p-1, 0x1.ad7f29abcaf48p-25, 0x1.19799812dea11p-40};
+  const PointTriangleResult r = closestPointOnTriangle(p, needle);
+  EXPECT_EQ(r.feature, TriangleFeature::Face);
+  EXPECT_NEAR(std::sqrt(r.distanceSquared), std::sqrt(test::exactSquaredDistance(p, needle)),
+              1e-16);
+  test::PairRandom random(6);
+  for (const double height : {1e-5, 1e-7, 1e-9, 1e-11}) {
+    for (int i = 0; i < 200; ++i) {
+      const Triangle t{{0, 0, 0}, {1, 0, 0}, {1, height, 0}};
+      const Vec3 q{1 - height * random.uniform(0.01, 0.9), height * random.uniform(0.0, 0.005),
+                   random.uniform(-1e-9, 1e-9)};
+      const double exact = std::sqrt(test::exactSquaredDistance(q, t));
+      ASSERT_LE(std::fabs(std::sqrt(closestPointOnTriangle(q, t).distanceSquared) - exact),
+                16.0 * kEpsilon * (1.0 + exact))
+          << height << "\n"
+          << pasteablePoint(q, t);
+    }
+  }
+}
+
 TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
   const Vec3 o{-1e6, 2e6, 3e6};
   const Triangle t{o, o + Vec3{2, 0, 0}, o + Vec3{0, 2, 0}};

@@ -272,6 +272,59 @@ void printStats(const char* what, const FamilyStats& s, std::size_t count) {
       what, count, s.worstError, s.intersecting, s.flagDisagreements);
 }
 
+TEST(TriangleDistance, NeedlesAreNeitherPiercedBeyondTheirTipsNorMeasuredPastTheirShortEdges) {
+  // An audit's cases. A segment crossing the plane of a needle (1e-12 high) just beyond its tip,
+  // where the lines of its long edges lie within rounding of each other, pierced it: 3.9e-7 apart
+  // called intersecting. And a point over a needle's face near its short edge (1e-7 long) was
+  // taken for one off the face (one rounding bound for the three edges) and measured to a long
+  // edge: 9.7e-9 for 1e-12.
+  const Triangle needle{{0, 0, 0},
+                        {0x1.1126ede545b65p-1, 0x1.adbb3a2487d22p-3, 0x1.a38303fb028e2p-1},
+                        {0x1.1126ede5421c9p-2, 0x1.adbb3a2485caep-4, 0x1.a38303fb05079p-2}};
+  const Triangle beyond{{0x1.13aca86a62b9p-1, 0x1.6b66fed8dfa5cp-1, 0x1.a68efbd567d6p-1},
+                        {0x1.0ea1419dde068p-1, -0x1.2912b85972179p-2, 0x1.a07721ffc1f7p-1},
+                        {0x1.1126f174b30bp+0, 0x1.adbb3fbe6a83p-2, 0x1.a3830972cbba4p+0}};
+  const double apart = std::sqrt(test::exactSquaredDistance(needle, beyond));
+  EXPECT_NEAR(apart, 3.8758393243535636e-07, 1e-20);
+  EXPECT_FALSE(trianglesIntersect(needle, beyond));
+  const auto r = triangleDistanceBruteForce(needle, beyond);
+  EXPECT_FALSE(r.intersect);
+  EXPECT_NEAR(std::sqrt(r.distanceSquared), apart, 1e-15);
+
+  const Triangle shortEdged{{0, 0, 0}, {1, 0, 0}, {1, 0x1.ad7f29abcaf48p-24, 0}};
+  const Vec3 q{0x1.ffffffaa19c47p-1, 0x1.ad7f29abcaf48p-25, 0x1.19799812dea11p-40};
+  const Triangle above{q,
+                       {0x1.3fffffd50ce24p+0, 0x1.000006b5fca6bp-3, 0x1.0000000001198p+0},
+                       {0x1.7fffffaa19c47p-1, 0x1.0000035afe535p-2, 0x1.0000000001198p+0}};
+  const double gap = std::sqrt(test::exactSquaredDistance(shortEdged, above));
+  EXPECT_NEAR(gap, 1e-12, 1e-24);
+  EXPECT_NEAR(std::sqrt(triangleDistanceBruteForce(shortEdged, above).distanceSquared), gap, 1e-16);
+
+  // Turned needles and segments crossing their planes just beyond a tip: never intersecting
+  // where the exact distance exceeds the touching tolerance (about 1.4e-14 here).
+  test::PairRandom random(23);
+  for (const double height : {1e-6, 1e-10, 1e-14}) {
+    int found = 0;
+    for (int i = 0; i < 200; ++i) {
+      const Quaternion turn = Quaternion::fromAxisAngle(random.unitVector(), random.uniform(0, 3));
+      const auto place = [&](const Vec3& v) { return turn.rotate(v); };
+      const Triangle a{place({0, 0, 0}), place({1, 0, 0}), place({0.5, height, 0})};
+      const Vec3 x{1 + std::pow(10.0, random.uniform(-9, -6)), 0, 0};
+      const Vec3 direction =
+          normalized(Vec3{random.uniform(-0.5, 0.5), random.uniform(-0.5, 0.5), 1});
+      const Triangle b{place(x - direction * 0.5), place(x + direction * 0.5),
+                       place(x + Vec3{1, 0, 0})};
+      const double exact = std::sqrt(test::exactSquaredDistance(a, b));
+      if (!(exact > 1e-13)) continue;
+      ++found;
+      ASSERT_FALSE(trianglesIntersect(a, b)) << height << "\n" << pasteable(a, b);
+      ASSERT_NEAR(std::sqrt(triangleDistanceBruteForce(a, b).distanceSquared), exact, 1e-13)
+          << pasteable(a, b);
+    }
+    EXPECT_GT(found, 150) << height;
+  }
+}
+
 TEST(TriangleDistance, MatchesExactOracleOnEveryFamily) {
   const std::size_t count = test::scaledCount(3000);
   for (const PairFamily family : test::kAllFamilies) {

@@ -133,39 +133,53 @@ struct FaceAreas {
   double a = 0.0, b = 0.0, c = 0.0;
 };
 
-/// The largest error of a face area n·(eᵢ × (p − vᵢ)) of insideLocalFace, against the exact area
-/// of the exact triangle and point the local ones stand for: 128ε·|n|₁·L·(|p|₁ + 2L), L the
-/// longest edge. Derived: p, the vertices and the edges are off by at most ε·(|p| + L), εL and
-/// 3εL (their differences from the frame's origin rounded), the accurate normal by 8ε of itself,
-/// and the cross and dot products round by 6ε of |n|·|e|·|p − v|: 25ε·|n|·L·(|p| + L) in all.
-/// Written out once for the scalar kernel and once in lanes (query/detail/exact_lanes_body.h), in
-/// the same operations, so that both give the same bits.
-inline double faceAreaBound(const Vec3& p, const LocalTriangle& t) noexcept {
-  const double normal = (std::abs(t.normal.x) + std::abs(t.normal.y)) + std::abs(t.normal.z);
-  const double edge = std::sqrt(t.longestEdgeSquared);
-  const double point = (std::abs(p.x) + std::abs(p.y)) + std::abs(p.z);
-  return 128.0 * kEpsilon * normal * edge * (point + 2.0 * edge);
+/// The largest error of the face area n·(e × w) of insideLocalFace, e an edge and w = p − v from
+/// its first corner, against the exact area of the exact triangle and point the local ones stand
+/// for: 64ε·|n|₁·(|e|₁·(|p|₁ + L) + L·|w|₁), `size` = |n|₁, `point` = |p|₁ and L the longest
+/// edge. Derived: p, the corner and the edge's ends are off by at most ε·|p| and εL (their
+/// differences from the frame's origin rounded), so w by ε(|w| + |p| + L) and e by ε(|e| + 2L);
+/// the accurate normal by 8ε of itself; the cross and dot products round by 6ε of |n|·|e|·|w|:
+/// in all ε|n|·(17|e|·(|p| + L) + 2L·|w|). Per edge: an edge's own rounding, 2εL, turns its line
+/// by 2εL/|e|, which only points far along it feel (a needle's short edge); one bound for the
+/// three edges took points over a needle's face within 10⁻¹³·L²/h of its short edge (h long)
+/// for points off the face and measured them to a long edge, up to h/2 too far. Written out once
+/// here and once in lanes (query/detail/exact_lanes_body.h), in the same operations, so that
+/// both give the same bits.
+inline double faceAreaBound(const Vec3& e, const Vec3& w, double size, double point,
+                            double longest) noexcept {
+  const double edge = (std::abs(e.x) + std::abs(e.y)) + std::abs(e.z);
+  const double reach = (std::abs(w.x) + std::abs(w.y)) + std::abs(w.z);
+  return 64.0 * kEpsilon * size * (edge * (point + longest) + longest * reach);
 }
 
 /// Whether the projection of p onto a non-flat local triangle falls inside it (the face region
 /// of closestOnLocalTriangle), with the areas that decide it (set where it does); false
 /// otherwise, for a flat triangle, and where an area lies within its rounding of 0
-/// (faceAreaBound): there the projection is within that rounding of an edge's line, and the
-/// edges give the distance to the same rounding where the projection lies by the edge. Where it
-/// lies beyond the edge's end, near the tip of a needle whose edges' lines meet at an angle below
-/// the rounding, the face's answer would be the distance to the plane, not to the tip: a point
-/// 2.9e-11 from the tip of a needle 1 long and 1e-12 high measured 1.0e-11 (and won a search
-/// against a triangle 2e-11 away).
+/// (faceAreaBound): there the projection is within that rounding of the edge's line, where the
+/// edges give the distance to the same rounding. Beyond an edge's end, near the tip of a needle
+/// whose edges' lines meet at an angle below the rounding, the face's answer would be the
+/// distance to the plane, not to the tip: a point 2.9e-11 from the tip of a needle 1 long and
+/// 1e-12 high measured 1.0e-11 (and won a search against a triangle 2e-11 away).
 inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
   if (t.flat) return false;
   const Vec3* v = t.vertex;
-  const double bound = faceAreaBound(p, t);
-  areas.c = dot(t.normal, cross(t.edge[0], p - v[0]));
-  if (!(areas.c > bound)) return false;
-  areas.a = dot(t.normal, cross(t.edge[1], p - v[1]));
-  if (!(areas.a > bound)) return false;
-  areas.b = dot(t.normal, cross(t.edge[2], p - v[2]));
-  return areas.b > bound;
+  const double size = (std::abs(t.normal.x) + std::abs(t.normal.y)) + std::abs(t.normal.z);
+  const double point = (std::abs(p.x) + std::abs(p.y)) + std::abs(p.z);
+  const double longest = std::sqrt(t.longestEdgeSquared);
+  // n·(e_k × (p − v_k)), or NaN where it lies within its rounding of 0.
+  const auto area = [&](int k) {
+    const Vec3 w = p - v[k];
+    const double value = dot(t.normal, cross(t.edge[k], w));
+    return value > faceAreaBound(t.edge[k], w, size, point, longest)
+               ? value
+               : std::numeric_limits<double>::quiet_NaN();
+  };
+  areas.c = area(0);
+  if (!(areas.c > 0.0)) return false;
+  areas.a = area(1);
+  if (!(areas.a > 0.0)) return false;
+  areas.b = area(2);
+  return areas.b > 0.0;
 }
 
 /// The projection of p onto a non-flat local triangle when it falls inside (the face region of
@@ -225,7 +239,8 @@ inline kernels::PointTriangleResult closestOnLocalEdges(const Vec3& p,
 /// v·(v2 − v0)) and feature.
 ///
 /// The face is chosen when the projection of p lies inside all three edges by more than the
-/// areas' rounding (n·(e × (p − v)) beyond faceAreaBound); the point is then p's projection
+/// areas' rounding (each n·(e × (p − v)) beyond its faceAreaBound); the point is then p's
+/// projection
 /// along the accurate normal. Otherwise the nearest of the three edges, which is the answer
 /// whenever the projection is outside, and within rounding of it where the projection lies
 /// inside within rounding of an edge.

@@ -97,19 +97,22 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   const Mask notFlat = greater(normalSquared, flatBound * flatBound);
 
   // closestOnLocalFace: the projection, where it lies inside all three edges by more than the
-  // areas' rounding (faceAreaBound, in its operations).
+  // areas' rounding (insideLocalFace and faceAreaBound, in their operations).
   const auto magnitude = [&zero](const Lanes& x) { return select(less(x, zero), -x, x); };
-  const Lanes normalSize = (magnitude(normal.x) + magnitude(normal.y)) + magnitude(normal.z);
-  const Lanes edgeSize = squareRoot(longest);
-  const Lanes pointSize = (magnitude(r.x) + magnitude(r.y)) + magnitude(r.z);
-  const Lanes bound = splat(128.0 * std::numeric_limits<double>::epsilon()) * normalSize *
-                      edgeSize * (pointSize + splat(2.0) * edgeSize);
+  const auto sizeOf = [&magnitude](const Vec& x) {
+    return (magnitude(x.x) + magnitude(x.y)) + magnitude(x.z);
+  };
+  const Lanes normalSize = sizeOf(normal), pointSize = sizeOf(r);
+  const Lanes longestEdge = squareRoot(longest);
+  const auto within = [&](const Vec& edge, const Vec& w) {  // the area beyond its bound
+    const Lanes area = dot(normal, cross(edge, w));
+    const Lanes bound = splat(64.0 * std::numeric_limits<double>::epsilon()) * normalSize *
+                        (sizeOf(edge) * (pointSize + longestEdge) + longestEdge * sizeOf(w));
+    return greater(area, bound);
+  };
   const Vec ap = minus(r, origin);
-  const Lanes areaC = dot(normal, cross(edge0, ap));
-  const Lanes areaA = dot(normal, cross(edge1, minus(r, u)));
-  const Lanes areaB = dot(normal, cross(edge2, minus(r, v)));
-  const Mask inside = both(both(notFlat, greater(areaC, bound)),
-                           both(greater(areaA, bound), greater(areaB, bound)));
+  const Mask inside = both(both(notFlat, within(edge0, ap)),
+                           both(within(edge1, minus(r, u)), within(edge2, minus(r, v))));
   const Lanes safeSquared = select(notFlat, normalSquared, splat(1.0));
   const Vec foot = minus(r, times(normal, dot(normal, ap) / safeSquared));
   const Lanes face = lengthSquared(minus(r, foot));
