@@ -57,10 +57,14 @@ inline constexpr double kTinyTriangleSquared = 0x1p-300;
 /// Robustness: computed in the frame of `triangle.a`, with the face normal accurate to a few ulps
 /// of itself (error-free edge differences and fused multiply–adds), so slivers are handled: the
 /// distance is within a few ε·(size + distance) of the exact distance of the stored input, near
-/// the origin or at 1e6. A triangle whose area is zero within rounding (|normal| ≤ 4ε·L², L its
-/// longest edge) is the union of its edges. For a needle of height h the closest point stays
-/// accurate, but (u, v) carry the needle's conditioning, an error of order ε·L/h (the point
-/// a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the needle).
+/// the origin or at 1e6, but for a point whose projection lies inside within the areas' rounding
+/// bound of an edge's line, measured to the edge: up to about 2⁸ε·(|p − a| + 2L) too far (an
+/// audit's sweep of points on and near the edges of strips, fans and cylinders turned at 1e3
+/// found up to 205ε·(size + distance); the bound is derived, not tight). A triangle whose area is
+/// zero within rounding (|normal| ≤ 4ε·L², L its longest edge) is the union of its edges. For a
+/// needle of height h the closest point stays accurate, but (u, v) carry the needle's conditioning,
+/// an error of order ε·L/h (the point a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the
+/// needle).
 ///
 /// A point on the triangle (within rounding) gets distance 0, or a rounding error's, and itself
 /// as the closest point. A point exactly on a vertex or an edge (in exact arithmetic on the
