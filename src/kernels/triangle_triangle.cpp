@@ -78,16 +78,15 @@ bool pierces(const Vec3& e0, const Vec3& e1, const LocalTriangle& t, double touc
   if (!((h0 > bound && h1 < -bound) || (h0 < -bound && h1 > bound))) return false;
   const Vec3 along = e1 - e0;
   const Vec3 x = e0 + along * (h0 / (h0 - h1));
-  const auto size = [](const Vec3& v) { return (std::abs(v.x) + std::abs(v.y)) + std::abs(v.z); };
   const double moved =
-      (bound / (std::abs(h0) + std::abs(h1)) + 4.0 * detail::kEpsilon) * size(along) +
+      (bound / (std::abs(h0) + std::abs(h1)) + 4.0 * detail::kEpsilon) * detail::normOne(along) +
       touching / 8.0;
-  const double normalSize = size(t.normal), point = size(x);
+  const double normalSize = detail::normOne(t.normal), point = detail::normOne(x);
   const double longest = std::sqrt(t.longestEdgeSquared);
   for (int k = 0; k < 3; ++k) {
     const Vec3 w = x - t.vertex[k];
     const double margin = detail::faceAreaBound(t.edge[k], w, normalSize, point, longest) +
-                          2.0 * normalSize * size(t.edge[k]) * moved;
+                          2.0 * normalSize * detail::normOne(t.edge[k]) * moved;
     if (!(dot(t.normal, cross(t.edge[k], w)) > margin)) return false;
   }
   crossing = x;

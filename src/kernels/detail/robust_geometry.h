@@ -133,6 +133,11 @@ struct FaceAreas {
   double a = 0.0, b = 0.0, c = 0.0;
 };
 
+/// |v.x| + |v.y| + |v.z|, summed in that order (the exact lanes sum their magnitudes alike).
+inline double normOne(const Vec3& v) noexcept {
+  return (std::abs(v.x) + std::abs(v.y)) + std::abs(v.z);
+}
+
 /// The largest error of the face area n·(e × w) of insideLocalFace, e an edge and w = p − v from
 /// its first corner, against the exact area of the exact triangle and point the local ones stand
 /// for: 64ε·|n|₁·(|e|₁·(|p|₁ + L) + L·|w|₁), `size` = |n|₁, `point` = |p|₁ and L the longest
@@ -147,9 +152,7 @@ struct FaceAreas {
 /// both give the same bits.
 inline double faceAreaBound(const Vec3& e, const Vec3& w, double size, double point,
                             double longest) noexcept {
-  const double edge = (std::abs(e.x) + std::abs(e.y)) + std::abs(e.z);
-  const double reach = (std::abs(w.x) + std::abs(w.y)) + std::abs(w.z);
-  return 64.0 * kEpsilon * size * (edge * (point + longest) + longest * reach);
+  return 64.0 * kEpsilon * size * (normOne(e) * (point + longest) + longest * normOne(w));
 }
 
 /// Whether the projection of p onto a non-flat local triangle falls inside it (the face region
@@ -162,24 +165,15 @@ inline double faceAreaBound(const Vec3& e, const Vec3& w, double size, double po
 /// 1e-12 high measured 1.0e-11 (and won a search against a triangle 2e-11 away).
 inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
   if (t.flat) return false;
-  const Vec3* v = t.vertex;
-  const double size = (std::abs(t.normal.x) + std::abs(t.normal.y)) + std::abs(t.normal.z);
-  const double point = (std::abs(p.x) + std::abs(p.y)) + std::abs(p.z);
+  const double size = normOne(t.normal), point = normOne(p);
   const double longest = std::sqrt(t.longestEdgeSquared);
-  // n·(e_k × (p − v_k)), or NaN where it lies within its rounding of 0.
-  const auto area = [&](int k) {
-    const Vec3 w = p - v[k];
-    const double value = dot(t.normal, cross(t.edge[k], w));
-    return value > faceAreaBound(t.edge[k], w, size, point, longest)
-               ? value
-               : std::numeric_limits<double>::quiet_NaN();
+  // Edge k's area n·(e_k × (p − v_k)) into `area`; whether it lies beyond its rounding of 0.
+  const auto inner = [&](int k, double& area) {
+    const Vec3 w = p - t.vertex[k];
+    area = dot(t.normal, cross(t.edge[k], w));
+    return area > faceAreaBound(t.edge[k], w, size, point, longest);
   };
-  areas.c = area(0);
-  if (!(areas.c > 0.0)) return false;
-  areas.a = area(1);
-  if (!(areas.a > 0.0)) return false;
-  areas.b = area(2);
-  return areas.b > 0.0;
+  return inner(0, areas.c) && inner(1, areas.a) && inner(2, areas.b);
 }
 
 /// The projection of p onto a non-flat local triangle when it falls inside (the face region of
@@ -240,9 +234,8 @@ inline kernels::PointTriangleResult closestOnLocalEdges(const Vec3& p,
 ///
 /// The face is chosen when the projection of p lies inside all three edges by more than the
 /// areas' rounding (each n·(e × (p − v)) beyond its faceAreaBound); the point is then p's
-/// projection
-/// along the accurate normal. Otherwise the nearest of the three edges, which is the answer
-/// whenever the projection is outside, and within rounding of it where the projection lies
+/// projection along the accurate normal. Otherwise the nearest of the three edges, which is the
+/// answer whenever the projection is outside, and within rounding of it where the projection lies
 /// inside within rounding of an edge.
 ///
 /// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
