@@ -1,9 +1,13 @@
 #include "delta/kernels/triangle_triangle.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
+#include "delta/mesh/coordinate_range.h"
+
+#include "detail/exact_predicates.h"
 #include "detail/robust_geometry.h"
 
 namespace delta::kernels {
@@ -91,6 +95,168 @@ bool pierces(const Vec3& e0, const Vec3& e1, const LocalTriangle& t, double touc
   }
   crossing = x;
   return true;
+}
+
+// Exact intersection, where the rounded tests above leave no witness: some pairs that meet do
+// so only within the rounding of those tests (an edge crossing a needle within the rounding of
+// its boundary, a vertex resting on a face whose distances round to more than τ), and there the
+// orientation signs of the given coordinates decide (exact_predicates.h).
+
+/// The exact sign of the orientation of p, q, r projected along `axis` (that coordinate
+/// dropped, the other two in cyclic order): the sign of `axis`'s component of (q − p) × (r − p),
+/// which is orient of the projected points and one lifted by 1 along the projection, all of
+/// them exact doubles.
+int projectedOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, int axis) noexcept {
+  const auto project = [axis](const Vec3& v, double lift) {
+    return Vec3{v[(axis + 1) % 3], v[(axis + 2) % 3], lift};
+  };
+  const Vec3 pp = project(p, 0.0);
+  return detail::orientSign(pp, project(q, 0.0), project(r, 0.0), project(p, 1.0));
+}
+
+/// Whether `p` lies on the closed segment a–b, given that the three are collinear in the
+/// projection along `axis`: between a and b in both kept coordinates.
+bool withinProjectedSegment(const Vec3& p, const Vec3& a, const Vec3& b, int axis) noexcept {
+  for (const int k : {(axis + 1) % 3, (axis + 2) % 3})
+    if (p[k] < std::min(a[k], b[k]) || p[k] > std::max(a[k], b[k])) return false;
+  return true;
+}
+
+/// Whether the closed segments p0–p1 and q0–q1 meet in the projection along `axis` (either may
+/// be a point).
+bool projectedSegmentsMeet(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
+                           int axis) noexcept {
+  const int o0 = projectedOrientSign(p0, p1, q0, axis), o1 = projectedOrientSign(p0, p1, q1, axis);
+  const int o2 = projectedOrientSign(q0, q1, p0, axis), o3 = projectedOrientSign(q0, q1, p1, axis);
+  if (o0 * o1 < 0 && o2 * o3 < 0) return true;
+  return (o0 == 0 && withinProjectedSegment(q0, p0, p1, axis)) ||
+         (o1 == 0 && withinProjectedSegment(q1, p0, p1, axis)) ||
+         (o2 == 0 && withinProjectedSegment(p0, q0, q1, axis)) ||
+         (o3 == 0 && withinProjectedSegment(p1, q0, q1, axis));
+}
+
+/// Whether `p` lies in the closed triangle t, in the projection along `axis` (t's projection of
+/// non-zero area).
+bool insideProjectedTriangle(const Vec3& p, const Triangle& t, int axis) noexcept {
+  const int s0 = projectedOrientSign(t.a, t.b, p, axis),
+            s1 = projectedOrientSign(t.b, t.c, p, axis),
+            s2 = projectedOrientSign(t.c, t.a, p, axis);
+  return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0);
+}
+
+/// Whether the closed segment p–q, lying in the plane of the triangle t (of non-zero area in the
+/// projection along `axis`), meets t.
+bool projectedSegmentMeetsTriangle(const Vec3& p, const Vec3& q, const Triangle& t,
+                                   int axis) noexcept {
+  return insideProjectedTriangle(p, t, axis) || projectedSegmentsMeet(p, q, t.a, t.b, axis) ||
+         projectedSegmentsMeet(p, q, t.b, t.c, axis) || projectedSegmentsMeet(p, q, t.c, t.a, axis);
+}
+
+/// An axis along which t (of non-zero area) projects to non-zero area: the normal's largest
+/// rounded component, checked exactly (the others where rounding misled).
+int projectionAxis(const Triangle& t) noexcept {
+  const Vec3 n = t.areaVector();
+  const double size[3] = {std::fabs(n.x), std::fabs(n.y), std::fabs(n.z)};
+  const int largest =
+      size[0] >= size[1] ? (size[0] >= size[2] ? 0 : 2) : (size[1] >= size[2] ? 1 : 2);
+  for (int k = 0; k < 3; ++k)
+    if (const int axis = (largest + k) % 3; projectedOrientSign(t.a, t.b, t.c, axis) != 0)
+      return axis;
+  return largest;  // not reached for a triangle of non-zero area
+}
+
+/// How a closed segment meets a closed triangle.
+enum class Meeting { kNone, kAcross, kWithinPlane };
+
+/// How the closed segment p–q meets the closed triangle t of non-zero area, given the exact
+/// orientations of p and q against t's plane: crossing the plane (or touching it at an end), or
+/// lying in it.
+Meeting segmentMeetsTriangle(const Vec3& p, const Vec3& q, int sideP, int sideQ,
+                             const Triangle& t) noexcept {
+  if (sideP * sideQ > 0) return Meeting::kNone;
+  if (sideP == 0 && sideQ == 0)
+    return projectedSegmentMeetsTriangle(p, q, t, projectionAxis(t)) ? Meeting::kWithinPlane
+                                                                     : Meeting::kNone;
+  // The line p–q crosses the plane at one point, which is inside t where the line passes every
+  // edge on the same side.
+  const int s0 = detail::orientSign(p, q, t.a, t.b), s1 = detail::orientSign(p, q, t.b, t.c),
+            s2 = detail::orientSign(p, q, t.c, t.a);
+  return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0) ? Meeting::kAcross
+                                                                            : Meeting::kNone;
+}
+
+/// Whether the exact predicates answer for these coordinates: within the coordinate range, and
+/// none so small that their products would underflow (exact_predicates.h).
+bool exactlyDecidable(const Triangle& t) noexcept {
+  for (const Vec3& v : {t.a, t.b, t.c})
+    if (!inCoordinateRange(v) || !detail::predicatesExactAt(v)) return false;
+  return true;
+}
+
+/// Whether t has zero area exactly (its corners on one line, or one point).
+bool exactlyFlat(const Triangle& t) noexcept {
+  return detail::exactCrossLeadingSign(t.a, t.b, t.a, t.c) == 0;
+}
+
+/// Whether the closed triangles meet, decided exactly on the coordinates as given; false where
+/// the exact predicates cannot answer (coordinates beyond their range) or both triangles have
+/// zero area (then the rounded tests alone decide: segments and points, whose distances the
+/// candidates give to a few ulps). `across` gets a bit for each edge that meets the other
+/// triangle across its plane: bit k for the first's edge k (corner k to k + 1), 3 + k for the
+/// second's.
+bool intersectExactly(const Triangle& first, const Triangle& second, unsigned& across) noexcept {
+  across = 0;
+  if (!exactlyDecidable(first) || !exactlyDecidable(second)) return false;
+  const bool firstFlat = exactlyFlat(first), secondFlat = exactlyFlat(second);
+  if (firstFlat && secondFlat) return false;
+  const std::array<Vec3, 3> corners[2] = {{first.a, first.b, first.c},
+                                          {second.a, second.b, second.c}};
+  const Triangle* triangles[2] = {&first, &second};
+  std::array<int, 3> sides[2];  // each triangle's corners against the other's plane
+  for (int m = 0; m < 2; ++m) {
+    const Triangle& other = *triangles[1 - m];
+    for (int k = 0; k < 3; ++k)
+      sides[m][k] = detail::orientSign(other.a, other.b, other.c, corners[m][k]);
+  }
+  const auto oneSide = [](const std::array<int, 3>& s) {
+    return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0);
+  };
+  // (Against a triangle of zero area every side is 0: no shortcut.)
+  if ((!secondFlat && oneSide(sides[0])) || (!firstFlat && oneSide(sides[1]))) return false;
+  if (!firstFlat && !secondFlat && sides[1] == std::array<int, 3>{}) {
+    // One plane: the projections overlap where two edges meet or one contains the other.
+    const int axis = projectionAxis(first);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (projectedSegmentsMeet(corners[0][i], corners[0][(i + 1) % 3], corners[1][j],
+                                  corners[1][(j + 1) % 3], axis))
+          return true;
+    return insideProjectedTriangle(first.a, second, axis) ||
+           insideProjectedTriangle(second.a, first, axis);
+  }
+  // Two planes: the triangles meet along their common line, where the two intervals they cut
+  // from it overlap, and an end of the overlap is where an edge of one meets the other. A
+  // triangle of zero area is the union of its edges, each against the other triangle.
+  bool meet = false;
+  for (int m = 0; m < 2; ++m) {
+    if (m == 0 ? secondFlat : firstFlat) continue;  // edges against a triangle of zero area
+    for (int k = 0; k < 3; ++k) {
+      const int next = (k + 1) % 3;
+      const Meeting meeting = segmentMeetsTriangle(corners[m][k], corners[m][next], sides[m][k],
+                                                   sides[m][next], *triangles[1 - m]);
+      if (meeting == Meeting::kAcross) across |= 1u << (3 * m + k);
+      meet = meet || meeting != Meeting::kNone;
+    }
+  }
+  return meet;
+}
+
+/// Where the segment e0 → e1 crosses the plane of t, its parameter clamped to the segment (where
+/// it crosses exactly but the rounded heights do not say so).
+Vec3 planeCrossing(const Vec3& e0, const Vec3& e1, const LocalTriangle& t) noexcept {
+  const double h0 = dot(t.normal, e0 - t.vertex[0]), h1 = dot(t.normal, e1 - t.vertex[0]);
+  const double along = h0 != h1 ? std::clamp(h0 / (h0 - h1), 0.0, 1.0) : 0.5;
+  return e0 + (e1 - e0) * along;
 }
 
 /// One of the 15 candidate pairs of closest points, with the seed's barycentric unknowns.
@@ -184,6 +350,19 @@ TriangleDistanceResult triangleDistanceBruteForce(const Triangle& first,
     const double touchingSquared = pair.touching * pair.touching;
     for (const Candidate& c : candidates)
       if (c.distanceSquared <= touchingSquared) witnesses[count++] = (c.p + c.q) * 0.5;
+    // Meeting only within the rounding of those tests: the exact signs decide, and the points
+    // where edges cross the other's plane (or the nearest candidates) are the witnesses.
+    if (unsigned across = 0; count == 0 && intersectExactly(first, second, across)) {
+      for (int k = 0; k < 3; ++k) {
+        const LocalTriangle& a = pair.first;
+        const LocalTriangle& b = pair.second;
+        if (across & (1u << k))
+          witnesses[count++] = planeCrossing(a.vertex[k], a.vertex[(k + 1) % 3], b);
+        if (across & (8u << k))
+          witnesses[count++] = planeCrossing(b.vertex[k], b.vertex[(k + 1) % 3], a);
+      }
+      if (count == 0) witnesses[count++] = (candidates[nearest].p + candidates[nearest].q) * 0.5;
+    }
     if (count > 0) {
       int from = 0, to = 0;
       double widest = -1.0;
@@ -217,7 +396,8 @@ bool trianglesIntersect(const Triangle& first, const Triangle& second) noexcept 
   const double touchingSquared = pair.touching * pair.touching;
   for (int k = 0; k < kCandidates; ++k)
     if (candidate(pair, k).distanceSquared <= touchingSquared) return true;
-  return false;
+  unsigned across = 0;
+  return intersectExactly(first, second, across);
 }
 
 }  // namespace delta::kernels

@@ -17,9 +17,9 @@
 #include "delta/query/part_nesting.h"
 #include "delta/query/self_intersections.h"
 
+#include "../kernels/detail/exact_predicates.h"
 #include "../kernels/detail/robust_geometry.h"
 #include "detail/dual_traversal.h"
-#include "detail/exact_predicates.h"
 #include "detail/placement.h"
 #include "detail/query_mesh_data.h"
 #include "detail/union_find.h"

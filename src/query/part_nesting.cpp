@@ -10,7 +10,7 @@
 
 #include "delta/core/parallel.h"
 
-#include "detail/exact_predicates.h"
+#include "../kernels/detail/exact_predicates.h"
 #include "detail/query_mesh_data.h"
 #include "detail/union_find.h"
 

@@ -5,7 +5,7 @@
 #include <limits>
 #include <numbers>
 
-#include "detail/exact_predicates.h"
+#include "../kernels/detail/exact_predicates.h"
 
 namespace delta {
 namespace {

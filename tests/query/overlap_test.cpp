@@ -18,8 +18,8 @@
 #include "delta/mesh/mass_properties.h"
 #include "delta/mesh/primitives.h"
 
+#include "kernels/detail/exact_predicates.h"
 #include "kernels/triangle_pairs.h"
-#include "query/detail/exact_predicates.h"
 
 namespace delta::contactdetection {
 namespace {

@@ -23,8 +23,8 @@
 #include "delta/query/self_intersections.h"
 #include "delta/query/winding_number.h"
 
+#include "kernels/detail/exact_predicates.h"
 #include "kernels/triangle_pairs.h"
-#include "query/detail/exact_predicates.h"
 #include "query/detail/query_mesh_data.h"
 #include "query/probe_points.h"
 

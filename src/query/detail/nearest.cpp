@@ -11,7 +11,7 @@
 #include "delta/mesh/coordinate_range.h"
 #include "delta/query/winding_number.h"
 
-#include "exact_predicates.h"
+#include "../../kernels/detail/exact_predicates.h"
 #include "isa_list.h"  // generated: DELTA_ISAS (src/CMakeLists.txt)
 #include "point_kernels.h"
 #include "query_mesh_data.h"

@@ -539,7 +539,7 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
   return 0;
 }
 
-int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept {
   // Two of the points the same (a mesh against a copy of itself, a vertex of one mesh on a
   // corner of the other's triangle): 0, where the adaptive stages would each fail before the
   // full expansion found it.
@@ -578,7 +578,7 @@ int ExactTripleProductSum::sign() const noexcept {
   return signOfTerms(sum_.data(), sum_.size());
 }
 
-int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept {
   const Vec3 u = q - p, v = s - r;
   // Each component a·b − c·d of differences: 0 where both products have a zero factor (a
   // difference rounds to 0 only where it is 0); else the sign of the rounded value where it

@@ -1,4 +1,4 @@
-// The overlap query's exact predicates (query/detail/exact_predicates.h) against exact rational
+// The exact predicates (kernels/detail/exact_predicates.h) against exact rational
 // arithmetic (CGAL's Gmpq on the given doubles): orient's sign by the filter and by the
 // expansions, the leading sign of a cross product of differences, the exact sum of triple
 // products, and the order of an edge's crossings with two planes (filter and integers), on random
@@ -8,7 +8,7 @@
 // exponents span the whole range the predicates take (2⁻²⁵⁰ to 2²⁰⁰), where a difference is not a
 // double.
 
-#include "query/detail/exact_predicates.h"
+#include "kernels/detail/exact_predicates.h"
 
 #include <CGAL/Gmpq.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,9 @@
 #pragma once
 
-// Exact orientation predicates on double coordinates for the overlap query, with the symbolic
-// perturbation that makes every configuration generic.
+// Exact orientation predicates on double coordinates: for the overlap query, with the symbolic
+// perturbation that makes every configuration generic, and for the triangle–triangle kernel's
+// piercing test where its rounding bounds cannot decide (triangle_triangle.cpp), the winding
+// number's signs and the part nesting.
 //
 // orient(p, q, r, s) = (s − p)·((q − p) × (r − p)): positive where s lies on the side of the
 // plane through p, q, r that the right-handed normal (q − p) × (r − p) points to. Its sign comes
@@ -50,11 +52,11 @@ inline bool predicatesExactAt(const Vec3& p) noexcept {
 /// The exact sign of orient(p, q, r, s) (−1, 0, +1), without orientSign's filter: 0 at once for
 /// two equal points or a zero factor in every product, else a double-double evaluation where its
 /// error bound decides (128ε² of the permanent), else expansion arithmetic.
-int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept;
 
 /// The exact sign of the first non-zero component of (q − p) × (s − r), in the order x, y, z
 /// (0 where the cross product is the zero vector).
-int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept;
 
 /// The order along the edge e0 → e1 of the points where it crosses the planes of triangles
 /// `first` and `second` of the other mesh, B perturbed: −1 where it crosses `first`'s first,
@@ -110,7 +112,7 @@ inline constexpr double kOrientErrorBound = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
 }
 
 /// The sign of orient(p, q, r, s) (−1, 0, +1): filtered, exact where the filter fails.
-inline int orientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+inline int orientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept {
   const int sign = filteredOrientSign(q - p, r - p, s - p);
   return sign != 0 ? sign : exactOrientSign(p, q, r, s);
 }
