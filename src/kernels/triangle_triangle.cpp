@@ -356,9 +356,10 @@ TriangleDistanceResult triangleDistanceBruteForce(const Triangle& first,
       for (int k = 0; k < 3; ++k) {
         const LocalTriangle& a = pair.first;
         const LocalTriangle& b = pair.second;
-        if (across & (1u << k))
+        // (Not across a plane that is lost in its rounding: a flat local triangle's normal.)
+        if ((across & (1u << k)) && !b.flat)
           witnesses[count++] = planeCrossing(a.vertex[k], a.vertex[(k + 1) % 3], b);
-        if (across & (8u << k))
+        if ((across & (8u << k)) && !a.flat)
           witnesses[count++] = planeCrossing(b.vertex[k], b.vertex[(k + 1) % 3], a);
       }
       if (count == 0) witnesses[count++] = (candidates[nearest].p + candidates[nearest].q) * 0.5;
