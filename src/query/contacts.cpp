@@ -8,6 +8,9 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
@@ -530,10 +533,33 @@ void markInsideBoth(const QueryMesh& first, const QueryMesh& second, double epsi
       return *exact;
     return distance > 0.0 && detail::windingSign(mesh, x, 0.0).inside;
   };
-  parallelFor(0, found.size(), kBlock, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i)
-      if (!found[i].overlap)
-        found[i].overlap = inside(a, toFirst(found[i].x)) && inside(b, toSecond(found[i].x));
+  // Each point once: contacts at one point share the answer (the pairs of two faces lying on
+  // one another, each sliver of a fan against a face resting on its centre, take the same
+  // closest point, and a search from a fan's centre ties with every sliver: a box resting on
+  // the cap of a CAD cylinder of 2,000 segments put 3,850 of its 6,020 contacts there).
+  std::vector<std::uint32_t> order;
+  for (std::size_t i = 0; i < found.size(); ++i)
+    if (!found[i].overlap) order.push_back(static_cast<std::uint32_t>(i));
+  // By the coordinates' bits: a total order whatever they hold, equal bits one point.
+  const auto bits = [&found](std::uint32_t i) {
+    const Vec3& x = found[i].x;
+    return std::tuple{std::bit_cast<std::uint64_t>(x.x), std::bit_cast<std::uint64_t>(x.y),
+                      std::bit_cast<std::uint64_t>(x.z)};
+  };
+  std::sort(order.begin(), order.end(), [&bits](std::uint32_t i, std::uint32_t j) {
+    return std::pair{bits(i), i} < std::pair{bits(j), j};
+  });
+  std::vector<std::size_t> starts;  // of the runs of one point in `order`
+  for (std::size_t k = 0; k < order.size(); ++k)
+    if (k == 0 || bits(order[k]) != bits(order[k - 1])) starts.push_back(k);
+  starts.push_back(order.size());
+  parallelFor(0, starts.size() - 1, kBlock, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t run = begin; run < end; ++run) {
+      const Vec3& x = found[order[starts[run]]].x;
+      const bool both = inside(a, toFirst(x)) && inside(b, toSecond(x));
+      for (std::size_t k = starts[run]; k < starts[run + 1]; ++k)
+        found[order[k]].overlap = both;
+    }
   });
 }
 

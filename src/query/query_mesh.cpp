@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
+#include <span>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
@@ -210,24 +212,57 @@ void buildOctets(detail::QueryMeshData& data) {
   }
 }
 
-/// A leaf's cylinder about an axis through `centre` (query_mesh_data.h's CylinderOctet, before
-/// the slack): the axis in single precision, the range of n·w and the largest distance from the
-/// axis over its triangles' vertices (w = vertex − origin − centre).
+/// A leaf's cylinder or cone about an axis through `centre` (query_mesh_data.h's CylinderOctet,
+/// before the slack): the axis in single precision, the range [low, high] of h = n·w, and the
+/// radius at h = 0 and its taper, radius + taper·h bounding the distance from the axis over its
+/// triangles' vertices (w = vertex − origin − centre).
 struct LeafCylinder {
   float axis[3] = {0.0f, 0.0f, 0.0f};
+  float taper = 0.0f;
   double low = 0.0, high = 0.0, radius = 0.0;
 
-  /// The cylinder's surface (2πr·length + 2πr², without the 2π): what it adds to the volume
-  /// around it that a search's bound admits.
+  /// The cylinder's or cone's surface (2πr̄·length + 2πr̄², r̄ its mean radius, without the 2π):
+  /// what it adds to the volume around it that a search's bound admits.
   double surface() const noexcept {
     const double s =
         double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2];
-    return radius * ((high - low) / std::sqrt(s) + radius);
+    const double mean = radius + double{taper} * (low + high) * 0.5;
+    return mean * ((high - low) / std::sqrt(s) + mean);
   }
 };
 
+/// The largest taper a cone may have (k = taper·|n| ≤ 1: query_mesh_data.h's bound on a misplaced
+/// minimum holds there).
+constexpr double kMostTaper = 1.0;
+
+/// The taper of the cone of least mean radius over [low, high] around points (h, l) (heights and
+/// distances from the axis, sorted by h): the slope of their upper hull where it passes the
+/// middle height, within ±kMostTaper (0 for points at one height).
+double leastMeanTaper(std::span<const std::array<double, 2>> points, double middle) noexcept {
+  std::array<std::array<double, 2>, 3 * detail::kFanout> hull;
+  std::size_t size = 0;
+  for (const auto& point : points) {
+    // Andrew's monotone chain, upper hull: drop the last point while it lies on or below the
+    // segment from the one before it to this one.
+    while (size >= 2) {
+      const auto& [h0, l0] = hull[size - 2];
+      const auto& [h1, l1] = hull[size - 1];
+      if ((h1 - h0) * (point[1] - l0) - (l1 - l0) * (point[0] - h0) < 0.0) break;
+      --size;
+    }
+    hull[size++] = point;
+  }
+  for (std::size_t k = 0; k + 1 < size; ++k)
+    if (hull[k + 1][0] >= middle && hull[k + 1][0] > hull[k][0])
+      return std::clamp((hull[k + 1][1] - hull[k][1]) / (hull[k + 1][0] - hull[k][0]), -kMostTaper,
+                        kMostTaper);
+  return 0.0;
+}
+
+/// The leaf's cylinder about `direction` through `centre`, or (`tapered`) its cone of least mean
+/// radius.
 LeafCylinder cylinderAbout(const detail::QueryMeshData& data, const Vec3& direction,
-                           const Vec3& centre, std::size_t from, std::size_t to) {
+                           const Vec3& centre, std::size_t from, std::size_t to, bool tapered) {
   LeafCylinder cylinder;
   cylinder.axis[0] = static_cast<float>(direction.x);
   cylinder.axis[1] = static_cast<float>(direction.y);
@@ -236,6 +271,8 @@ LeafCylinder cylinderAbout(const detail::QueryMeshData& data, const Vec3& direct
   const double inverse = 1.0 / dot(axis, axis);
   cylinder.low = std::numeric_limits<double>::infinity();
   cylinder.high = -cylinder.low;
+  std::array<std::array<double, 2>, 3 * detail::kFanout> points;  // (h, distance from the axis)
+  std::size_t count = 0;
   for (std::size_t k = from; k < to; ++k) {
     const Triangle t = data.triangle(k);
     for (const Vec3& v : {t.a, t.b, t.c}) {
@@ -243,20 +280,48 @@ LeafCylinder cylinderAbout(const detail::QueryMeshData& data, const Vec3& direct
       const double h = dot(axis, w);
       cylinder.low = std::min(cylinder.low, h);
       cylinder.high = std::max(cylinder.high, h);
-      cylinder.radius = std::max(cylinder.radius, length(w - axis * (h * inverse)));
+      points[count++] = {h, length(w - axis * (h * inverse))};
     }
   }
+  const std::span<std::array<double, 2>> measured(points.data(), count);
+  if (tapered) {
+    std::sort(measured.begin(), measured.end());
+    cylinder.taper =
+        static_cast<float>(leastMeanTaper(measured, (cylinder.low + cylinder.high) * 0.5));
+  }
+  // The radius at h = 0 for the taper as stored.
+  for (const auto& [h, l] : measured)
+    cylinder.radius = std::max(cylinder.radius, l - double{cylinder.taper} * h);
   return cylinder;
+}
+
+/// The vertex every triangle of [from, to) has (by its coordinates), if there is one.
+std::optional<Vec3> commonVertex(const detail::QueryMeshData& data, std::size_t from,
+                                 std::size_t to) {
+  const Triangle first = data.triangle(from);
+  for (const Vec3& v : {first.a, first.b, first.c}) {
+    bool everywhere = true;
+    for (std::size_t k = from + 1; k < to && everywhere; ++k) {
+      const Triangle t = data.triangle(k);
+      everywhere = t.a == v || t.b == v || t.c == v;
+    }
+    if (everywhere) return v;
+  }
+  return std::nullopt;
 }
 
 /// The cylinders of the leaves of node `node` of level 1 (query_mesh_data.h), each about an axis
 /// through the centre of the leaf's box in the node's octet (less the origin, as the octet is):
 /// the leaf's slab's normal, a flat disc around a patch of a surface; or, where its surface is
 /// less than half the disc's, the leaf's long direction (from the vertex farthest from the
-/// centre to the vertex farthest from that one), a thin rod around a fan of slivers. A cap of a
-/// cylinder triangulated as a fan from its centre puts every leaf's triangles from the centre to
-/// the rim: a point above the cap lay within the box and the disc of a fifth of the leaves, and
-/// a search took 97 µs on a fan of 16,384 slivers where it took 1.4 µs on one of 1,024.
+/// centre to the vertex farthest from that one), a thin rod around a strip of slivers; or, where
+/// the leaf's triangles meet in one vertex (a wedge of a fan) and its surface is less than half
+/// the disc's, the cone from the centre towards that vertex, its tip there. A cap of a cylinder
+/// triangulated as a fan from its centre puts every leaf's triangles from the centre to the rim:
+/// a point above the cap lay within the box and the disc of a fifth of the leaves, and a search
+/// took 97 µs on a fan of 16,384 slivers where it took 1.4 µs on one of 1,024; rods kept most of
+/// them out, but a point near the centre lay within the rod of every wedge (as wide at the
+/// centre as at the rim), which the cones, as thin as the wedges at every height, are not.
 detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size_t node) {
   const detail::BoxOctet& boxes = data.childOctets[0][node];
   detail::CylinderOctet cylinders{};  // empty slots: zeros (their boxes' centres are NaN)
@@ -268,7 +333,8 @@ detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size
     const Vec3 centre{(double{boxes.lowerX[i]} + double{boxes.upperX[i]}) * 0.5,
                       (double{boxes.lowerY[i]} + double{boxes.upperY[i]}) * 0.5,
                       (double{boxes.lowerZ[i]} + double{boxes.upperZ[i]}) * 0.5};
-    LeafCylinder cylinder = cylinderAbout(data, data.slabs[0][leaf].normal, centre, from, to);
+    LeafCylinder cylinder =
+        cylinderAbout(data, data.slabs[0][leaf].normal, centre, from, to, false);
     // The long direction: the two vertices farthest apart, nearly.
     const auto farthestFrom = [&](const Vec3& point) {
       Vec3 farthest = point;
@@ -285,9 +351,19 @@ detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size
     };
     const Vec3 end = farthestFrom(centre), start = farthestFrom(end);
     const Vec3 along = end - start;
+    const LeafCylinder disc = cylinder;
     if (const double size = length(along); size > 0.0 && std::isfinite(size)) {
-      const LeafCylinder rod = cylinderAbout(data, along / size, centre, from, to);
-      if (rod.surface() < 0.5 * cylinder.surface()) cylinder = rod;
+      const LeafCylinder rod = cylinderAbout(data, along / size, centre, from, to, false);
+      if (rod.surface() < 0.5 * disc.surface()) cylinder = rod;
+    }
+    // A wedge of a fan (its triangles meet in one vertex): a cone from the centre towards it,
+    // whose tip lies there.
+    if (const std::optional<Vec3> tip = commonVertex(data, from, to)) {
+      const Vec3 towards = (*tip - data.lanes.origin) - centre;
+      if (const double size = length(towards); size > 0.0 && std::isfinite(size)) {
+        const LeafCylinder cone = cylinderAbout(data, towards / size, centre, from, to, true);
+        if (cone.surface() < 0.5 * disc.surface()) cylinder = cone;
+      }
     }
     // The slack covers this rounding and the queries' (far above a few ulps of the box).
     cylinders.normalX[i] = cylinder.axis[0];
@@ -296,6 +372,14 @@ detail::CylinderOctet cylinderOctet(const detail::QueryMeshData& data, std::size
     cylinders.low[i] = roundedOutward(cylinder.low - data.slack, true);
     cylinders.high[i] = roundedOutward(cylinder.high + data.slack, false);
     cylinders.radius[i] = roundedOutward(cylinder.radius + data.slack, false);
+    cylinders.taper[i] = cylinder.taper;
+    // The offset of the least bound's height per unit of gap (query_mesh_data.h), to the
+    // nearest float: its rounding is covered there.
+    const double axisSquared = double{cylinder.axis[0]} * cylinder.axis[0] +
+                               double{cylinder.axis[1]} * cylinder.axis[1] +
+                               double{cylinder.axis[2]} * cylinder.axis[2];
+    const double taper = cylinder.taper;
+    cylinders.step[i] = static_cast<float>(taper / (1.0 / axisSquared + taper * taper));
   }
   return cylinders;
 }

@@ -12,6 +12,7 @@
 #include "delta/kernels/point_triangle.h"
 #include "delta/kernels/triangle_triangle.h"
 #include "delta/mesh/primitives.h"
+#include "delta/query/point_distance.h"
 #include "delta/query/query_mesh.h"
 
 #include "kernels/triangle_pairs.h"
@@ -174,6 +175,39 @@ TEST(Contacts, PreparedMeshesGiveTheSameContactsWhateverTheTriangleOrder) {
     ASSERT_EQ(prepared[k].second, flat[k].second) << k;
     EXPECT_NEAR(prepared[k].distance, flat[k].distance, 1e-12 * size) << k;
     EXPECT_TRUE(prepared[k].overlap || !flat[k].overlap) << k;
+  }
+}
+
+TEST(Contacts, OverlapsMarkedOncePerPointAreEachPointsOwn) {
+  // A box sunk 1e-9 into the centre of a CAD cylinder's fan cap (its bottom face parallel to
+  // the cap, not crossing it), and one resting 1e-12 above it: most contacts share a point (each
+  // sliver takes its centre vertex against the box's faces), which is asked for once. Each
+  // contact whose triangles do not cross is marked overlapping exactly where its point lies
+  // inside both meshes (their signed distances).
+  const QueryMesh cylinder(primitives::cylinder(1.0, 1.0, 500));
+  for (const double depth : {1e-9, -1e-12}) {
+    const QueryMesh box(primitives::box({1e-3, 1e-3, 1e-3}, {0, 0, 0.5 + 0.5e-3 - depth}));
+    const std::vector<ContactPoint> found = contacts(cylinder, box, 1e-6);
+    ASSERT_GT(found.size(), 500u) << depth;
+    std::vector<Vec3> points;
+    for (const ContactPoint& c : found)
+      points.push_back(c.x);
+    const PointQuery request{.signedDistance = true};
+    const auto inCylinder = distances(cylinder, points, request);
+    const auto inBox = distances(box, points, request);
+    std::size_t marked = 0;
+    for (std::size_t k = 0; k < found.size(); ++k) {
+      const Triangle a = cylinder.triangles().triangle(found[k].first);
+      const Triangle b = box.triangles().triangle(found[k].second);
+      if (kernels::trianglesIntersect(a, b)) continue;  // marked for crossing
+      EXPECT_EQ(found[k].overlap, inCylinder[k].inside && inBox[k].inside) << depth << " " << k;
+      marked += found[k].overlap;
+    }
+    if (depth > 0) {
+      EXPECT_GT(marked, 500u);
+    }
+    std::printf("[ stats    ] box %g deep: %zu contacts, %zu marked by their points\n", depth,
+                found.size(), marked);
   }
 }
 

@@ -284,5 +284,27 @@ TEST(LeafCylinder, RejectsMostLeavesTheBoxesAdmitAboveAFanOfSlivers) {
       << admitted.byCylinders << " of " << admitted.byBoxes;
 }
 
+TEST(LeafCylinder, NearAFansCentreTheConesAdmitFewLeaves) {
+  // Near a fan's centre every wedge of slivers reaches within the point's distance of it along
+  // its long direction, and a rod (a cylinder along the wedge, as wide as its rim) admitted a
+  // sixth of the leaves; a cone, as thin as the wedge at every height, admits the few around the
+  // point's foot.
+  const QueryMesh query(fan(16384, {0, 0, 0}));
+  std::mt19937_64 random(13);
+  std::uniform_real_distribution<double> exponent(-4.0, -1.0), angle(0.0, 2 * std::numbers::pi);
+  std::vector<Vec3> points;
+  for (int round = 0; round < 20; ++round) {
+    const double r = std::pow(10.0, exponent(random)), a = angle(random);
+    points.push_back({r * std::cos(a), r * std::sin(a), 1e-9});
+  }
+  const Admitted admitted = admittedLeaves(query, points);
+  EXPECT_GE(admitted.byCylinders, 20u);  // at least the leaf of the nearest triangle
+  EXPECT_LE(admitted.byCylinders, 3u * 20u) << admitted.byCylinders << " of " << admitted.byBoxes;
+  std::printf(
+      "[ stats    ] 20 points 1e-4 to 1e-1 from a fan's centre: the boxes admit %zu leaves, "
+      "the cones %zu\n",
+      admitted.byBoxes, admitted.byCylinders);
+}
+
 }  // namespace
 }  // namespace delta::detail

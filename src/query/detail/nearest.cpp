@@ -108,7 +108,7 @@ bool LeafCandidates::pack(const QueryMeshData& mesh, std::size_t found) {
              &BoxOctet::upperX, &BoxOctet::upperY, &BoxOctet::upperZ);
     copySlot(around, i, cylinders_.back(), slot, &CylinderOctet::normalX, &CylinderOctet::normalY,
              &CylinderOctet::normalZ, &CylinderOctet::low, &CylinderOctet::high,
-             &CylinderOctet::radius);
+             &CylinderOctet::radius, &CylinderOctet::taper, &CylinderOctet::step);
     leaves_[leaves_.size() - kFanout + slot] = leaf;
   }
   count_ = found;

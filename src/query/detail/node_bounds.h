@@ -111,6 +111,13 @@ struct Avx512Bounds {
                            double (&out)[kFanout]) noexcept {
     return notAbove(boxes(octet, point), prune, out);
   }
+  /// Whether any leaf of the octet has a cone (query_mesh_data.h's CylinderOctet): an octet of
+  /// cylinders only (every leaf of a smooth surface) takes the cylinders' bound, five operations
+  /// shorter than the cones' (W2 2.5% faster).
+  static bool tapered(const CylinderOctet& cylinders) {
+    return _mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(cylinders.taper), _mm256_setzero_ps(),
+                                            _CMP_NEQ_OQ)) != 0;
+  }
   /// raiseByCylinders (query_mesh_data.h), lane for lane.
   static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
                          double shrink, double prune, double (&out)[kFanout]) noexcept {
@@ -137,15 +144,30 @@ struct Avx512Bounds {
                   lz = _mm512_fnmadd_pd(nz, along, wz);
     const __m512d lateral =
         _mm512_sqrt_pd(_mm512_fmadd_pd(lx, lx, _mm512_fmadd_pd(ly, ly, _mm512_mul_pd(lz, lz))));
-    const __m512d across =
-        _mm512_max_pd(_mm512_sub_pd(_mm512_sub_pd(lateral, widened(cylinders.radius)), by), zero);
-    const __m512d height =
-        _mm512_max_pd(_mm512_sub_pd(_mm512_max_pd(_mm512_sub_pd(widened(cylinders.low), h),
-                                                  _mm512_sub_pd(h, widened(cylinders.high))),
-                                    by),
-                      zero);
-    const __m512d cylinder =
-        _mm512_fmadd_pd(_mm512_mul_pd(height, height), inverse, _mm512_mul_pd(across, across));
+    __m512d cylinder;
+    if (!tapered(cylinders)) {
+      // Cylinders only (the leaves of a smooth surface): their bound in five operations fewer.
+      const __m512d across =
+          _mm512_max_pd(_mm512_sub_pd(_mm512_sub_pd(lateral, widened(cylinders.radius)), by), zero);
+      const __m512d height =
+          _mm512_max_pd(_mm512_sub_pd(_mm512_max_pd(_mm512_sub_pd(widened(cylinders.low), h),
+                                                    _mm512_sub_pd(h, widened(cylinders.high))),
+                                      by),
+                        zero);
+      cylinder =
+          _mm512_fmadd_pd(_mm512_mul_pd(height, height), inverse, _mm512_mul_pd(across, across));
+    } else {
+      // raiseByCylinders' gap, clamped height offset x and what is left across
+      const __m512d taper = widened(cylinders.taper);
+      const __m512d gap = _mm512_sub_pd(
+          _mm512_fnmadd_pd(taper, h, _mm512_sub_pd(lateral, widened(cylinders.radius))), by);
+      const __m512d x = _mm512_min_pd(
+          _mm512_max_pd(_mm512_mul_pd(widened(cylinders.step), _mm512_max_pd(gap, zero)),
+                        _mm512_sub_pd(_mm512_sub_pd(widened(cylinders.low), by), h)),
+          _mm512_sub_pd(_mm512_add_pd(widened(cylinders.high), by), h));
+      const __m512d across = _mm512_max_pd(_mm512_fnmadd_pd(taper, x, gap), zero);
+      cylinder = _mm512_fmadd_pd(_mm512_mul_pd(x, x), inverse, _mm512_mul_pd(across, across));
+    }
     return notAbove(_mm512_max_pd(cylinder, box), prune, out);  // the box where it is NaN
   }
   static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
@@ -197,10 +219,15 @@ struct Avx2Bounds {
                            double (&out)[kFanout]) noexcept {
     return notAbove(boxes<0>(octet, point), boxes<4>(octet, point), prune, out);
   }
+  /// Avx512Bounds::tapered.
+  static bool tapered(const CylinderOctet& cylinders) {
+    return _mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(cylinders.taper), _mm256_setzero_ps(),
+                                            _CMP_NEQ_OQ)) != 0;
+  }
   /// Avx512Bounds::leaves of lanes H to H + 3.
   template <std::size_t H>
   static __m256d leafBounds(const BoxOctet& octet, const CylinderOctet& cylinders,
-                            const Vec3& point, double shrink) {
+                            const Vec3& point, double shrink, bool cones) {
     const __m256d box = boxes<H>(octet, point);
     const __m256d half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(),
                   by = _mm256_set1_pd(shrink);
@@ -224,21 +251,35 @@ struct Avx2Bounds {
                   lz = _mm256_fnmadd_pd(nz, along, wz);
     const __m256d lateral =
         _mm256_sqrt_pd(_mm256_fmadd_pd(lx, lx, _mm256_fmadd_pd(ly, ly, _mm256_mul_pd(lz, lz))));
-    const __m256d across = _mm256_max_pd(
-        _mm256_sub_pd(_mm256_sub_pd(lateral, widened<H>(cylinders.radius)), by), zero);
-    const __m256d height =
-        _mm256_max_pd(_mm256_sub_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(cylinders.low), h),
-                                                  _mm256_sub_pd(h, widened<H>(cylinders.high))),
-                                    by),
-                      zero);
-    const __m256d cylinder =
-        _mm256_fmadd_pd(_mm256_mul_pd(height, height), inverse, _mm256_mul_pd(across, across));
+    __m256d cylinder;
+    if (!cones) {
+      const __m256d across = _mm256_max_pd(
+          _mm256_sub_pd(_mm256_sub_pd(lateral, widened<H>(cylinders.radius)), by), zero);
+      const __m256d height =
+          _mm256_max_pd(_mm256_sub_pd(_mm256_max_pd(_mm256_sub_pd(widened<H>(cylinders.low), h),
+                                                    _mm256_sub_pd(h, widened<H>(cylinders.high))),
+                                      by),
+                        zero);
+      cylinder =
+          _mm256_fmadd_pd(_mm256_mul_pd(height, height), inverse, _mm256_mul_pd(across, across));
+    } else {
+      const __m256d taper = widened<H>(cylinders.taper);
+      const __m256d gap = _mm256_sub_pd(
+          _mm256_fnmadd_pd(taper, h, _mm256_sub_pd(lateral, widened<H>(cylinders.radius))), by);
+      const __m256d x = _mm256_min_pd(
+          _mm256_max_pd(_mm256_mul_pd(widened<H>(cylinders.step), _mm256_max_pd(gap, zero)),
+                        _mm256_sub_pd(_mm256_sub_pd(widened<H>(cylinders.low), by), h)),
+          _mm256_sub_pd(_mm256_add_pd(widened<H>(cylinders.high), by), h));
+      const __m256d across = _mm256_max_pd(_mm256_fnmadd_pd(taper, x, gap), zero);
+      cylinder = _mm256_fmadd_pd(_mm256_mul_pd(x, x), inverse, _mm256_mul_pd(across, across));
+    }
     return _mm256_max_pd(cylinder, box);  // the box where it is NaN
   }
   static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
                          double shrink, double prune, double (&out)[kFanout]) noexcept {
-    return notAbove(leafBounds<0>(octet, cylinders, point, shrink),
-                    leafBounds<4>(octet, cylinders, point, shrink), prune, out);
+    const bool cones = tapered(cylinders);  // the whole octet's, as AVX-512 decides it
+    return notAbove(leafBounds<0>(octet, cylinders, point, shrink, cones),
+                    leafBounds<4>(octet, cylinders, point, shrink, cones), prune, out);
   }
   static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],
                              unsigned present, double& prune) noexcept {
@@ -273,6 +314,10 @@ struct NeonBounds {
   /// x86's maximum: a where a > b, else b.
   static float64x2_t maximum(float64x2_t a, float64x2_t b) {
     return vbslq_f64(vcgtq_f64(a, b), a, b);
+  }
+  /// x86's minimum: a where a < b, else b.
+  static float64x2_t minimum(float64x2_t a, float64x2_t b) {
+    return vbslq_f64(vcltq_f64(a, b), a, b);
   }
   template <std::size_t H>
   static float64x2_t boxes(const BoxOctet& boxes, const Vec3& point) {
@@ -312,10 +357,17 @@ struct NeonBounds {
                                    boxes<4>(octet, point), boxes<6>(octet, point)};
     return notAbove(bounds, prune, out);
   }
+  /// Avx512Bounds::tapered.
+  static bool tapered(const CylinderOctet& cylinders) {
+    const float32x4_t zero = vdupq_n_f32(0.0f);
+    const uint32x4_t low = vmvnq_u32(vceqq_f32(vld1q_f32(cylinders.taper), zero));
+    const uint32x4_t high = vmvnq_u32(vceqq_f32(vld1q_f32(cylinders.taper + 4), zero));
+    return vmaxvq_u32(vorrq_u32(low, high)) != 0;
+  }
   /// Avx512Bounds::leaves of lanes H and H + 1.
   template <std::size_t H>
   static float64x2_t leafBounds(const BoxOctet& octet, const CylinderOctet& cylinders,
-                                const Vec3& point, double shrink) {
+                                const Vec3& point, double shrink, bool cones) {
     const float64x2_t box = boxes<H>(octet, point);
     const float64x2_t half = vdupq_n_f64(0.5), zero = vdupq_n_f64(0.0), by = vdupq_n_f64(shrink);
     const float64x2_t wx =
@@ -337,22 +389,37 @@ struct NeonBounds {
     const float64x2_t lx = vfmsq_f64(wx, nx, along), ly = vfmsq_f64(wy, ny, along),
                       lz = vfmsq_f64(wz, nz, along);
     const float64x2_t lateral = vsqrtq_f64(vfmaq_f64(vfmaq_f64(vmulq_f64(lz, lz), ly, ly), lx, lx));
-    const float64x2_t across =
-        maximum(vsubq_f64(vsubq_f64(lateral, widened<H>(cylinders.radius)), by), zero);
-    const float64x2_t height = maximum(vsubq_f64(maximum(vsubq_f64(widened<H>(cylinders.low), h),
-                                                         vsubq_f64(h, widened<H>(cylinders.high))),
-                                                 by),
-                                       zero);
-    const float64x2_t cylinder =
-        vfmaq_f64(vmulq_f64(across, across), vmulq_f64(height, height), inverse);
+    float64x2_t cylinder;
+    if (!cones) {
+      const float64x2_t across =
+          maximum(vsubq_f64(vsubq_f64(lateral, widened<H>(cylinders.radius)), by), zero);
+      const float64x2_t height =
+          maximum(vsubq_f64(maximum(vsubq_f64(widened<H>(cylinders.low), h),
+                                    vsubq_f64(h, widened<H>(cylinders.high))),
+                            by),
+                  zero);
+      cylinder = vfmaq_f64(vmulq_f64(across, across), vmulq_f64(height, height), inverse);
+    } else {
+      // (lateral − radius) − taper·h and gap − taper·x, fused as AVX's fnmadd
+      const float64x2_t taper = widened<H>(cylinders.taper);
+      const float64x2_t gap =
+          vsubq_f64(vfmsq_f64(vsubq_f64(lateral, widened<H>(cylinders.radius)), taper, h), by);
+      const float64x2_t x =
+          minimum(maximum(vmulq_f64(widened<H>(cylinders.step), maximum(gap, zero)),
+                          vsubq_f64(vsubq_f64(widened<H>(cylinders.low), by), h)),
+                  vsubq_f64(vaddq_f64(widened<H>(cylinders.high), by), h));
+      const float64x2_t across = maximum(vfmsq_f64(gap, taper, x), zero);
+      cylinder = vfmaq_f64(vmulq_f64(across, across), vmulq_f64(x, x), inverse);
+    }
     return maximum(cylinder, box);  // the box where it is NaN
   }
   static unsigned leaves(const BoxOctet& octet, const CylinderOctet& cylinders, const Vec3& point,
                          double shrink, double prune, double (&out)[kFanout]) noexcept {
-    const float64x2_t bounds[4] = {leafBounds<0>(octet, cylinders, point, shrink),
-                                   leafBounds<2>(octet, cylinders, point, shrink),
-                                   leafBounds<4>(octet, cylinders, point, shrink),
-                                   leafBounds<6>(octet, cylinders, point, shrink)};
+    const bool cones = tapered(cylinders);
+    const float64x2_t bounds[4] = {leafBounds<0>(octet, cylinders, point, shrink, cones),
+                                   leafBounds<2>(octet, cylinders, point, shrink, cones),
+                                   leafBounds<4>(octet, cylinders, point, shrink, cones),
+                                   leafBounds<6>(octet, cylinders, point, shrink, cones)};
     return notAbove(bounds, prune, out);
   }
   static unsigned candidates(double (&lower)[kFanout], const double (&upper)[kFanout],

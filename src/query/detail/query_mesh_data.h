@@ -75,19 +75,29 @@ inline void distancesSquared(const BoxOctet& boxes, const Vec3& point,
   return mask;
 }
 
-/// The leaves' oriented cylinders, eight side by side (one block per node of level 1, beside its
-/// BoxOctet): each leaf's triangles lie within heights [low, high] along `normal` (single
-/// precision, not quite unit: n) from the centre c of the leaf's box in the octet, and within
-/// `radius` of the axis through c along n. A far point's search reaches the leaves around its
-/// nearest point, whose boxes, as thick as they are wide wherever the surface is not axis-aligned,
-/// come closer to it than their triangles; the cylinder of a patch nearly flat is about as thin as
-/// the patch. For a point p, w = p − c, h = n·w, s = n·n and the lateral l = w − n·h/s:
-///   distance² ≥ max(low − h, h − high, 0)² / s + max(|l| − radius, 0)²
-/// (Pythagoras along n / √s and across it). Built from the double vertices and widened by the
-/// slack, rounded outward; empty slots' boxes make c NaN, whose bound the caller ignores.
+/// The leaves' oriented cylinders and cones, eight side by side (one block per node of level 1,
+/// beside its BoxOctet): each leaf's triangles lie within heights [low, high] along `normal`
+/// (single precision, not quite unit: n) from the centre c of the leaf's box in the octet, and
+/// within radius + taper·h of the axis through c along n at height h (a cylinder where taper is
+/// 0). A far point's search reaches the leaves around its nearest point, whose boxes, as thick as
+/// they are wide wherever the surface is not axis-aligned, come closer to it than their
+/// triangles; the cylinder of a patch nearly flat is about as thin as the patch, and the cone of
+/// a fan's wedge of slivers is as thin as the wedge at every height (a cylinder around it is as
+/// wide as its rim, and a point near the fan's centre lies within the cylinders of every wedge).
+/// For a point p, w = p − c, h = n·w, s = n·n, the lateral l = w − n·h/s and the gap
+/// g = |l| − radius − taper·h, every point y of the leaf, at height h + x, has |l_y| ≤ radius +
+/// taper·(h + x), so |p − y|² ≥ x²/s + max(g − taper·x, 0)² (Pythagoras along n / √s and across
+/// it), a convex function of x whose least value over x ∈ [low − h, high − h] bounds distance²:
+/// at x = clamp(step·max(g, 0), low − h, high − h), step = taper/(1/s + taper²) (its unconstrained
+/// minimum; for a cylinder x = 0 clamped, the bound max(low − h, h − high, 0)²/s + max(g, 0)²).
+/// `step` is stored rounded to single precision: a minimum taken a relative 2⁻²⁴ off its place
+/// raises the bound by at most 2⁻⁴⁸·k² of itself (k = taper·√s, at most 1), far within the
+/// shrink. Built from the double vertices and widened by the slack, rounded outward; empty slots'
+/// boxes make c NaN, whose bound the caller ignores.
 struct alignas(64) CylinderOctet {
   float normalX[kFanout], normalY[kFanout], normalZ[kFanout];
   float low[kFanout], high[kFanout], radius[kFanout];
+  float taper[kFanout], step[kFanout];
 };
 using CylinderOctets = std::vector<CylinderOctet, AlignedAllocator<CylinderOctet, 64>>;
 
@@ -105,11 +115,14 @@ inline void raiseByCylinders(const BoxOctet& boxes, const CylinderOctet& cylinde
     const double h = nx * wx + ny * wy + nz * wz;
     const double along = h * inverse;
     const double lx = wx - nx * along, ly = wy - ny * along, lz = wz - nz * along;
-    const double across = std::max(
-        std::sqrt(lx * lx + ly * ly + lz * lz) - double{cylinders.radius[i]} - shrink, 0.0);
-    const double height = std::max(
-        std::max(double{cylinders.low[i]} - h, h - double{cylinders.high[i]}) - shrink, 0.0);
-    const double bound = height * height * inverse + across * across;
+    const double taper = cylinders.taper[i];
+    const double gap =
+        std::sqrt(lx * lx + ly * ly + lz * lz) - double{cylinders.radius[i]} - taper * h - shrink;
+    const double x = std::min(std::max(double{cylinders.step[i]} * std::max(gap, 0.0),
+                                       double{cylinders.low[i]} - shrink - h),
+                              double{cylinders.high[i]} + shrink - h);
+    const double across = std::max(gap - taper * x, 0.0);
+    const double bound = x * x * inverse + across * across;
     out[i] = std::max(out[i], bound);
   }
 }
