@@ -28,8 +28,12 @@ Vec3 orthogonalUnit(const Vec3& d) noexcept {
   return unit(cross(w, axis));  // |w × axis| ≥ √(2/3): the smallest component of w is ≤ 1/√3
 }
 
-/// Centres closer than this to the triangle (relative to the frame's scale) count as on it.
-constexpr double kOnTriangleUlps = 8.0;
+/// Centres closer than this to the triangle (relative to the frame's scale) count as on it: the
+/// face test near an edge (robust_geometry.h's insideLocalFace) defers to the edges within its
+/// rounding, about 100 to 400 ulps of the scale for a well-shaped triangle, and a centre on the
+/// face there took the direction from the edge, in the face's plane (an audit: a centre 2⁻⁴⁶ from
+/// an edge of the unit triangle, on it, got (0, 1, 0) for (0, 0, 1); 8 ulps were the bound then).
+constexpr double kOnTriangleUlps = 1024.0;
 
 }  // namespace
 

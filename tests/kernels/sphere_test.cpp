@@ -104,6 +104,25 @@ TEST(SphereContact, CentreOnTheTriangleGetsTheFaceNormal) {
   expectNear(onEdge.normal, {0, 0, 1}, 1e-15);
 }
 
+TEST(SphereContact, CentreOnTheFaceBesideAnEdgeGetsTheFaceNormal) {
+  // An audit's cases: beside an edge the face's test defers to the edges within its rounding,
+  // and a centre on the face 2⁻⁴⁶ from the edge got the edge's direction, in the face's plane.
+  const auto on = sphereTriangle({{0x1p-1, 0x1p-46, 0}, 0x1p-2}, kUnit);
+  expectNear(on.normal, {0, 0, 1}, 1e-15);
+  EXPECT_NEAR(on.gap, -0.25, 1024 * std::numeric_limits<double>::epsilon());  // to its rounding
+  expectNear(sphereTriangle({{0x1p-1, 0x1p-46, 0x1p-46}, 0x1p-2}, kUnit).normal, {0, 0, 1}, 1e-15);
+  expectNear(sphereTriangle({{0x1p-1, 0x1p-46, 0x1p-44}, 0x1p-2}, kUnit).normal, {0, 0, 1}, 1e-15);
+  // Every edge, on the face and just below it, 2⁻⁵⁰ to 2⁻⁴³ in from the edge.
+  for (int exponent = -50; exponent <= -43; ++exponent) {
+    const double in = std::ldexp(1.0, exponent);
+    for (const Vec3& centre :
+         {Vec3{0.25, in, 0}, Vec3{in, 0.5, 0}, Vec3{0.5 - in, 0.5 - in, 0}, Vec3{0.25, in, -in}}) {
+      const auto r = sphereTriangle({centre, 0.1}, kUnit);
+      EXPECT_NEAR(std::fabs(r.normal.z), 1.0, 1e-15) << exponent << " " << toString(centre);
+    }
+  }
+}
+
 TEST(SphereContact, ZeroAreaTriangles) {
   const Triangle segment{{0, 0, 0}, {2, 0, 0}, {1, 0, 0}};
   const auto on = sphereTriangle({{1, 0, 0}, 0.5}, segment);

@@ -140,6 +140,24 @@ std::vector<Scene> scenes() {
   all.push_back({"box", box, randomSpheres(box, 300, 0.3, 0.01, 0.2, 2), 0.02});
   const Mesh cylinder = primitives::cylinder(1, 2, 40);
   all.push_back({"cylinder", cylinder, randomSpheres(cylinder, 300, 0.4, 0.02, 0.3, 3), 0.01});
+  // Long slivers turned out of the axes (a CAD cylinder's caps and wall), whose boxes are as
+  // wide as they are long: the tree's slabs keep them out.
+  Mesh turned = primitives::cylinder(1, 2, 400);
+  turned.rotate({1, 2, 3}, 0.7);
+  all.push_back({"turned cylinder of 400 segments", turned,
+                 randomSpheres(turned, 300, 0.3, 0.005, 0.2, 5), 0.01});
+  // Spheres far larger than the mesh whose surfaces pass through it, many along its diagonals,
+  // where their boxes meet every node's.
+  Random random(6);
+  std::vector<Sphere> large(300);
+  for (Sphere& sphere : large) {
+    const Vec3 along =
+        normalized(Vec3{random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1)} +
+                   Vec3{1, 1, 1} * random.uniform(0, 2));
+    sphere.radius = std::pow(10.0, random.uniform(1, 3));
+    sphere.center = along * (sphere.radius + random.uniform(0.6, 1.3));
+  }
+  all.push_back({"spheres far larger than the mesh", icosphere, large, 0.01});
   Mesh granulate = primitives::granulate(11, {2, 1.5, 1}, 300);
   granulate.rotate({1, 2, 3}, 0.7).translate({1e6, -1e6, 5e5});
   all.push_back({"granulate far from the origin", granulate,
@@ -441,6 +459,24 @@ TEST(SphereContacts, BadInputThrows) {
       EXPECT_NE(std::string(error.what()).find("sphere 2 "), std::string::npos) << error.what();
     }
   }
+}
+
+TEST(SphereContacts, TrianglesTooSmallForTheKernelAreRefusedInEveryForm) {
+  // An audit's case: a triangle 1e-100 across (below 2⁻²⁰⁰, where the kernel's products
+  // underflow) and a sphere overlapping it. The flattened form refused it; the prepared form
+  // answered no contact (the kernel's gap +6.9e-102, exactly −1e-101).
+  const double side = 0x1.bff2ee48e053p-333;
+  const Mesh mesh({{0, 0, 0}, {side, 0, 0}, {0, side, 0}, {1, 1, 1}, {2, 1, 1}, {1, 2, 1}},
+                  {{0, 1, 2}, {3, 4, 5}});
+  const Sphere sphere{{0x1.bff2ee48e053p-335, 0x1.bff2ee48e053p-335, 0x1.665bf1d3e6a8dp-336},
+                      0x1.665bf1d3e6a8dp-335};
+  const double epsilon = 1e-300;
+  EXPECT_THROW(sphereContacts(sphere, flatten(mesh), epsilon), Error);
+  const QueryMesh query(mesh);  // the point queries take it (they scale such triangles up)
+  EXPECT_THROW(sphereContacts(std::span<const Sphere>(&sphere, 1), query, epsilon), Error);
+  SphereContactCache cache(0.1);
+  std::vector<ContactPoint> out;
+  EXPECT_THROW(sphereContacts(sphere, query, epsilon, cache, out), Error);
 }
 
 TEST(SphereContacts, SameResultForOneAndTwoOmpThreads) {

@@ -18,7 +18,8 @@ struct SphereContactResult {
 };
 
 /// Sphere–sphere. Concentric spheres get the normal +x (any direction is correct). Lengths are
-/// computed with scaling, so centres 1e-300 or 1e300 apart work too. gap = |c₁ − c₂| − r₁ − r₂:
+/// computed with scaling, so centres 1e-300 or 1e300 apart work too (but centres whose
+/// difference overflows, as ±1.8e308, give NaN). gap = |c₁ − c₂| − r₁ − r₂:
 /// negative, by the depth, where the balls overlap (one inside the other included). Radii are
 /// not checked: a radius of 0 is a point; the queries that take spheres require positive ones.
 ///
@@ -26,13 +27,21 @@ struct SphereContactResult {
 SphereContactResult sphereSphere(const Sphere& first, const Sphere& second) noexcept;
 
 /// Sphere–triangle (solid triangle). A centre on the triangle gets the face normal (for a
-/// zero-area triangle, any unit vector orthogonal to it, or +x for a point).
+/// triangle of zero area within rounding, |(b − a) × (c − a)| ≤ 4ε·L², L its longest edge: any
+/// unit vector orthogonal to its longest edge, or +x for a point).
 ///
-/// "On the triangle" means within 8ε of the scale (the centre's distance from triangle.a plus
-/// the longest edge), where the direction to the closest point is rounding noise; the face
-/// normal is then (b − a) × (c − a), normalised. Otherwise the normal is the unit vector from
-/// the closest point (`q`) to the centre, gap = |centre − q| − radius. Never NaN for finite input.
-/// A zero-area triangle is its longest edge or its point (closestPointOnTriangle).
+/// "On the triangle" means within 1024ε of the scale (the centre's distance from triangle.a plus
+/// the longest edge), where the direction to the closest point is rounding noise (beside an edge
+/// the face's own test is that uncertain); the face normal is then (b − a) × (c − a), normalised.
+/// Otherwise the normal is the unit vector from the closest point (`q`) to the centre, gap =
+/// |centre − q| − radius. A zero-area triangle is its longest edge or its point
+/// (closestPointOnTriangle).
+///
+/// Range: the answers hold, never NaN, for coordinates, radii and triangle sizes between 2⁻²⁰⁰
+/// and 2²⁰⁰ in magnitude (coordinate_range.h; the queries check it, the kernel does not): beyond
+/// it squares and products of degree 4 underflow or overflow, and an answer can be wrong (an
+/// audit: 0.2 of the distance for a triangle 1e-100 across), or NaN where coordinate differences
+/// overflow.
 ///
 /// Threading: a pure function; safe from any thread.
 SphereContactResult sphereTriangle(const Sphere& sphere, const Triangle& triangle) noexcept;
