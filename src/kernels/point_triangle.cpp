@@ -140,7 +140,16 @@ PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triang
     if (const std::optional<PointTriangleResult> tiny =
             closestOnTinyTriangle(p, triangle, local.vertex[1], local.vertex[2]))
       return *tiny;
-  PointTriangleResult result = detail::closestOnLocalTriangle(p - origin, local);
+  const Vec3 r = p - origin;
+  detail::FaceAreas areas;
+  unsigned nearEdges = 0;
+  detail::FaceSide side = detail::sideOfLocalFace(r, local, areas, nearEdges);
+  if (side == detail::FaceSide::kNearEdge)
+    side = detail::insideNearEdges(p, triangle, nearEdges) ? detail::FaceSide::kInside
+                                                           : detail::FaceSide::kOutside;
+  PointTriangleResult result = side == detail::FaceSide::kInside
+                                   ? detail::projectOntoLocalFace(r, local, areas)
+                                   : detail::closestOnLocalEdges(r, local);
   result.closest += origin;
   // A point exactly on a vertex or an edge is at distance 0 from every triangle that has it, but
   // the projection above leaves a rounding error's distance that differs between them (a plain

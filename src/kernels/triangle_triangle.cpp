@@ -28,6 +28,9 @@ struct LocalPair {
   LocalTriangle first;
   LocalTriangle second;
   double touching = 0.0;  ///< τ
+  /// The triangles as given (for the exact face test, faceCandidate).
+  const Triangle* givenFirst = nullptr;
+  const Triangle* givenSecond = nullptr;
 };
 
 LocalPair makeLocalPair(const Triangle& a, const Triangle& b) noexcept {
@@ -40,6 +43,8 @@ LocalPair makeLocalPair(const Triangle& a, const Triangle& b) noexcept {
     for (const Vec3& v : t->vertex)
       largest = std::max({largest, std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
   pair.touching = kTouchingUlps * detail::kEpsilon * largest;
+  pair.givenFirst = &a;
+  pair.givenSecond = &b;
   return pair;
 }
 
@@ -288,6 +293,27 @@ void edgeCoordinates(int i, double s, double& u, double& v) noexcept {
   }
 }
 
+/// Corner i (0, 1, 2: a, b, c) of t.
+const Vec3& cornerOf(const Triangle& t, int i) noexcept {
+  return i == 0 ? t.a : i == 1 ? t.b : t.c;
+}
+
+/// The projection of local vertex `v` (`given` as given) onto the face of local triangle `t`
+/// (`triangle` as given) into `result`, where it falls inside (closestPointOnTriangle's face
+/// test: the rounded areas, and exact signs within their rounding of an edge's line); false
+/// otherwise.
+bool faceCandidate(const Vec3& v, const Vec3& given, const LocalTriangle& t,
+                   const Triangle& triangle, PointTriangleResult& result) noexcept {
+  detail::FaceAreas areas;
+  unsigned nearEdges = 0;
+  const detail::FaceSide side = detail::sideOfLocalFace(v, t, areas, nearEdges);
+  if (side == detail::FaceSide::kOutside ||
+      (side == detail::FaceSide::kNearEdge && !detail::insideNearEdges(given, triangle, nearEdges)))
+    return false;
+  result = detail::projectOntoLocalFace(v, t, areas);
+  return true;
+}
+
 /// Candidates 0–2: vertex i of the first triangle onto the second's face; 3–5: vertex i of the
 /// second onto the first's face; 6–14: edge (index − 6) / 3 of the first to edge (index − 6) % 3
 /// of the second. A vertex–face candidate whose projection falls outside the face (or onto a flat
@@ -297,13 +323,15 @@ Candidate candidate(const LocalPair& pair, int index) noexcept {
   PointTriangleResult r;
   if (index < 3) {
     const Vec3& v = pair.first.vertex[index];
-    if (!detail::closestOnLocalFace(v, pair.second, r)) return c;
+    if (!faceCandidate(v, cornerOf(*pair.givenFirst, index), pair.second, *pair.givenSecond, r))
+      return c;
     c.p = v, c.q = r.closest, c.distanceSquared = r.distanceSquared;
     vertexCoordinates(index, c.a1, c.a2);
     c.a3 = r.u, c.a4 = r.v;
   } else if (index < 6) {
     const Vec3& v = pair.second.vertex[index - 3];
-    if (!detail::closestOnLocalFace(v, pair.first, r)) return c;
+    if (!faceCandidate(v, cornerOf(*pair.givenSecond, index - 3), pair.first, *pair.givenFirst, r))
+      return c;
     c.p = r.closest, c.q = v, c.distanceSquared = r.distanceSquared;
     c.a1 = r.u, c.a2 = r.v;
     vertexCoordinates(index - 3, c.a3, c.a4);

@@ -171,6 +171,40 @@ TEST(PointTriangle, PointsOverANeedleNearItsShortEdgeAreOverTheFace) {
   }
 }
 
+TEST(PointTriangle, PointsWhoseProjectionLiesWithinRoundingOfAnEdgeAreExact) {
+  // Where the rounded areas leave the projection within their rounding of an edge's line, the
+  // edges answered: for a point over the face there, its distance to that edge, up to 783·ε·(size
+  // + d) too far on this sweep (points within 600ε·(|a| + 2L) of an edge's line, on either side,
+  // at heights from 0 to that band's width, triangles turned at offsets up to 1e3). Now exact signs
+  // decide the side, and either answer is the plane's or the edge's to a few ε.
+  test::PairRandom random(7);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < test::scaledCount(20000); ++i) {
+    const double offset = std::pow(10.0, random.uniform(0, 3));
+    const double length = std::pow(10.0, random.uniform(-1, 1));
+    const Vec3 a = random.unitVector() * offset;
+    const Triangle t{a, a + random.unitVector() * length,
+                     a + random.unitVector() * (length * random.uniform(0.05, 1.05))};
+    const Vec3 corner[3] = {t.a, t.b, t.c};
+    const Vec3 start = corner[i % 3], edge = corner[(i + 1) % 3] - start;
+    const Vec3 normal = normalized(t.areaVector());
+    const Vec3 inward = normalized(cross(normal, edge));
+    const double band = 600.0 * kEpsilon * (offset + 2.0 * length);
+    const double height = i % 7 == 0 ? 0.0 : band * std::pow(10.0, random.uniform(-4, 0));
+    const Vec3 p = start + edge * random.uniform(0.05, 0.95) +
+                   inward * (band * random.uniform(-0.1, 1.1)) +
+                   normal * (random.below(2) == 0 ? height : -height);
+    const double exact = std::sqrt(test::exactSquaredDistance(p, t));
+    const double size = std::max(length, std::sqrt(lengthSquared(p - t.a)));
+    const double error =
+        std::fabs(std::sqrt(closestPointOnTriangle(p, t).distanceSquared) - exact) /
+        (kEpsilon * (size + exact));
+    worst = std::max(worst, error);
+    ASSERT_LE(error, 16.0) << pasteablePoint(p, t);
+  }
+  std::printf("[ stats    ] beside an edge: max |d - exact| = %.3g eps (size + d)\n", worst);
+}
+
 TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
   const Vec3 o{-1e6, 2e6, 3e6};
   const Triangle t{o, o + Vec3{2, 0, 0}, o + Vec3{0, 2, 0}};

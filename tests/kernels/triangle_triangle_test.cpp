@@ -326,6 +326,37 @@ TEST(TriangleDistance, NeedlesAreNeitherPiercedBeyondTheirTipsNorMeasuredPastThe
   }
 }
 
+TEST(TriangleDistance, AVertexOverTheFaceWithinRoundingOfAnEdgeIsMeasuredToTheFace) {
+  // A vertex whose projection lies within the rounded areas' rounding of an edge's line, just
+  // over the face: its face candidate was dropped and the edges measured it, up to some 2⁸ε of
+  // the size too far (here above the touching tolerance, 32ε of the size). The exact signs of
+  // the point kernel's face test now decide it.
+  test::PairRandom random(29);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < test::scaledCount(4000); ++i) {
+    const double offset = std::pow(10.0, random.uniform(0, 3));
+    const Vec3 a = random.unitVector() * offset;
+    const Triangle t{a, a + random.unitVector(), a + random.unitVector() * random.uniform(0.3, 1)};
+    const Vec3 corner[3] = {t.a, t.b, t.c};
+    const Vec3 start = corner[i % 3], edge = corner[(i + 1) % 3] - start;
+    const Vec3 normal = normalized(t.areaVector());
+    const Vec3 inward = normalized(cross(normal, edge));
+    const double band = 600.0 * kEpsilon * (offset + 2.0);
+    const Vec3 tip = start + edge * random.uniform(0.2, 0.8) + inward * (band * random.uniform()) +
+                     normal * (band * std::pow(10.0, random.uniform(-3, 0)));
+    // The other corners far above the face, leaning inward: the tip is the nearest feature.
+    const Triangle above{tip, tip + (normal + inward * 0.5) * 0.5,
+                         tip + (normal + inward * 0.5 + normalized(edge) * 0.3) * 0.5};
+    const double exact = std::sqrt(test::exactSquaredDistance(t, above));
+    const double error =
+        std::fabs(std::sqrt(triangleDistanceBruteForce(t, above).distanceSquared) - exact) /
+        (kEpsilon * (offset + 2.0));
+    worst = std::max(worst, error);
+    ASSERT_LE(error, 16.0) << pasteable(t, above);
+  }
+  std::printf("[ stats    ] vertex beside an edge: max |d - exact| = %.3g eps (size)\n", worst);
+}
+
 TEST(TriangleDistance, EdgesCrossingNearABoundaryWithinItsRoundingIntersect) {
   // An audit's pairs: an edge crossing the other triangle within the rounding of the inside
   // test, which measured them to the boundary they cross near: 9.4e-12 apart (L = 7.1, 1e3 from

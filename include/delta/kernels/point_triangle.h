@@ -46,25 +46,26 @@ inline constexpr double kTinyTriangleSquared = 0x1p-300;
 /// (Ericson, Real-Time Collision Detection, 5.1.5). A zero-area triangle degrades to its longest
 /// edge (a segment) or to a point; the result is never NaN for finite input.
 ///
-/// Precisely: the face is chosen when the projection of `p` lies inside all three edges by more
-/// than the rounding of the areas that decide it, and the closest point is then that projection
-/// (`feature` Face); otherwise it is the closest point of the nearest edge (an edge feature, or a
-/// vertex feature when it is an end of that edge), within rounding of the projection where that
-/// lies inside by less. (Beyond the tip of a needle the edges' lines lie within rounding of each
-/// other: a point there measured to the face's plane came out up to 10⁷ times the accuracy below
-/// too close.) `u, v ≥ 0` and `u + v ≤ 1` (to an ulp) always.
+/// Precisely: the face is chosen when the projection of `p` lies inside all three edges, and the
+/// closest point is then that projection (`feature` Face); otherwise it is the closest point of
+/// the nearest edge (an edge feature, or a vertex feature when it is an end of that edge). The
+/// side of each edge's line comes from the rounded area that decides it where that lies beyond
+/// its rounding, and from an exact sign of the given coordinates where it does not (a projection
+/// within that rounding of an edge's line), for coordinates within the coordinate range and 0 or
+/// at least 2⁻²⁵⁰ in magnitude; for others the edges answer there, up to about
+/// 2⁸ε·(|p − a| + 2L) too far. (Beyond the tip of a needle the edges' lines lie within rounding
+/// of each other: a point there measured to the face's plane came out up to 10⁷ times the
+/// accuracy below too close.) `u, v ≥ 0` and `u + v ≤ 1` (to an ulp) always.
 ///
 /// Robustness: computed in the frame of `triangle.a`, with the face normal accurate to a few ulps
 /// of itself (error-free edge differences and fused multiply–adds), so slivers are handled: the
 /// distance is within a few ε·(size + distance) of the exact distance of the stored input, near
-/// the origin or at 1e6, but for a point whose projection lies inside within the areas' rounding
-/// bound of an edge's line, measured to the edge: up to about 2⁸ε·(|p − a| + 2L) too far (an
-/// audit's sweep of points on and near the edges of strips, fans and cylinders turned at 1e3
-/// found up to 205ε·(size + distance); the bound is derived, not tight). A triangle whose area is
-/// zero within rounding (|normal| ≤ 4ε·L², L its longest edge) is the union of its edges. For a
-/// needle of height h the closest point stays accurate, but (u, v) carry the needle's conditioning,
-/// an error of order ε·L/h (the point a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the
-/// needle).
+/// the origin or at 1e6 (points within rounding of edges' lines, triangles turned at offsets up
+/// to 1e3: 5ε·(size + distance) at most in the tests' sweep, where the rounded face test alone
+/// gave up to 783ε). A triangle whose area is zero within rounding (|normal| ≤ 4ε·L², L its
+/// longest edge) is the union of its edges. For a needle of height h the closest point stays
+/// accurate, but (u, v) carry the needle's conditioning, an error of order ε·L/h (the point
+/// a + u·(b − a) + v·(c − a) can then be off by ε·L²/h along the needle).
 ///
 /// A point on the triangle (within rounding) gets distance 0, or a rounding error's, and itself
 /// as the closest point. A point exactly on a vertex or an edge (in exact arithmetic on the

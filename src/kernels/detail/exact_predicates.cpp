@@ -539,6 +539,29 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
   return 0;
 }
 
+int exactFaceAreaSign(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& s, const Vec3& e,
+                      const Vec3& p) {
+  // Every coordinate an integer times 2^−shift (a double's lowest bit), as in crossingOrder.
+  const std::array<Vec3, 6> given{a, b, c, s, e, p};
+  int shift = 0;
+  double largest = 0.0;
+  for (const Vec3& q : given)
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      largest = std::max(largest, std::abs(q[axis]));
+      if (q[axis] != 0.0) shift = std::max(shift, 52 - exponentOf(q[axis]));
+    }
+  if (shift > kMostShift || !(largest < std::ldexp(1.0, kMostCoordinateExponent)))
+    throw Error("exactFaceAreaSign: a coordinate outside the predicates' range (internal error)");
+  std::array<IntegerVector<kCoordinateLimbs>, 6> big;
+  for (std::size_t k = 0; k < 6; ++k)
+    big[k] = integerPoint(given[k], shift);
+  const auto normal =
+      integerCross(integerDifference(big[1], big[0]), integerDifference(big[2], big[0]));
+  const auto side =
+      integerCross(integerDifference(big[4], big[3]), integerDifference(big[5], big[3]));
+  return integerDot(normal, side).sign();
+}
+
 int exactOrientSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept {
   // Two of the points the same (a mesh against a copy of itself, a vertex of one mesh on a
   // corner of the other's triangle): 0, where the adaptive stages would each fail before the

@@ -76,6 +76,17 @@ int exactCrossLeadingSign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec
 int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& first,
                   const std::array<Vec3, 3>& second, bool edgeOfA);
 
+/// The exact sign of ((b − a) × (c − a))·((e − s) × (p − s)) (−1, 0, +1): the side of the line
+/// through s and e, within the plane of triangle (a, b, c), on which p's projection onto that
+/// plane lies; positive on the side the triangle's corners lie on, for an edge (s, e) of it in
+/// its order (a, b), (b, c) or (c, a). For the point–triangle kernel, where its rounded face
+/// test leaves p's projection within rounding of an edge's line (robust_geometry.h). In integer
+/// arithmetic (degree 4, up to some 2,300 bits); every coordinate must be 0 or at least
+/// kSmallestExactCoordinate in magnitude and within the coordinate range (2²⁰⁰), else
+/// delta::Error.
+int exactFaceAreaSign(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& s, const Vec3& e,
+                      const Vec3& p);
+
 /// An exact sum of triple products a·(b × c) (six times a closed surface's signed volume, one
 /// term a triangle): its sign where a float sum's rounding leaves it in doubt. Every coordinate
 /// must be 0 or at least kSmallestExactCoordinate in magnitude (predicatesExactAt), and within

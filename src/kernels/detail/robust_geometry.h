@@ -16,8 +16,12 @@
 #include <cmath>
 #include <limits>
 
+#include "delta/core/triangle.h"
 #include "delta/core/vec3.h"
 #include "delta/kernels/point_triangle.h"
+#include "delta/mesh/coordinate_range.h"
+
+#include "exact_predicates.h"
 
 namespace delta::detail {
 
@@ -155,25 +159,80 @@ inline double faceAreaBound(const Vec3& e, const Vec3& w, double size, double po
   return 64.0 * kEpsilon * size * (normOne(e) * (point + longest) + longest * normOne(w));
 }
 
-/// Whether the projection of p onto a non-flat local triangle falls inside it (the face region
-/// of closestOnLocalTriangle), with the areas that decide it (set where it does); false
-/// otherwise, for a flat triangle, and where an area lies within its rounding of 0
-/// (faceAreaBound): there the projection is within that rounding of the edge's line, where the
-/// edges give the distance to the same rounding. Beyond an edge's end, near the tip of a needle
-/// whose edges' lines meet at an angle below the rounding, the face's answer would be the
-/// distance to the plane, not to the tip: a point 2.9e-11 from the tip of a needle 1 long and
-/// 1e-12 high measured 1.0e-11 (and won a search against a triangle 2e-11 away).
-inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
-  if (t.flat) return false;
+/// Where the projection of p onto a local triangle falls (sideOfLocalFace).
+enum class FaceSide : unsigned char {
+  kOutside,  ///< beyond an edge's line by more than its area's rounding, or a flat triangle
+  kInside,   ///< inside every edge's line by more than its area's rounding
+  kNearEdge  ///< neither: within the rounding of one or more edges' lines (`nearEdges`)
+};
+
+/// Where the projection of p onto a local triangle falls, with the areas that decide it (set for
+/// kInside; for kNearEdge those of the edges in `nearEdges`, bit k for edge k, and of the edges
+/// beyond their bounds): kInside where every area n·(e_k × (p − v_k)) exceeds its rounding
+/// (faceAreaBound), kOutside for a flat triangle or where one lies below minus its rounding (or
+/// is NaN), kNearEdge otherwise: the projection lies within that rounding of those edges' lines,
+/// on either side (the exact signs decide, exactFaceAreaSign). Beyond an edge's end, near the tip
+/// of a needle whose edges' lines meet at an angle below the rounding, the face's answer would be
+/// the distance to the plane, not to the tip: a point 2.9e-11 from the tip of a needle 1 long and
+/// 1e-12 high measured 1.0e-11 (and won a search against a triangle 2e-11 away); such a point is
+/// never kInside, and exactly beyond the tip it is outside an edge's line.
+inline FaceSide sideOfLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas,
+                                unsigned& nearEdges) noexcept {
+  nearEdges = 0;
+  if (t.flat) return FaceSide::kOutside;
   const double size = normOne(t.normal), point = normOne(p);
   const double longest = std::sqrt(t.longestEdgeSquared);
-  // Edge k's area n·(e_k × (p − v_k)) into `area`; whether it lies beyond its rounding of 0.
-  const auto inner = [&](int k, double& area) {
+  double* area[3] = {&areas.c, &areas.a, &areas.b};  // edge k's area, opposite vertex k + 2
+  for (int k = 0; k < 3; ++k) {
     const Vec3 w = p - t.vertex[k];
-    area = dot(t.normal, cross(t.edge[k], w));
-    return area > faceAreaBound(t.edge[k], w, size, point, longest);
-  };
-  return inner(0, areas.c) && inner(1, areas.a) && inner(2, areas.b);
+    *area[k] = dot(t.normal, cross(t.edge[k], w));
+    const double bound = faceAreaBound(t.edge[k], w, size, point, longest);
+    if (*area[k] > bound) continue;
+    if (!(*area[k] >= -bound)) return FaceSide::kOutside;
+    nearEdges |= 1u << k;
+  }
+  return nearEdges == 0 ? FaceSide::kInside : FaceSide::kNearEdge;
+}
+
+/// Whether the projection of p onto a non-flat local triangle falls inside it by more than the
+/// areas' rounding (sideOfLocalFace's kInside), with the areas that decide it.
+inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& areas) noexcept {
+  unsigned nearEdges = 0;
+  return sideOfLocalFace(p, t, areas, nearEdges) == FaceSide::kInside;
+}
+
+/// Whether p's projection onto the triangle's plane lies strictly inside each edge k in
+/// `nearEdges` (bit k: edge k from corner k to corner k + 1), decided exactly on the given
+/// coordinates (exactFaceAreaSign): where the rounded face test leaves it within rounding of
+/// those edges' lines. Measured to the edges there, a point over the face came out up to about
+/// 2⁸ε·(|p − a| + 2L) too far (an audit found 205ε·(size + distance) beside the edges of strips
+/// and fans, the tests' sweep 783ε). False on an edge's line (the edge's distance is then the
+/// plane's), and where the
+/// exact signs do not apply (a coordinate below kSmallestExactCoordinate but not 0, or beyond
+/// the coordinate range): the edges then answer to that rounding.
+inline bool insideNearEdges(const Vec3& p, const Triangle& triangle, unsigned nearEdges) {
+  for (const Vec3& v : {p, triangle.a, triangle.b, triangle.c})
+    if (!inCoordinateRange(v) || !detail::predicatesExactAt(v)) return false;
+  const Vec3* corner[3] = {&triangle.a, &triangle.b, &triangle.c};
+  for (int k = 0; k < 3; ++k)
+    if ((nearEdges >> k & 1u) != 0u &&
+        detail::exactFaceAreaSign(triangle.a, triangle.b, triangle.c, *corner[k],
+                                  *corner[(k + 1) % 3], p) <= 0)
+      return false;
+  return true;
+}
+
+/// The projection of p onto a non-flat local triangle whose face region it lies in, from the
+/// areas n·(e × (p − v)) of sideOfLocalFace: barycentrics from the areas normalised, each taken
+/// as at least 0 (an area within its rounding of 0 may have rounded below it).
+inline kernels::PointTriangleResult projectOntoLocalFace(const Vec3& p, const LocalTriangle& t,
+                                                         const FaceAreas& areas) noexcept {
+  const double a = std::fmax(areas.a, 0.0), b = std::fmax(areas.b, 0.0),
+               c = std::fmax(areas.c, 0.0);
+  const double sum = a + b + c;
+  const Vec3 foot = p - t.normal * (dot(t.normal, p - t.vertex[0]) / t.normalLengthSquared);
+  return {lengthSquared(p - foot), foot, sum > 0.0 ? b / sum : 0.0, sum > 0.0 ? c / sum : 0.0,
+          kernels::TriangleFeature::Face};
 }
 
 /// The projection of p onto a non-flat local triangle when it falls inside (the face region of
@@ -184,10 +243,7 @@ inline bool closestOnLocalFace(const Vec3& p, const LocalTriangle& t,
                                kernels::PointTriangleResult& result) noexcept {
   FaceAreas areas;
   if (!insideLocalFace(p, t, areas)) return false;
-  const double sum = areas.a + areas.b + areas.c;
-  const Vec3 foot = p - t.normal * (dot(t.normal, p - t.vertex[0]) / t.normalLengthSquared);
-  result = {lengthSquared(p - foot), foot, areas.b / sum, areas.c / sum,
-            kernels::TriangleFeature::Face};
+  result = projectOntoLocalFace(p, t, areas);
   return true;
 }
 
@@ -236,7 +292,9 @@ inline kernels::PointTriangleResult closestOnLocalEdges(const Vec3& p,
 /// areas' rounding (each n·(e × (p − v)) beyond its faceAreaBound); the point is then p's
 /// projection along the accurate normal. Otherwise the nearest of the three edges, which is the
 /// answer whenever the projection is outside, and within rounding of it where the projection lies
-/// inside within rounding of an edge.
+/// inside within rounding of an edge. (closestPointOnTriangle decides that band by exact signs of
+/// the given coordinates, which a local triangle no longer holds; the triangle–triangle kernel's
+/// points on both triangles take this rounded form.)
 ///
 /// Barycentrics of a face point come from the same three signed areas, normalised, so they lie
 /// in the triangle (to an ulp); for a needle of height h they carry the needle's conditioning, an

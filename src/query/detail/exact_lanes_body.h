@@ -104,15 +104,25 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   };
   const Lanes normalSize = sizeOf(normal), pointSize = sizeOf(r);
   const Lanes longestEdge = squareRoot(longest);
-  const auto within = [&](const Vec& edge, const Vec& w) {  // the area beyond its bound
+  // Each edge's area against its bound: beyond it (inside that edge's line), and not below
+  // minus it (not surely outside: within the rounding of the line, or inside).
+  struct Side {
+    Mask inside, notOutside;
+  };
+  const auto side = [&](const Vec& edge, const Vec& w) {
     const Lanes area = dot(normal, cross(edge, w));
     const Lanes bound = splat(64.0 * std::numeric_limits<double>::epsilon()) * normalSize *
                         (sizeOf(edge) * (pointSize + longestEdge) + longestEdge * sizeOf(w));
-    return greater(area, bound);
+    return Side{greater(area, bound), greaterOrEqual(area, -bound)};
   };
   const Vec ap = minus(r, origin);
-  const Mask inside = both(both(notFlat, within(edge0, ap)),
-                           both(within(edge1, minus(r, u)), within(edge2, minus(r, v))));
+  const Side side0 = side(edge0, ap), side1 = side(edge1, minus(r, u)),
+             side2 = side(edge2, minus(r, v));
+  const Mask inside = both(both(notFlat, side0.inside), both(side1.inside, side2.inside));
+  // sideOfLocalFace's kNearEdge: the scalar kernel decides those lanes by exact signs.
+  const unsigned nearEdge =
+      bits(both(both(notFlat, side0.notOutside), both(side1.notOutside, side2.notOutside))) &
+      ~bits(inside);
   const Lanes safeSquared = select(notFlat, normalSquared, splat(1.0));
   const Vec foot = minus(r, times(normal, dot(normal, ap) / safeSquared));
   const Lanes face = lengthSquared(minus(r, foot));
@@ -128,11 +138,12 @@ inline void distances(const QueryMeshData& mesh, const Vec3& point, const std::u
   // The scalar kernel's exact boundary test (a point exactly on a vertex or an edge gets 0): it
   // runs where the square is positive and within kExactBoundaryCheck·L², the lanes that pass
   // take the scalar kernel's value (rare: a point within rounding of a triangle's boundary).
-  // So do the lanes of a tiny triangle, which the scalar kernel solves scaled up.
+  // So do the lanes of a tiny triangle, which the scalar kernel solves scaled up, and those whose
+  // projection lies within the areas' rounding of an edge's line (nearEdge).
   const unsigned nearBoundary =
       bits(both(greater(squared, zero),
                 lessOrEqual(squared, splat(kernels::kExactBoundaryCheck) * longest))) |
-      bits(less(longest, splat(kernels::kTinyTriangleSquared)));
+      bits(less(longest, splat(kernels::kTinyTriangleSquared))) | nearEdge;
   alignas(64) double result[kWidth];
   store(result, squared);
   for (std::size_t i = 0; i < count; ++i)
