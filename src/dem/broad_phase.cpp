@@ -9,6 +9,7 @@
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/parallel.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta::dem {
 namespace {
@@ -42,18 +43,30 @@ std::size_t bucketOf(const Cell& cell, std::uint64_t mask) noexcept {
 /// reach, 1022 from the box's corner, fell two cells apart.
 constexpr double kCellSlack = 1.0 + 0x1p-18;
 
+/// The least non-zero radius or margin: reaches of at least 2⁻⁴⁸¹ have normal squares. Below it
+/// reach² underflowed (two coincident spheres of radius 1e-170 were no pair); above the
+/// coordinate range squared distances could overflow (radius 1e200, centres 1e170 apart).
+constexpr double kSmallestLength = 0x1p-481;
+
+/// Whether `length` is 0 or within [kSmallestLength, kLargestCoordinate].
+bool inLengthRange(double length) noexcept {
+  return length == 0.0 || (length >= kSmallestLength && length <= kLargestCoordinate);
+}
+
 void validate(std::span<const Sphere> spheres, double margin) {
-  if (!std::isfinite(margin) || margin < 0.0)
-    throw Error("nearbyPairs: margin = " + toString(margin) + " must be finite and non-negative");
+  if (!inLengthRange(margin))
+    throw Error("nearbyPairs: margin = " + toString(margin) +
+                " must be 0 or between 2^-481 and the coordinate range " +
+                toString(kLargestCoordinate));
   if (spheres.size() >= (std::size_t{1} << 32))
     throw Error("nearbyPairs: " + std::to_string(spheres.size()) +
                 " spheres are more than 32-bit ids can name");
   for (std::size_t i = 0; i < spheres.size(); ++i)
-    if (!isFinite(spheres[i].center) || !std::isfinite(spheres[i].radius) ||
-        spheres[i].radius < 0.0)
+    if (!inCoordinateRange(spheres[i].center) || !inLengthRange(spheres[i].radius))
       throw Error("nearbyPairs: sphere " + std::to_string(i) + " has centre " +
                   toString(spheres[i].center) + " and radius " + toString(spheres[i].radius) +
-                  " (must be finite, radius non-negative)");
+                  " (the centre must lie within the coordinate range, ±" +
+                  toString(kLargestCoordinate) + ", and the radius be 0 or between 2^-481 and it)");
 }
 
 /// nearbyPairs on a dense grid of (last.x + 1)·(last.y + 1)·(last.z + 1) cells: the spheres

@@ -4,11 +4,13 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <string>
 #include <unordered_map>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
 #include "delta/core/format.h"
+#include "delta/mesh/coordinate_range.h"
 
 namespace delta::contactdetection {
 namespace {
@@ -28,13 +30,22 @@ struct CellHash {
   }
 };
 
-/// A grid over the points' box with cells a little wider than `h` (so two points closer than h
-/// fall in neighbouring cells despite rounding in the cell computation), and at most 2⁴⁰ cells
+/// A grid over the points' box with cells wider than `h` by more than the rounding of the cell
+/// computation (so two points closer than h fall in neighbouring cells), and at most 2⁴⁰ cells
 /// across, so the integer cell coordinates stay exact whatever the ratio of coordinates to h.
+///
+/// The rounding: an offset p − lower (at most the box's extent E) and its quotient by the cell
+/// each round by half an ulp, together at most ε·E along an axis, so two points' cell
+/// coordinates, as lengths, differ from their offsets' difference by at most 2ε·E; and a
+/// squared distance below h² as computed may belong to points up to h·(1 + 2ε) apart. A cell
+/// of h·(1 + 2⁻³⁰) + 2⁻⁵⁰·E exceeds both together. (With a fixed relative slack alone, 10⁻⁹ of
+/// h, points 10⁻¹⁰ apart in a box 2 across fell two cells apart, and both were kept.)
 class Grid {
  public:
   Grid(const Aabb& box, double h)
-      : origin_(box.lower), cell_(std::max(h * (1.0 + 1e-9), maxAbs(box.extent()) * 0x1p-40)) {}
+      : origin_(box.lower),
+        cell_(std::max(h * (1.0 + 0x1p-30) + maxAbs(box.extent()) * 0x1p-50,
+                       maxAbs(box.extent()) * 0x1p-40)) {}
 
   CellKey cellOf(const Vec3& p) const noexcept {
     return {index(p.x - origin_.x), index(p.y - origin_.y), index(p.z - origin_.z)};
@@ -88,6 +99,20 @@ std::vector<ContactPoint> filterFew(std::span<const ContactPoint> contacts, doub
 std::vector<ContactPoint> filter(std::span<const ContactPoint> contacts, double h) {
   if (!std::isfinite(h) || !(h > 0.0))
     throw Error("filter: h = " + toString(h) + " must be finite and positive");
+  // h² and every squared distance must be normal doubles where they are compared: below 2⁻⁴⁸¹ h²
+  // came out subnormal or 0 (coincident points both kept for h = 1e-170), above 2²⁰⁰ squares of
+  // differences could overflow (points 2e155 apart not closer than h = 1e300).
+  if (!(h >= 0x1p-481 && h <= kLargestCoordinate))
+    throw Error("filter: h = " + toString(h) + " must lie between 2^-481 (" + toString(0x1p-481) +
+                ") and the coordinate range " + toString(kLargestCoordinate));
+  for (std::size_t i = 0; i < contacts.size(); ++i)
+    if (const Vec3& n = contacts[i].normal; !inCoordinateRange(contacts[i].x) ||
+                                            !std::isfinite(n.x) || !std::isfinite(n.y) ||
+                                            !std::isfinite(n.z))
+      throw Error("filter: contact point " + std::to_string(i) + " at " + toString(contacts[i].x) +
+                  " with normal " + toString(contacts[i].normal) +
+                  " is not finite or lies beyond the coordinate range (" +
+                  toString(kLargestCoordinate) + ")");
   if (contacts.size() <= 64) return filterFew(contacts, h);
   std::vector<std::size_t> order(contacts.size());
   std::iota(order.begin(), order.end(), std::size_t{0});

@@ -120,5 +120,24 @@ TEST(DemBroadPhase, RejectsBadInput) {
   EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{0, 0, 0}, -1}}, 0.0), Error);
 }
 
+TEST(DemBroadPhase, RefusesLengthsWhoseSquaresLeaveTheDoubles) {
+  // An audit's cases, each one pair by the definition and none found: the reach's square
+  // underflowed (coincident spheres of radius 1e-170; points 1e-170 apart, margin 1e-169) or the
+  // squares overflowed (radius 1e200, centres 1e170 apart). Now refused.
+  const std::vector<Sphere> tiny = {{{1, 1, 1}, 1e-170}, {{1, 1, 1}, 1e-170}};
+  EXPECT_THROW(nearbyPairs(tiny, 0.0), Error);
+  const std::vector<Sphere> points = {{{0, 0, 0}, 0.0}, {{1e-170, 0, 0}, 0.0}};
+  EXPECT_THROW(nearbyPairs(points, 1e-169), Error);
+  const std::vector<Sphere> huge = {{{0, 0, 0}, 1e200}, {{1e170, 0, 0}, 1e200}};
+  EXPECT_THROW(nearbyPairs(huge, 0.0), Error);
+  EXPECT_THROW(nearbyPairs(std::vector<Sphere>{{{1e61, 0, 0}, 1}}, 0.0), Error);
+  // At the ends of the range the definition holds.
+  const std::vector<Sphere> smallest = {{{1, 1, 1}, 0x1p-481}, {{1, 1, 1}, 0x1p-481}};
+  EXPECT_EQ(nearbyPairs(smallest, 0.0).size(), 1u);
+  const std::vector<Sphere> largest = {{{0, 0, 0}, 0x1p199}, {{-0x1.8p199, 0, 0}, 0x1p199}};
+  EXPECT_EQ(nearbyPairs(largest, 0x1p-481), pairsByDefinition(largest, 0x1p-481));
+  EXPECT_EQ(nearbyPairs(largest, 0x1p-481).size(), 1u);
+}
+
 }  // namespace
 }  // namespace delta::dem

@@ -37,8 +37,10 @@ struct CandidatePair {
 /// sizes crowd, the same pairs in the same order. Cells are 2⁻¹⁸ larger than the reach they
 /// hold, so that the rounding of a centre's cell never parts a pair.
 ///
-/// Throws delta::Error when the margin is negative or not finite, a sphere's centre or radius
-/// is not finite or a radius is negative (naming the sphere), or there are 2³² or more spheres.
+/// Throws delta::Error when the margin or a radius is neither 0 nor within [2⁻⁴⁸¹, 2²⁰⁰] (negative,
+/// not finite, so small that its square is subnormal, or so large that squares could overflow),
+/// a centre lies beyond the coordinate range (±2²⁰⁰, mesh/coordinate_range.h, or is not finite;
+/// naming the sphere), or there are 2³² or more spheres.
 ///
 /// Threading: reads its input only; safe to call from any number of threads at once. Runs in
 /// parallel over the spheres itself (core/parallel.h).

@@ -14,13 +14,16 @@ namespace delta {
 /// minimal ball of the extreme points along 13 directions, grown by the farthest point a few
 /// times. Any point set works: one point (radius 0), duplicates, collinear or coplanar points,
 /// points far from the origin. Throws delta::Error for an empty or non-finite point set, or
-/// points so far apart that the radius overflows.
+/// points so far apart that their squared distances overflow (from about 1.3e154 apart, where
+/// `Sphere::contains` could not hold; meshes lie within ±2²⁰⁰, about 1.6e60). For sets below
+/// about 1e-154 across, whose squared distances are subnormal, the radius is that of
+/// `Sphere::contains`'s rounded distances, up to about 1e-4 above the minimal ball's.
 ///
 /// Threading: reads its input only; safe to call concurrently.
 Sphere boundingSphere(std::span<const Vec3> points);
 
 /// The bounding sphere of the mesh's vertices, referenced by a triangle or not (a Mesh always has
-/// some, all finite, so this throws only when the radius overflows).
+/// some, all finite, so this throws only when their squared distances overflow).
 ///
 /// Threading: reads the mesh only; safe to call concurrently.
 Sphere boundingSphere(const Mesh& mesh);
