@@ -505,7 +505,7 @@ class QueryMesh:
     @property
     def moved(self) -> bool:
         """
-        The pose is not the identity.
+        A pose has been set, by transform or set_pose (even the identity).
         """
         ...
     @property

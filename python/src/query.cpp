@@ -241,7 +241,8 @@ Python threads may query one QueryMesh at once.)")
       .def_property_readonly(
           "pose", [](const QueryMesh& mesh) { return mesh.pose(); },
           "Where the mesh is: a RigidTransform (a copy) from the frame it was prepared in.")
-      .def_property_readonly("moved", &QueryMesh::moved, "The pose is not the identity.")
+      .def_property_readonly("moved", &QueryMesh::moved,
+                             "A pose has been set, by transform or set_pose (even the identity).")
       .def(py::pickle(
           // The mesh it was prepared from and its pose, bit for bit: unpickled, it is prepared
           // again (O(n log n)) and answers as the original does (for multiprocessing).

@@ -172,6 +172,57 @@ TEST(QueryMesh, RejectsNonFiniteMotionsAndEmptyMeshes) {
   EXPECT_THROW(QueryMesh(Mesh({}, {})), Error);
 }
 
+TEST(QueryMesh, PosesThatOverflowAreRefusedAndLeaveThePose) {
+  // An audit's cases: two translations of 1.5e308 composed to (∞, 0, 0), whose inverse is NaN,
+  // and a turn of a pose at 1.7e308 overflowed, with no error.
+  QueryMesh box(primitives::box());
+  box.transform(RigidTransform::translationBy({1.5e308, 0, 0}));
+  const RigidTransform before = box.pose();
+  EXPECT_THROW(box.transform(RigidTransform::translationBy({1.5e308, 0, 0})), Error);
+  EXPECT_EQ(box.pose().translation, before.translation);
+  EXPECT_EQ(box.inversePose().translation, before.inverse().translation);
+  box.setPose(RigidTransform::translationBy({1.7e308, 1.7e308, 0}));
+  const RigidTransform far = box.pose();
+  EXPECT_THROW(box.transform({Quaternion::fromAxisAngle({0, 0, 1}, 0.7853981633974483), {}}),
+               Error);
+  EXPECT_EQ(box.pose().translation, far.translation);
+  EXPECT_EQ(box.pose().rotation.w, far.rotation.w);
+  // Beyond the coordinate range but finite: kept, and the queries refuse the mesh there.
+  box.setPose(RigidTransform::translationBy({0, 0, -1e100}));
+  EXPECT_EQ(box.pose().translation.z, -1e100);
+}
+
+TEST(QueryMesh, SetPoseToAnothersPosePutsItExactlyThere) {
+  // Normalising a unit quaternion again changed its last bits in some 2.5% of cases, so a mesh
+  // put at another's pose (a pickled QueryMesh, an adaptive grid's boundary) answered up to
+  // 1.1e-10 differently at 1e6 (an audit).
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const QueryMesh box(primitives::box());
+  int changedByNormalising = 0;
+  for (int i = 0; i < 400; ++i) {
+    QueryMesh moved = box;
+    moved.transform(
+        {Quaternion::fromComponents(unit(random), unit(random), unit(random), unit(random)),
+         {1e6, unit(random), unit(random)}});
+    const Quaternion& q = moved.pose().rotation;
+    const Quaternion again = Quaternion::fromComponents(q.w, q.x, q.y, q.z);
+    changedByNormalising += again.w != q.w || again.x != q.x || again.y != q.y || again.z != q.z;
+    QueryMesh placed = box;
+    placed.setPose(moved.pose());
+    ASSERT_EQ(placed.pose().rotation.w, q.w);
+    ASSERT_EQ(placed.pose().rotation.x, q.x);
+    ASSERT_EQ(placed.pose().rotation.y, q.y);
+    ASSERT_EQ(placed.pose().rotation.z, q.z);
+    ASSERT_EQ(placed.pose().translation, moved.pose().translation);
+  }
+  EXPECT_GT(changedByNormalising, 0);  // the case the test is for occurred
+  // A rotation that is not a unit quaternion is still normalised.
+  QueryMesh placed = box;
+  placed.setPose({Quaternion{2, 0, 0, 0}, {}});
+  EXPECT_EQ(placed.pose().rotation.w, 1.0);
+}
+
 TEST(QueryMesh, ManyThreadsQueryCopiesWithTheirOwnPoses) {
   const QueryMesh shape(primitives::icosphere(3));
   const std::vector<Vec3> points = pointsAround(shape.bounds(), 2000, 9);

@@ -69,17 +69,21 @@ class QueryMesh {
   /// Prepares `mesh` (O(n log n); copies what it needs, the Mesh may then change or go).
   explicit QueryMesh(const Mesh& mesh);
 
-  /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose. O(1). Throws delta::Error for a
-  /// non-finite translation or a zero or non-finite rotation, leaving the pose unchanged.
+  /// Moves the mesh rigidly: its pose becomes `motion` ∘ pose (`motion`'s rotation
+  /// renormalised). O(1). Throws delta::Error for a non-finite translation, a zero or non-finite
+  /// rotation, or a resulting pose whose translation (or its inverse's) overflows a double,
+  /// leaving the pose unchanged. (A pose beyond the coordinate range is kept; the queries
+  /// refuse the mesh there.)
   QueryMesh& transform(const RigidTransform& motion);
-  /// Puts the mesh at `pose` (from the frame it was prepared in; the rotation is renormalised).
-  /// O(1). Throws as transform().
+  /// Puts the mesh at `pose` (from the frame it was prepared in): a rotation that is a unit
+  /// quaternion to within 8ε is kept bit for bit (so that setPose(other.pose()) puts this mesh
+  /// exactly where `other` is), any other is renormalised. O(1). Throws as transform().
   QueryMesh& setPose(const RigidTransform& pose);
   /// Where the mesh is: the map from the frame it was prepared in to where it is now.
   const RigidTransform& pose() const noexcept { return pose_; }
   /// The inverse of pose(): from world coordinates into the prepared frame.
   const RigidTransform& inversePose() const noexcept { return inversePose_; }
-  /// Whether a transform has been applied (the pose is not the identity).
+  /// Whether a pose has been set, by transform() or setPose() (even the identity).
   bool moved() const noexcept { return moved_; }
   /// Whether a quick test made when the pose was set finds the mesh's box, moved by its pose,
   /// within the coordinate range (mesh/coordinate_range.h); false means only that the pair
