@@ -2,7 +2,10 @@
 // pass-through"; src/dem/guards.cpp), and the overlap the CLI's start warning reads.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
@@ -237,6 +240,74 @@ TEST(DemGuards, AStepThatFailsLeavesTheWorldAsItWasAndItMayGoOn) {
     EXPECT_EQ(world.stateDigest(), untried.stateDigest());
     EXPECT_EQ(world.contacts().size(), untried.contacts().size());
   }
+}
+
+/// Three icospheres resting in a row on the floor, touching one another (restitution 0.5: the
+/// forces depend on the velocities), after 3 steps.
+World restingRow() {
+  World world(test::centimetreParameters(0.01, 1.0, 0.5, 0.5, {0, 0, -9.81}));
+  world.addShape(primitives::icosphere(2, kRadius), kDensity);
+  world.addObstacle(primitives::quad(1.0, 1.0));
+  for (int i = 0; i < 3; ++i)
+    world.addParticle(0, {{0.0203 * i, 0, kRadius + 0.0008}, {}, {}, {0, 0, 10.0 * i}});
+  world.run(3);
+  return world;
+}
+
+TEST(DemGuards, ASetterThatRefusesAValueChangesNothing) {
+  // An audit's cases: setPose with a zero orientation moved the particle before refusing it,
+  // and every refused setter still made the next step evaluate its forces anew (and drop the
+  // neighbour list), which changes the run: 2e-5 m after 300 steps.
+  const World start = restingRow();
+  const std::vector<std::function<void(World&)>> refused = {
+      [](World& w) {
+        w.setPose(1, {0.5, 0.5, 0.5}, Quaternion{0, 0, 0, 0});
+      },
+      [](World& w) {
+        w.setPose(1, {NAN, 0, 0}, {});
+      },
+      [](World& w) {
+        w.setPose(1, {1e61, 0, 0}, {});
+      },
+      [](World& w) {
+        w.setVelocity(1, {INFINITY, 0, 0});
+      },
+      [](World& w) {
+        w.setAngularVelocity(1, {NAN, 0, 0});
+      },
+      [](World& w) {
+        w.setVelocity(7, {0, 0, 0});
+      }};
+  for (std::size_t k = 0; k < refused.size(); ++k) {
+    World world = start, untouched = start;
+    EXPECT_THROW(refused[k](world), Error) << k;
+    EXPECT_EQ(world.stateDigest(), untouched.stateDigest()) << k;
+    world.run(100);
+    untouched.run(100);
+    EXPECT_EQ(world.stateDigest(), untouched.stateDigest()) << k;
+  }
+}
+
+TEST(DemGuards, AStepRefusedAfterItsFirstEvaluationPutsTheForcesBack) {
+  // A setter makes the next step evaluate the forces first; the pass-through guard then refused
+  // it, and the particles kept that evaluation's forces and torques (an audit: 13 of 30
+  // changed), so the World's digest and checkpoint were no longer those before the step.
+  World world = restingRow();
+  ASSERT_GE(world.contacts().size(), 3u);  // on the floor and against one another
+  world.setVelocity(1, {0, 0, -500});      // valid, but too fast for the shell
+  const World before = world;
+  EXPECT_NE(stepError(world).find("particle 1 (speed 500"), std::string::npos);
+  EXPECT_EQ(world.stateDigest(), before.stateDigest());
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(world.particles()[i].force, before.particles()[i].force) << i;
+    EXPECT_EQ(world.particles()[i].torque, before.particles()[i].torque) << i;
+  }
+  world.setVelocity(1, {0, 0, 0});
+  World untried = before;
+  untried.setVelocity(1, {0, 0, 0});
+  world.run(10);
+  untried.run(10);
+  EXPECT_EQ(world.stateDigest(), untried.stateDigest());
 }
 
 TEST(DemGuards, AStepThatFailsBeforeItsEvaluationKeepsTheContactRecords) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <random>
 #include <set>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "delta/core/sphere.h"
+#include "delta/dem/narrow_phase.h"
 #include "delta/dem/world.h"
 #include "delta/mesh/primitives.h"
 #include "delta/query/query_mesh.h"
@@ -173,6 +175,44 @@ TEST(NeighbourList, AParticleSetAnywhereIsFoundAtOnce) {
   world.step();
   EXPECT_EQ(world.statistics().particlePairsTested,
             pairsWithinReach(spheresOf(world), world.parameters().epsilon));
+}
+
+TEST(NeighbourList, CornersThatMeetWithinTwoEpsilonByAFewUlpsArePaired) {
+  // An audit's case: two unit cubes turned to meet corner to corner along x, their centres
+  // 2R + 2ε apart to within 40 ulps (R the bounding radius, reached at the corners). The placed
+  // corners lie a few ulps beyond R (the rotation's rounding), so the narrow phase puts them
+  // within 2ε (4.8e-16 at ε = 0.01) while the bounding spheres just miss: the World tested no
+  // pair and had no contact. The pair test now allows for the placing's rounding.
+  const Vec3 diagonal = normalized(Vec3{1, 1, 1});
+  const Vec3 axis = cross(diagonal, Vec3{1, 0, 0});
+  const double angle = std::acos(diagonal.x);
+  const Quaternion first = Quaternion::fromAxisAngle(axis, angle);
+  const Quaternion second = Quaternion::fromAxisAngle(axis, angle + 3.141592653589793);
+  int paired = 0;
+  for (const double epsilon : {1e-2, 1e-9})
+    for (int ulps = -40; ulps <= 40; ulps += 4) {
+      Parameters parameters;
+      parameters.epsilon = parameters.filterDistance = epsilon;
+      parameters.stiffness = 1e7;
+      parameters.gravity = {};
+      parameters.timeStep = 1e-6;
+      World world(parameters);
+      world.addShape(primitives::box({1, 1, 1}), 1000.0);
+      const double reach = 2.0 * world.shapes()[0].boundingRadius() + 2.0 * epsilon;
+      double x = reach;
+      for (int k = 0; k < std::abs(ulps); ++k)
+        x = std::nextafter(x, ulps < 0 ? 0.0 : 1e300);
+      world.addParticle(0, {{0, 0, 0}, first, {}, {}});
+      world.addParticle(0, {{x, 0, 0}, second, {}, {}});
+      world.step();
+      QueryMesh a = world.shapes()[0].queryMesh(), b = world.shapes()[0].queryMesh();
+      a.transform(world.particles()[0].pose());
+      b.transform(world.particles()[1].pose());
+      const bool touching = !pairContacts(a, b, epsilon, epsilon).points.empty();
+      EXPECT_EQ(world.contacts().empty(), !touching) << epsilon << " " << ulps;
+      paired += touching;
+    }
+  EXPECT_GT(paired, 4);  // the case the test is for occurred
 }
 
 }  // namespace

@@ -319,7 +319,8 @@ class World {
   // the forces at a state do not depend on the step that follows it). Each throws
   // delta::Error for a particle index that does not exist or a value that is not finite (a
   // time step must also be positive; an orientation non-zero; a pose must keep the particle's
-  // bounding sphere within the coordinate range).
+  // bounding sphere within the coordinate range; an angular momentum must be finite), and then
+  // changes nothing: the next step is the one it would have been.
 
   void setTimeStep(double timeStep);
   void setPose(std::size_t particle, const Vec3& position, const Quaternion& orientation);
@@ -467,6 +468,8 @@ class World {
   void advance(Exchange* exchange);
   void advanceOnce(Exchange* exchange);
   void keepStepStart();
+  /// The particles' forces and torques into stepStart_, before a step's first evaluation.
+  void keepStartForces();
   void restoreStepStart() noexcept;
   /// The forces at the current state, in phases: findPairs (the broad phase), detectContacts,
   /// applyContactLaw, exchangeGhostForces (with `exchange`), sumForces.
@@ -550,7 +553,14 @@ class World {
   /// ω = R·I⁻¹·Rᵀ·L of the particle's shape at `orientation`, for the angular momentum given.
   Vec3 angularVelocityOf(const Particle& particle, const Quaternion& orientation,
                          const Vec3& angularMomentum) const noexcept;
+  /// The owned particle `index`, or delta::Error naming `operation`.
   Particle& particleAt(std::size_t index, const char* operation);
+  /// A setter's change: the next step evaluates the forces first, and the neighbour list anew.
+  void stateChanged() noexcept;
+  /// R·I·Rᵀ·ω of the particle's shape at `orientation`: its angular momentum; delta::Error
+  /// starting with `what` where it is not finite.
+  Vec3 angularMomentumOf(const Particle& particle, const Quaternion& orientation,
+                         const Vec3& angularVelocity, const std::string& what) const;
 
   Parameters parameters_;
   ContactLaw law_;
@@ -672,6 +682,10 @@ class World {
     /// The particles before kickAndDrift moved them (particlesMoved: it has, in this step).
     std::vector<Particle> particles;
     bool particlesMoved = false;
+    /// The particles' contact forces and torques before a first evaluation changed them
+    /// (forcesKept: one ran in this step, before kickAndDrift).
+    std::vector<std::pair<Vec3, Vec3>> forces;
+    bool forcesKept = false;
     std::vector<std::pair<std::uint64_t, TangentialSpring>> particleSprings, obstacleSprings;
     std::vector<RigidTransform> obstaclePoses;
     StepStatistics statistics;
