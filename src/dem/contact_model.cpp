@@ -409,13 +409,31 @@ void pairForces(std::span<const ContactPoint> points, const BodyMotion& first,
                          onsetFactor(result.points[deepestIndex], first, second, timeStep);
   const double pointDamping = damping / static_cast<double>(pressed);
   const double spring = law.stiffness * result.deepest;
+  // Point i's share wᵢ·k·δ_max − (c/m)·v_n,ᵢ. Where some are negative (shallow points while the
+  // bodies separate) they are not pulled: each point takes its positive share, scaled by
+  // (Σ of all shares) / (Σ of the positive ones), so that the pair's total stays
+  // max(0, k·δ_max − c·v̄_n) (v̄_n the points' mean) and its restitution e. (Cut at zero point
+  // by point, the dropped negative shares left the pair under-damped: an icosphere dropped on a
+  // floor came back at 1.23 for e = 0.1, an audit found.) Where none is negative the scale is
+  // exactly 1.
+  const auto share = [&](const PointForce& out) {
+    const Vec3 relative = first.velocityAt(out.point.x) - second.velocityAt(out.point.x);
+    return out.depth / depthSum * spring - pointDamping * dot(relative, out.point.direction);
+  };
+  double total = 0.0, positive = 0.0;
+  for (const PointForce& out : result.points) {
+    if (!(out.depth > 0.0)) continue;
+    const double f = share(out);
+    total += f;
+    positive += std::max(0.0, f);
+  }
+  const double scale = total > 0.0 ? total / positive : 0.0;
   Vec3 centre, meanDirection;
   for (PointForce& out : result.points) {
     if (!(out.depth > 0.0)) continue;
     const double weight = out.depth / depthSum;
     const Vec3& n = out.point.direction;
-    const Vec3 relative = first.velocityAt(out.point.x) - second.velocityAt(out.point.x);
-    const double normalForce = std::max(0.0, weight * spring - pointDamping * dot(relative, n));
+    const double normalForce = std::max(0.0, share(out)) * scale;
     out.force = n * normalForce;
     result.normalForce += normalForce;
     centre += out.point.x * weight;

@@ -156,6 +156,31 @@ TEST(DemContactModel, PointsShareTheDeepestSpringByDepth) {
   EXPECT_DOUBLE_EQ(forces.normalForce, 1000.0 * 0.015);
 }
 
+TEST(DemContactModel, SeparatingPairsKeepTheirTotalWhereShallowPointsWouldPull) {
+  // Depths 0.015 and 0.001 (2ε = 0.02), the bodies separating at 0.5: the shallow point's share
+  // w·k·δ_max − (c/2)·v_n is negative. Cut at zero on its own, the pair's total was the deep
+  // point's share, more than k·δ_max − c·v_n; now the deep point carries the whole of it.
+  const ContactLaw contactLaw = law(0.5);
+  const std::vector<ContactPoint> points = {pointAt({0, 0, 0}, 0.005), pointAt({1, 0, 0}, 0.019)};
+  BodyMotion leaving;
+  leaving.velocity = {0, 0, 0.5};
+  const PairForces forces = pairForces(points, leaving, {}, 1.0, {}, 1e-6, contactLaw);
+  const double damping = 2.0 * contactLaw.dampingRatio * std::sqrt(contactLaw.stiffness);
+  const double total = contactLaw.stiffness * 0.015 - damping * 0.5;
+  ASSERT_GT(total, 0.0);
+  ASSERT_LT(1.0 / 16.0 * contactLaw.stiffness * 0.015 - damping / 2.0 * 0.5, 0.0);
+  EXPECT_NEAR(forces.normalForce, total, 1e-12 * contactLaw.stiffness);
+  EXPECT_NEAR(forces.points[0].force.z, total, 1e-12 * contactLaw.stiffness);
+  EXPECT_EQ(forces.points[1].force.z, 0.0);
+  // Approaching, no share is negative: the points' forces are their shares.
+  BodyMotion approaching;
+  approaching.velocity = {0, 0, -0.5};
+  const PairForces pressed = pairForces(points, approaching, {}, 1.0, {}, 1e-6, contactLaw);
+  EXPECT_NEAR(pressed.points[1].force.z,
+              1.0 / 16.0 * contactLaw.stiffness * 0.015 + damping / 2.0 * 0.5,
+              1e-12 * contactLaw.stiffness);
+}
+
 TEST(DemContactModel, OverlappingPointsTakeTheClearPointsDirection) {
   const ContactLaw contactLaw = law(0.5);
   ContactPoint crossing = pointAt({0, 0, 0}, 0.0);
