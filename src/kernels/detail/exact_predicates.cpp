@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "delta/core/error.h"
@@ -348,6 +349,29 @@ Integer<N + M + 2> integerDot(const IntegerVector<N>& u, const IntegerVector<M>&
   return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
 }
 
+/// The points as integers times 2^−shift, one shift for all (the least that makes every
+/// coordinate an integer: its lowest bit's); delta::Error naming `what` for a coordinate the
+/// predicates do not take (below kSmallestExactCoordinate but not 0, or beyond the coordinate
+/// range), for which the integers' capacities would not hold.
+template <std::size_t N>
+std::array<IntegerVector<kCoordinateLimbs>, N> integerPoints(const std::array<Vec3, N>& given,
+                                                             const char* what) {
+  int shift = 0;
+  double largest = 0.0;
+  for (const Vec3& q : given)
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      largest = std::max(largest, std::abs(q[axis]));
+      if (q[axis] != 0.0) shift = std::max(shift, 52 - exponentOf(q[axis]));
+    }
+  if (shift > kMostShift || !(largest < std::ldexp(1.0, kMostCoordinateExponent)))
+    throw Error(std::string(what) +
+                ": a coordinate outside the predicates' range (internal error)");
+  std::array<IntegerVector<kCoordinateLimbs>, N> big;
+  for (std::size_t k = 0; k < N; ++k)
+    big[k] = integerPoint(given[k], shift);
+  return big;
+}
+
 /// Where the edge e0 → e1 crosses the plane of triangle t (unperturbed), in floating point:
 /// `at` = orient(t, e0) = (e0 − t0)·N and `along` = (e0 − e1)·N, N = (t1 − t0) × (t2 − t0), the
 /// crossing at λ = at/along; with Shewchuk's bounds on their rounding (each a determinant of
@@ -510,16 +534,7 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
   // and so is every product of six differences times 2^−6·shift. Some 3,000 bits where the
   // coordinates span the whole range (2⁻²⁵⁰ to 2²⁰⁰): beyond a double's exponents, which
   // expansions of doubles would need (a mesh shifted by 2⁻²⁵⁰ against its copy).
-  int shift = 0;
-  for (const Vec3& q : given)
-    for (std::size_t axis = 0; axis < 3; ++axis)
-      if (q[axis] != 0.0) shift = std::max(shift, 52 - exponentOf(q[axis]));
-  // The integers' capacities hold for coordinates the predicates take; others would not fit.
-  if (shift > kMostShift || !(largest < std::ldexp(1.0, kMostCoordinateExponent)))
-    throw Error("crossingOrder: a coordinate outside the predicates' range (internal error)");
-  std::array<IntegerVector<kCoordinateLimbs>, 8> big;
-  for (std::size_t k = 0; k < 8; ++k)
-    big[k] = integerPoint(given[k], shift);
+  const auto big = integerPoints(given, "crossingOrder");
   const auto along = integerDifference(big[0], big[1]);
   const auto normalS =
       integerCross(integerDifference(big[3], big[2]), integerDifference(big[4], big[2]));
@@ -541,20 +556,7 @@ int crossingOrder(const Vec3& e0, const Vec3& e1, const std::array<Vec3, 3>& fir
 
 int exactFaceAreaSign(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& s, const Vec3& e,
                       const Vec3& p) {
-  // Every coordinate an integer times 2^−shift (a double's lowest bit), as in crossingOrder.
-  const std::array<Vec3, 6> given{a, b, c, s, e, p};
-  int shift = 0;
-  double largest = 0.0;
-  for (const Vec3& q : given)
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      largest = std::max(largest, std::abs(q[axis]));
-      if (q[axis] != 0.0) shift = std::max(shift, 52 - exponentOf(q[axis]));
-    }
-  if (shift > kMostShift || !(largest < std::ldexp(1.0, kMostCoordinateExponent)))
-    throw Error("exactFaceAreaSign: a coordinate outside the predicates' range (internal error)");
-  std::array<IntegerVector<kCoordinateLimbs>, 6> big;
-  for (std::size_t k = 0; k < 6; ++k)
-    big[k] = integerPoint(given[k], shift);
+  const auto big = integerPoints(std::array<Vec3, 6>{a, b, c, s, e, p}, "exactFaceAreaSign");
   const auto normal =
       integerCross(integerDifference(big[1], big[0]), integerDifference(big[2], big[0]));
   const auto side =
