@@ -104,14 +104,19 @@ bool onBoundary(const Vec3& p, const Triangle& triangle) noexcept {
          exactlyOnSegment(p, triangle.b, triangle.c) || exactlyOnSegment(p, triangle.c, triangle.a);
 }
 
-/// closestPointOnTriangle for a tiny triangle (its edges from `triangle.a`, `u` and `v`, of
-/// squares below kTinyTriangleSquared): the kernel on `p` and the triangle less their first
-/// vertex scaled up by a power of two to about 1 (exact), and its answer scaled back. Nothing
+/// closestPoint for a tiny triangle (its edges from `triangle.a`, `u` and `v`, of squares
+/// below kTinyTriangleSquared): the kernel on `p` and the triangle less their first vertex
+/// scaled up by a power of two to about 1 (exact), and its answer scaled back. Nothing
 /// where the triangle is one point (its distances are between points) or where the point lies so
 /// far that even the scale its distance allows leaves the triangle tiny: a flat triangle's
 /// answer then differs by less than its size, far below an ulp of the distance.
+PointTriangleResult closestPoint(const Vec3& p, const Triangle& triangle, const Vec3& givenPoint,
+                                 const Triangle& given) noexcept;
+
 std::optional<PointTriangleResult> closestOnTinyTriangle(const Vec3& p, const Triangle& triangle,
-                                                         const Vec3& u, const Vec3& v) noexcept {
+                                                         const Vec3& u, const Vec3& v,
+                                                         const Vec3& givenPoint,
+                                                         const Triangle& given) noexcept {
   const double extent = std::fmax(maxAbs(u), maxAbs(v));
   if (!(extent > 0.0)) return std::nullopt;
   const Vec3 r = p - triangle.a;
@@ -120,17 +125,23 @@ std::optional<PointTriangleResult> closestOnTinyTriangle(const Vec3& p, const Tr
   if (const double reach = maxAbs(r); reach > 0.0)
     exponent = std::min(exponent, 510 - std::ilogb(reach));
   if (std::ldexp(extent, exponent) < 0x1p-140) return std::nullopt;
-  PointTriangleResult result = closestPointOnTriangle(
-      ldexp(r, exponent), {{}, ldexp(u, exponent), ldexp(v, exponent)});  // not tiny now
+  PointTriangleResult result =
+      closestPoint(ldexp(r, exponent), {{}, ldexp(u, exponent), ldexp(v, exponent)}, givenPoint,
+                   given);  // not tiny now
   const bool onTriangle = result.distanceSquared == 0.0;
   result.distanceSquared = std::ldexp(result.distanceSquared, -2 * exponent);
   result.closest = onTriangle ? p : triangle.a + ldexp(result.closest, -exponent);
   return result;
 }
 
-}  // namespace
-
-PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triangle) noexcept {
+/// closestPointOnTriangle(p, triangle), where the side of an edge's line that the rounded face
+/// test leaves in doubt is decided exactly on `givenPoint` and `given`: the same point and
+/// triangle, or those it was made from by a translation and a power-of-two scale
+/// (distanceAtScale, the tiny triangles' path), so that every form decides the band alike (the
+/// local copies' rounded differences could fall on the other side of the line: a point in a
+/// face's plane measured 1.9e-18 at scale and 0 by the kernel).
+PointTriangleResult closestPoint(const Vec3& p, const Triangle& triangle, const Vec3& givenPoint,
+                                 const Triangle& given) noexcept {
   // In the frame of the first vertex: the differences of nearby coordinates are exact, so the
   // answer is as accurate relative to the triangle's size far from the origin as near it.
   const Vec3& origin = triangle.a;
@@ -138,15 +149,15 @@ PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triang
       detail::makeLocalTriangle({}, triangle.b - origin, triangle.c - origin);
   if (local.longestEdgeSquared < kTinyTriangleSquared) [[unlikely]]
     if (const std::optional<PointTriangleResult> tiny =
-            closestOnTinyTriangle(p, triangle, local.vertex[1], local.vertex[2]))
+            closestOnTinyTriangle(p, triangle, local.vertex[1], local.vertex[2], givenPoint, given))
       return *tiny;
   const Vec3 r = p - origin;
   detail::FaceAreas areas;
   unsigned nearEdges = 0;
   detail::FaceSide side = detail::sideOfLocalFace(r, local, areas, nearEdges);
   if (side == detail::FaceSide::kNearEdge)
-    side = detail::insideNearEdges(p, triangle, nearEdges) ? detail::FaceSide::kInside
-                                                           : detail::FaceSide::kOutside;
+    side = detail::insideNearEdges(givenPoint, given, nearEdges) ? detail::FaceSide::kInside
+                                                                 : detail::FaceSide::kOutside;
   PointTriangleResult result = side == detail::FaceSide::kInside
                                    ? detail::projectOntoLocalFace(r, local, areas)
                                    : detail::closestOnLocalEdges(r, local);
@@ -167,6 +178,12 @@ PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triang
   return result;
 }
 
+}  // namespace
+
+PointTriangleResult closestPointOnTriangle(const Vec3& p, const Triangle& triangle) noexcept {
+  return closestPoint(p, triangle, p, triangle);
+}
+
 double distanceAtScale(const Vec3& p, const Triangle& triangle) noexcept {
   if (onBoundary(p, triangle)) return 0.0;  // as closestPointOnTriangle decides it
   const Vec3 r = p - triangle.a, u = triangle.b - triangle.a, v = triangle.c - triangle.a;
@@ -179,8 +196,8 @@ double distanceAtScale(const Vec3& p, const Triangle& triangle) noexcept {
   // By ldexp on each coordinate: below 2⁻¹⁰²² (subnormal differences) the factor 2^−exponent
   // itself would be beyond a double, and the distance came out +∞.
   const int exponent = std::ilogb(largest);
-  const PointTriangleResult result =
-      closestPointOnTriangle(ldexp(r, -exponent), {{}, ldexp(u, -exponent), ldexp(v, -exponent)});
+  const PointTriangleResult result = closestPoint(
+      ldexp(r, -exponent), {{}, ldexp(u, -exponent), ldexp(v, -exponent)}, p, triangle);
   return std::ldexp(std::sqrt(result.distanceSquared), exponent);
 }
 

@@ -205,6 +205,36 @@ TEST(PointTriangle, PointsWhoseProjectionLiesWithinRoundingOfAnEdgeAreExact) {
   std::printf("[ stats    ] beside an edge: max |d - exact| = %.3g eps (size + d)\n", worst);
 }
 
+TEST(PointTriangle, AtScaleTheBandBesideAnEdgeIsDecidedAsTheKernelDecidesIt) {
+  // Found by the sanitizer build's point query on fandisk: a point in a face's plane (y the
+  // same for all four), inside the face within rounding of an edge's line. The kernel's exact
+  // signs on the given coordinates put it inside (distance 0); distanceAtScale, which runs the
+  // kernel on the rounded differences from the first corner, decided on those and measured it
+  // to the edge: 1.9e-18.
+  const Triangle face{{-0x1.0cb295e9e1b09p-8, 0x1.05aee631f8a09p-2, 0x1.5182a9930be0ep-7},
+                      {0x1.8e219652bd3c3p-6, 0x1.05aee631f8a09p-2, 0x1.a36e2eb1c432dp-9},
+                      {0x1.ff2e48e8a71dep-8, 0x1.05aee631f8a09p-2, -0x1.82a9930be0dedp-7}};
+  const Vec3 p{0x1.4af4f0d844d01p-7, 0x1.05aee631f8a09p-2, 0x1.ba5e353f7ced9p-8};
+  EXPECT_EQ(closestPointOnTriangle(p, face).distanceSquared, 0.0);
+  EXPECT_EQ(distanceAtScale(p, face), 0.0);
+  // Points in the plane of axis-aligned faces, within 600ε of an edge's line on either side: the
+  // two forms agree bit for bit (no square here is subnormal).
+  test::PairRandom random(31);
+  for (std::size_t i = 0; i < test::scaledCount(20000); ++i) {
+    const double y = random.uniform(-1, 1);
+    const auto inPlane = [&] { return Vec3{random.uniform(-1, 1), y, random.uniform(-1, 1)}; };
+    const Triangle t{inPlane(), inPlane(), inPlane()};
+    const Vec3 corner[3] = {t.a, t.b, t.c};
+    const Vec3 start = corner[i % 3], edge = corner[(i + 1) % 3] - start;
+    const Vec3 across = normalized(Vec3{-edge.z, 0, edge.x});
+    Vec3 q = start + edge * random.uniform(0.05, 0.95) +
+             across * (600.0 * kEpsilon * random.uniform(-1, 1));
+    q.y = y;
+    const double kernel = std::sqrt(closestPointOnTriangle(q, t).distanceSquared);
+    ASSERT_EQ(distanceAtScale(q, t), kernel) << pasteablePoint(q, t);
+  }
+}
+
 TEST(PointTriangle, FarFromTheOriginAsAccurateAsNearIt) {
   const Vec3 o{-1e6, 2e6, 3e6};
   const Triangle t{o, o + Vec3{2, 0, 0}, o + Vec3{0, 2, 0}};

@@ -207,9 +207,9 @@ inline bool insideLocalFace(const Vec3& p, const LocalTriangle& t, FaceAreas& ar
 /// those edges' lines. Measured to the edges there, a point over the face came out up to about
 /// 2⁸ε·(|p − a| + 2L) too far (an audit found 205ε·(size + distance) beside the edges of strips
 /// and fans, the tests' sweep 783ε). False on an edge's line (the edge's distance is then the
-/// plane's), and where the
-/// exact signs do not apply (a coordinate below kSmallestExactCoordinate but not 0, or beyond
-/// the coordinate range): the edges then answer to that rounding.
+/// plane's), and where the exact signs do not apply (a coordinate below
+/// kSmallestExactCoordinate but not 0, or beyond the coordinate range): the edges then answer
+/// to that rounding.
 inline bool insideNearEdges(const Vec3& p, const Triangle& triangle, unsigned nearEdges) {
   for (const Vec3& v : {p, triangle.a, triangle.b, triangle.c})
     if (!inCoordinateRange(v) || !detail::predicatesExactAt(v)) return false;
