@@ -19,8 +19,10 @@ struct CandidatePair {
 };
 
 /// The DEM broad phase: every pair of spheres whose surfaces are closer than `margin`
-/// (|cᵢ − cⱼ| < rᵢ + rⱼ + margin, strictly), sorted by (first, second), the same for any
-/// thread count.
+/// (|cᵢ − cⱼ| < rᵢ + rⱼ + margin, strictly, compared as computed in doubles: the squared
+/// distance against the squared reach, each rounded, so a pair within a few ulps of the reach
+/// may fall either way; callers that must not miss such a pair allow for it, as the World's
+/// skin and its pair test do), sorted by (first, second), the same for any thread count.
 ///
 /// A cell list rebuilt on every call: cells of edge 2·r_max + margin, so each sphere meets only
 /// the spheres of its own and the 26 neighbouring cells. Where the spheres' box holds at most
