@@ -668,31 +668,25 @@ RigidTransform checkedMotion(const RigidTransform& motion, const char* what, boo
   return {Quaternion::fromComponents(q.w, q.x, q.y, q.z), motion.translation};
 }
 
-/// `pose`, where its translation and its inverse's are finite; else delta::Error naming `what`.
-/// (Composed, two finite motions of 1.5e308 gave a translation of +∞ and an inverse of NaN.)
-/// A pose beyond the coordinate range is kept: the queries refuse the mesh there.
-const RigidTransform& checkedPose(const RigidTransform& pose, const char* what) {
-  if (!isFinite(pose.translation) || !isFinite(pose.inverse().translation))
-    throw Error(std::string("QueryMesh::") + what + ": the pose's translation " +
-                toString(pose.translation) + " overflows a double");
-  return pose;
-}
-
 }  // namespace
 
 QueryMesh& QueryMesh::transform(const RigidTransform& motion) {
-  const RigidTransform pose =
-      checkedPose(checkedMotion(motion, "transform", false) * pose_, "transform");
-  pose_ = pose;
-  inversePose_ = pose_.inverse();
-  moved_ = true;
-  placedSurelyInRange_ = detail::surelyInRange(data_->bounds, pose_);
-  return *this;
+  return place(checkedMotion(motion, "transform", false) * pose_, "transform");
 }
 
 QueryMesh& QueryMesh::setPose(const RigidTransform& pose) {
-  pose_ = checkedPose(checkedMotion(pose, "setPose", true), "setPose");
-  inversePose_ = pose_.inverse();
+  return place(checkedMotion(pose, "setPose", true), "setPose");
+}
+
+QueryMesh& QueryMesh::place(const RigidTransform& pose, const char* what) {
+  // Composed, two finite motions of 1.5e308 gave a translation of +∞ and an inverse of NaN. A
+  // pose beyond the coordinate range is kept: the queries refuse the mesh there.
+  const RigidTransform inverse = pose.inverse();
+  if (!isFinite(pose.translation) || !isFinite(inverse.translation))
+    throw Error(std::string("QueryMesh::") + what + ": the pose's translation " +
+                toString(pose.translation) + " overflows a double");
+  pose_ = pose;
+  inversePose_ = inverse;
   moved_ = true;
   placedSurelyInRange_ = detail::surelyInRange(data_->bounds, pose_);
   return *this;

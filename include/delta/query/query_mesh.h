@@ -121,6 +121,10 @@ class QueryMesh {
   const std::shared_ptr<const detail::QueryMeshData>& sharedData() const noexcept { return data_; }
 
  private:
+  /// Puts the mesh at `pose` (its rotation already checked) with its inverse; delta::Error naming
+  /// `what` where either translation is not finite, the pose then unchanged.
+  QueryMesh& place(const RigidTransform& pose, const char* what);
+
   std::shared_ptr<const detail::QueryMeshData> data_;
   RigidTransform pose_;
   RigidTransform inversePose_;
