@@ -145,6 +145,11 @@ void printText(const cd::Overlap& found, const std::string& out, double loadSeco
   if (found.touching > 0)
     std::printf("%s%zu touching piece%s without volume", found.any() ? "\n  " : "; ",
                 found.touching, found.touching == 1 ? "" : "s");
+  if (found.coplanar > 0 && found.any())
+    std::printf("\n  %zu coplanar triangle pair%s: area vectors and moments %s", found.coplanar,
+                found.coplanar == 1 ? "" : "s",
+                found.oneSided ? "one-sided (regions split differently either way)"
+                               : "the mean of both sides");
   std::printf("\nload %.3f s, build %.3f s, query %.3f s%s\n", loadSeconds, buildSeconds,
               querySeconds, out.empty() ? "" : (", curves written to " + out).c_str());
 }
@@ -167,6 +172,8 @@ void printJson(const cd::Overlap& found, double loadSeconds, double buildSeconds
       .value("curves", found.curves.size())
       .value("segments", found.segments)
       .value("touching", found.touching)
+      .value("coplanar", found.coplanar)
+      .value("one_sided", found.oneSided)
       .value("load_s", loadSeconds)
       .value("build_s", buildSeconds)
       .value("query_s", querySeconds);

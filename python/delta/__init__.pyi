@@ -279,6 +279,12 @@ class Overlap:
         """
         ...
     @property
+    def coplanar(self) -> int:
+        """
+        Pairs of triangles, one of each mesh, lying in one plane with meeting boxes: there the surface integrals are one-sided derivatives of the volume, and are answered as the mean of both sides.
+        """
+        ...
+    @property
     def curve_length(self) -> float:
         """
         The length of the intersection curves bounding the shared solid (all regions; the centroid is their volume-weighted mean, the moment about it).
@@ -294,6 +300,12 @@ class Overlap:
     def moment(self) -> numpy.ndarray:
         """
         ∫ (x - centroid) × n dA over the part of a's surface inside b, shape (3,); about another point p it is moment + np.cross(centroid - p, area_vector) (all regions; the centroid is their volume-weighted mean, the moment about it).
+        """
+        ...
+    @property
+    def one_sided(self) -> bool:
+        """
+        True where coplanar faces met but the surface integrals are one side's alone (symmetric=False, or the two sides split the solid into different regions).
         """
         ...
     @property
@@ -695,7 +707,7 @@ def minimum_distance(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], metho
     """
     ...
 
-def overlap(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], curves: bool = ...) -> Overlap:
+def overlap(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], curves: bool = ..., symmetric: bool = ...) -> Overlap:
     """
     The solid two closed meshes share, A ∩ B, each where it is now.
 
@@ -708,7 +720,10 @@ def overlap(a: Union[Mesh, QueryMesh], b: Union[Mesh, QueryMesh], curves: bool =
     curves (delta.IntersectionCurve: `points` (n, 3), `triangles_a` and `triangles_b` per segment,
     `region`, `closed`, `length`; none with curves=False, which the integrals do not need);
     `segments` (crossing triangle pairs) and `touching` (contacts that enclose no volume, left out
-    of the regions). Vectors are float64 arrays of shape (3,), in the world frame. The topology is
+    of the regions); `coplanar` (pairs of triangles in one plane) and `one_sided`. Where faces of a
+    and b lie in one plane the volume is not differentiable, and the area vectors and moments are
+    the mean of both one-sided derivatives (a second query, the meshes swapped); symmetric=False
+    gives one side's alone. Vectors are float64 arrays of shape (3,), in the world frame. The topology is
     exact (exact predicates; a symbolic perturbation settles touching and coplanar faces). For a
     volume-based contact law with energy w(V): the force on b is w'(V) * area_vector, the torque on
     b about its centre c is w'(V) * (moment + np.cross(centroid - c, area_vector)). delta.Error (a

@@ -567,6 +567,14 @@ void bindOverlap(py::module_& module) {
       .def_readonly("touching", &cd::Overlap::touching,
                     "Pieces of contact that enclose no volume (surfaces that only touch, faces "
                     "lying on one another): counted here, left out of the regions.")
+      .def_readonly("coplanar", &cd::Overlap::coplanar,
+                    "Pairs of triangles, one of each mesh, lying in one plane with meeting "
+                    "boxes: there the surface integrals are one-sided derivatives of the volume, "
+                    "and are answered as the mean of both sides.")
+      .def_readonly("one_sided", &cd::Overlap::oneSided,
+                    "True where coplanar faces met but the surface integrals are one side's "
+                    "alone (symmetric=False, or the two sides split the solid into different "
+                    "regions).")
       .def("__bool__", &cd::Overlap::any, "The meshes share a volume (regions is not empty).")
       .def("__repr__", [](const cd::Overlap& o) {
         return "Overlap(volume=" + py::repr(py::float_(o.total.volume)).cast<std::string>() +
@@ -578,13 +586,14 @@ void bindOverlap(py::module_& module) {
 
   module.def(
       "overlap",
-      [](const Geometry& a, const Geometry& b, Flag curves) {
+      [](const Geometry& a, const Geometry& b, Flag curves, Flag symmetric) {
         cd::OverlapOptions options;
         options.curves = curves.value;
+        options.symmetric = symmetric.value;
         py::gil_scoped_release release;
         return cd::overlap(a.prepare(), b.prepare(), options);
       },
-      "a"_a, "b"_a, "curves"_a = true,
+      "a"_a, "b"_a, "curves"_a = true, "symmetric"_a = true,
       R"(The solid two closed meshes share, A ∩ B, each where it is now.
 
 `a`, `b`: each a Mesh, or a QueryMesh at its pose. Returns a delta.Overlap: `volume`,
@@ -596,7 +605,10 @@ largest volume first, with the count of `triangles` on its boundary); `curves`, 
 curves (delta.IntersectionCurve: `points` (n, 3), `triangles_a` and `triangles_b` per segment,
 `region`, `closed`, `length`; none with curves=False, which the integrals do not need);
 `segments` (crossing triangle pairs) and `touching` (contacts that enclose no volume, left out
-of the regions). Vectors are float64 arrays of shape (3,), in the world frame. The topology is
+of the regions); `coplanar` (pairs of triangles in one plane) and `one_sided`. Where faces of a
+and b lie in one plane the volume is not differentiable, and the area vectors and moments are
+the mean of both one-sided derivatives (a second query, the meshes swapped); symmetric=False
+gives one side's alone. Vectors are float64 arrays of shape (3,), in the world frame. The topology is
 exact (exact predicates; a symbolic perturbation settles touching and coplanar faces). For a
 volume-based contact law with energy w(V): the force on b is w'(V) * area_vector, the torque on
 b about its centre c is w'(V) * (moment + np.cross(centroid - c, area_vector)). delta.Error (a

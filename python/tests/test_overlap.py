@@ -176,6 +176,24 @@ def test_the_volume_matches_a_monte_carlo_estimate_by_inside_tests(rng):
     np.testing.assert_allclose(found.centroid, centroid, atol=0.02 * np.max(upper - lower))
 
 
+def test_coplanar_faces_get_the_mean_of_both_sides():
+    # Aligned cubes face to face: their side faces lie in one plane, where the volume has only
+    # one-sided derivatives; one side alone pushes them sideways.
+    a, b = delta.box((0.02, 0.02, 0.02)), delta.box((0.02, 0.02, 0.02), (0, 0, 0.019))
+    found = delta.overlap(a, b)
+    assert found.coplanar > 0 and not found.one_sided
+    assert_vector(found.area_vector, (0, 0, 4e-4), 1e-19)
+    one_side = delta.overlap(a, b, symmetric=False)
+    assert one_side.one_sided and one_side.coplanar == found.coplanar
+    assert_vector(one_side.area_vector, (2e-5, 2e-5, 4e-4), 1e-18)
+    assert one_side.volume == found.volume
+    with pytest.raises(TypeError):
+        delta.overlap(a, b, symmetric=1)
+    # Offset cubes meet in no plane: both answers are one.
+    plain = delta.overlap(delta.box(), delta.box().translate(OFFSET))
+    assert plain.coplanar == 0 and not plain.one_sided
+
+
 def test_wrong_types_raise_type_error():
     box = delta.box()
     for a, b in ((box, "box"), (None, box), (np.zeros((3, 3)), box), (box, [box])):
@@ -206,6 +224,7 @@ def test_matches_the_command_line_tool(cli_json):
     assert answer["curve_length"] == pytest.approx(found.curve_length, abs=1e-15)
     assert answer["curves"] == len(found.curves) and answer["segments"] == found.segments
     assert answer["touching"] == found.touching
+    assert answer["coplanar"] == found.coplanar and answer["one_sided"] == found.one_sided
     assert len(answer["regions"]) == 1
     region = answer["regions"][0]
     assert set(region) == {

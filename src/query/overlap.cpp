@@ -507,6 +507,7 @@ struct Query {
   Side a, b;
   Vec3 reference;
   std::vector<Segment>& segments;
+  std::size_t coplanar = 0;  ///< pairs of triangles in one plane crossed (Overlap::coplanar)
 
   Query(const QueryMesh& first, const QueryMesh& second)
       : a(first, true), b(second, false), segments(recycled<Segment, 0>()) {}
@@ -593,8 +594,18 @@ void crossPair(Query& query, std::uint32_t ta, std::uint32_t tb, const PlacedTri
     sideA[i] = filteredSide(placedB, a[i]);
   if (sideA[0] == 0 || sideA[1] == 0 || sideA[2] == 0) {
     if (apart()) return;
+    // As detail::sideOfAVertex, counting the corners in B's plane: three make a coplanar pair,
+    // whose sides the displacement alone decides (Overlap::coplanar).
+    int inPlane = 0;
     for (std::size_t i = 0; i < 3; ++i)
-      if (sideA[i] == 0) sideA[i] = detail::sideOfAVertex(b[0], b[1], b[2], a[i]);
+      if (sideA[i] == 0) {
+        sideA[i] = detail::orientSign(b[0], b[1], b[2], a[i]);
+        if (sideA[i] == 0) {
+          ++inPlane;
+          sideA[i] = -detail::exactCrossLeadingSign(b[0], b[1], b[0], b[2]);
+        }
+      }
+    if (inPlane == 3 && sideA[0] != 0) ++query.coplanar;
   }
   const bool flatB = sideA[0] == 0;  // then all three are 0
   if (!flatB && sideA[0] == sideA[1] && sideA[1] == sideA[2]) return;
@@ -1644,6 +1655,56 @@ std::vector<std::size_t>& reportRegions(const Query& query, const std::vector<Su
   return regionOfRoot;
 }
 
+/// The reverse query's region `region` (overlap(second, first)) as the first mesh's part: the
+/// same solid, its surface's two parts swapped. ∂(A ∩ B) is closed, so ∫ (x − c) × n dA over it
+/// is zero: the first mesh's part's moment is minus the second's.
+OverlapRegion asFirstPart(const OverlapRegion& region) {
+  OverlapRegion first = region;
+  first.areaVector = region.areaVectorB;
+  first.areaVectorB = region.areaVector;
+  first.moment = -region.moment;
+  return first;
+}
+
+/// `into`'s surface integrals made the mean of its own and `other`'s (the same solid under the
+/// other displacement; its moment carried to into's centroid). Volume and centroid stay into's.
+void average(OverlapRegion& into, const OverlapRegion& other) {
+  const Vec3 moment = other.moment + cross(other.centroid - into.centroid, other.areaVector);
+  into.areaVector = (into.areaVector + other.areaVector) * 0.5;
+  into.areaVectorB = (into.areaVectorB + other.areaVectorB) * 0.5;
+  into.moment = (into.moment + moment) * 0.5;
+}
+
+/// Phase 7, where coplanar faces met: `result`'s integrals (B displaced by +t) averaged with
+/// `reverse`'s (overlap(second, first): B displaced by −t), region by region. The two partition
+/// the same solid, so each region is matched with the reverse's of the nearest centroid; false
+/// (nothing changed) where the displacements split it differently: other counts, or matched
+/// volumes more than 10⁻³ apart (pieces meeting only at an edge or a point, joined one way and
+/// not the other).
+bool averageDisplacements(Overlap& result, const Overlap& reverse) {
+  const std::size_t count = result.regions.size();
+  if (reverse.regions.size() != count) return false;
+  std::vector<std::size_t> partner(count);
+  std::vector<bool> taken(count, false);
+  for (std::size_t i = 0; i < count; ++i) {
+    const OverlapRegion& region = result.regions[i];
+    std::size_t best = count;
+    for (std::size_t j = 0; j < count; ++j)
+      if (!taken[j] &&
+          (best == count || distance(reverse.regions[j].centroid, region.centroid) <
+                                distance(reverse.regions[best].centroid, region.centroid)))
+        best = j;
+    const double volume = reverse.regions[best].volume;
+    if (!(std::abs(volume - region.volume) <= 1e-3 * std::max(volume, region.volume))) return false;
+    partner[i] = best;
+    taken[best] = true;
+  }
+  for (std::size_t i = 0; i < count; ++i)
+    average(result.regions[i], asFirstPart(reverse.regions[partner[i]]));
+  average(result.total, asFirstPart(reverse.total));
+  return true;
+}
+
 }  // namespace
 
 /// In phases: the meshes checked and placed about a reference point (1); the triangles whose
@@ -1651,9 +1712,10 @@ std::vector<std::size_t>& reportRegions(const Query& query, const std::vector<Su
 /// from a descent, which makes the cache anew where it has a skin); every triangle's corners
 /// classified inside or outside the other mesh (3); the faces inside and the regions they join
 /// into (4); each region's integrals summed (5); the regions reported, with their curves if
-/// asked (6).
-Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options,
-                OverlapCache& cache) {
+/// asked (6). overlap() then averages, where coplanar faces met, with the opposite
+/// displacement's (7).
+Overlap OverlapCache::oneWay(const QueryMesh& first, const QueryMesh& second,
+                             const OverlapOptions& options, OverlapCache& cache) {
   checkMesh(first, "first");
   checkMesh(second, "second");
   const RigidTransform secondToFirst = detail::checkPlacedPair(first, second, "overlap");
@@ -1723,6 +1785,7 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   const std::vector<std::size_t>& regionOfRoot = reportRegions(query, byRoot, result);
 
   result.segments = query.segments.size();
+  result.coplanar = query.coplanar;
   if (options.curves && !query.segments.empty()) {
     std::vector<std::size_t>& regionOfSegment = recycled<std::size_t, 8>();
     regionOfSegment.resize(query.segments.size());
@@ -1733,6 +1796,23 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   if (making)
     cache.apart_ = cache.pairs_.empty() && result.regions.empty() && result.touching == 0 &&
                    result.segments == 0 && result.total.volume == 0.0;
+  return result;
+}
+
+Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOptions& options,
+                OverlapCache& cache) {
+  Overlap result = OverlapCache::oneWay(first, second, options, cache);
+  if (result.coplanar == 0 || result.regions.empty()) return result;
+  if (!options.symmetric) {
+    result.oneSided = true;
+    return result;
+  }
+  // Its B displaced by −t: the first mesh's part of each region is the reverse's part of B.
+  OverlapOptions reverseOptions;
+  reverseOptions.curves = false;
+  OverlapCache none;
+  const Overlap reverse = OverlapCache::oneWay(second, first, reverseOptions, none);
+  result.oneSided = !averageDisplacements(result, reverse);
   return result;
 }
 

@@ -50,13 +50,12 @@ struct IntersectionCurve {
 /// areaVector. For a volume-based contact law with energy w(V): the force on B is w′(V)·
 /// areaVector, the torque on B about its centre c is w′(V)·(moment + (centroid − c) ×
 /// areaVector), and A gets the opposites (both are derivatives of V under a rigid motion of B).
-/// Where faces of A and B lie in one plane facing the same way (the sides of aligned boxes
-/// stacked face to face), V is not differentiable: moving B either way along that plane's
-/// normal shrinks it. areaVector is then the derivative one way, the way the symbolic
-/// displacement of B (+x first) takes: two aligned cubes 2·10⁻² across overlapping by 10⁻³ along
-/// z give (2e-5, 2e-5, 4e-4) for the (0, 0, 4e-4) of either symmetric choice, and the volume law
-/// pushes them sideways (an audit: a 9% sideways kick and 1.9% of the energy into spin, the same
-/// in every frame). Not yet resolved symmetrically.
+/// Where faces of A and B lie in one plane (the sides of aligned boxes stacked face to face), V
+/// is not differentiable: moving B either way along that plane's normal shrinks it (faces facing
+/// the same way) or leaves it (facing each other). Each displacement of B (±t, overlap()) gives
+/// the derivative one way: two aligned cubes 2·10⁻² across overlapping by 10⁻³ along z give
+/// (±2e-5, ±2e-5, 4e-4). overlap() answers their mean, (0, 0, 4e-4), which does not depend on
+/// the order of the meshes (OverlapOptions::symmetric; Overlap::coplanar, Overlap::oneSided).
 ///
 /// Threading: a value type; no shared state.
 struct OverlapRegion {
@@ -93,6 +92,16 @@ struct Overlap {
   /// only as exact as that where their coordinates are, they touch, and so does a slab 10⁻¹²
   /// deep between faces of many triangles (the scale grows with their boundaries' length).
   std::size_t touching = 0;
+  /// Pairs of triangles, one of each mesh, that lie in one plane and whose boxes meet: there the
+  /// displacement alone decides which side each lies on, and the surface integrals of a region
+  /// depend on its direction (OverlapRegion). Counted under +t.
+  std::size_t coplanar = 0;
+  /// The surface integrals (areaVector, areaVectorB, moment, of the regions and the total) are
+  /// the one displacement's, +t, though coplanar faces met: OverlapOptions::symmetric was off, or
+  /// the two displacements split the solid into regions that do not match (pieces meeting only at
+  /// an edge or a point, joined under one and not the other). False where they are the mean of
+  /// both, or where no coplanar faces met (both give the same).
+  bool oneSided = false;
   bool any() const noexcept { return !regions.empty(); }
 };
 
@@ -103,6 +112,11 @@ struct OverlapOptions {
   /// Chain the segments into curves (Overlap::curves). The integrals do not need them; a DEM
   /// step turns this off.
   bool curves = true;
+  /// Where coplanar faces met in a region (Overlap::coplanar), the surface integrals are the mean
+  /// of the two displacements' (±t), region by region: a second query with the meshes swapped,
+  /// made afresh (the cache serves the first). Volumes, centroids, curves and counts are +t's.
+  /// Off: +t's alone, as every other answer of the query (Overlap::oneSided).
+  bool symmetric = true;
 };
 
 /// The overlap of two closed meshes, each where its pose puts it (world coordinates: each
@@ -115,7 +129,11 @@ struct OverlapOptions {
 /// vertex lies on a face and no edges meet: touching surfaces, coplanar faces, shared vertices
 /// and edge-on-edge crossings are resolved consistently, every curve is closed and every
 /// triangle's inside part well defined. The volume is continuous under that translation, so it
-/// is the exact volume of the unperturbed meshes up to the rounding of the numbers. The numbers
+/// is the exact volume of the unperturbed meshes up to the rounding of the numbers. Its
+/// derivatives under a motion of B, the surface integrals, are one-sided where faces of both lie
+/// in one plane: there they are the mean of the translation's and its opposite's (the meshes
+/// swapped; OverlapOptions::symmetric), so that they do not depend on which mesh comes first
+/// nor on the translation's direction. The numbers
 /// (crossing points, areas, volumes) are computed in double in frames local to each triangle, so
 /// they keep their accuracy at any offset.
 ///
@@ -168,6 +186,9 @@ class OverlapCache : public PairCache {
  private:
   friend Overlap overlap(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options,
                          OverlapCache& cache);
+  /// The query with B displaced by +t alone (overlap.cpp), through `cache`.
+  static Overlap oneWay(const QueryMesh& a, const QueryMesh& b, const OverlapOptions& options,
+                        OverlapCache& cache);
   /// (first, second) sorted triangle indices, first << 32 | second, increasing.
   std::vector<std::uint64_t> pairs_;
   /// Made for meshes that shared nothing, with no pairs: they share nothing while it holds.
@@ -178,7 +199,8 @@ class OverlapCache : public PairCache {
 /// made for other meshes, or when the second mesh has moved against the first by more than the
 /// skin allows since; otherwise only the triangle pairs it holds are crossed (every pair that
 /// crosses now lay within the skin when it was made, and the pairs are crossed in the same order
-/// either way: by increasing indices). Meshes whose boxes do not meet leave it as it is.
+/// either way: by increasing indices). Meshes whose boxes do not meet leave it as it is. Where
+/// coplanar faces make the answer symmetric, the opposite displacement's query is made afresh.
 ///
 /// Throws as overlap(a, b, options).
 ///
