@@ -45,6 +45,32 @@ std::pair<const char*, const char*> byteRange(const py::array& array) {
   return {lowest, highest + array.itemsize()};
 }
 
+/// Where a nest of lists and tuples is ragged: "rows of 3 and 2 items" for the first level whose
+/// sequences differ in length, or whose items are sequences and numbers mixed; empty where it is
+/// rectangular (as far as NumPy cares: depth 32 at most).
+std::string raggedness(py::handle given, int depth = 0) {
+  const auto isSequence = [](py::handle item) {
+    return PyList_Check(item.ptr()) || PyTuple_Check(item.ptr());
+  };
+  if (depth > 32 || !isSequence(given)) return "";
+  const py::sequence items = py::reinterpret_borrow<py::sequence>(given);
+  const std::size_t count = items.size();
+  if (count == 0) return "";
+  const bool nested = isSequence(items[0]);
+  const std::size_t length = nested ? py::len(items[0]) : 0;
+  for (std::size_t i = 1; i < count; ++i) {
+    const py::handle item = items[i];
+    if (isSequence(item) != nested) return "sequences and numbers mixed at one level";
+    if (nested && py::len(item) != length)
+      return "rows of " + std::to_string(length) + " and " + std::to_string(py::len(item)) +
+             " items";
+  }
+  if (!nested) return "";
+  for (std::size_t i = 0; i < count; ++i)
+    if (std::string why = raggedness(items[i], depth + 1); !why.empty()) return why;
+  return "";
+}
+
 }  // namespace
 
 RealArray realArray(py::handle given) {
@@ -55,6 +81,10 @@ RealArray realArray(py::handle given) {
   if (isBoolean(given) || holdsBoolean(given, 0))
     return refuse("must be real numbers, not booleans");
   py::array array = py::array::ensure(given);  // clears NumPy's error when it cannot
+  if (!array && !raggedness(given).empty())
+    return refuse("must be a rectangular array of real numbers, not a ragged " +
+                  py::str(py::type::handle_of(given).attr("__name__")).cast<std::string>() + " (" +
+                  raggedness(given) + ")");
   if (!array)
     return refuse("must be real numbers, not " +
                   py::str(py::type::handle_of(given).attr("__name__")).cast<std::string>() +

@@ -8,6 +8,7 @@ and integers float64 would round raise delta.Error. Never a read outside the arg
 """
 
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -376,8 +377,13 @@ def test_grid_values_are_refused_not_replaced_by_defaults():
         delta.ib.AdaptiveGrid(sphere, levels=2, exact_band=NAN)
     with pytest.raises(delta.Error, match="exactBand -1"):
         delta.ib.AdaptiveGrid(sphere, levels=2, exact_band=-1.0)
-    with pytest.raises(delta.Error, match="shape"):
-        delta.ib.AdaptiveGrid(sphere, levels=2, domain=[[0, 0, 0]])
+    for shape, domain in (("(1, 3)", [[0, 0, 0]]), ("(2, 2)", [[0, 0], [1, 1]]),
+                          ("(6,)", np.arange(6.0))):
+        with pytest.raises(delta.Error, match=r"shape \(2, 3\): lower, upper corner; not " +
+                           re.escape(shape)):
+            delta.ib.AdaptiveGrid(sphere, levels=2, domain=domain)
+    with pytest.raises(TypeError, match=r"ragged list \(rows of 3 and 2 items\)"):
+        delta.ib.AdaptiveGrid(sphere, levels=2, domain=[[0, 0, 0], [1, 1]])
     for option in ({"refine_factor": NAN}, {"padding": NAN}, {"padding": -1.0}, {"levels": 0}):
         with pytest.raises(delta.Error):
             delta.ib.AdaptiveGrid(sphere, **{"levels": 2, **option})

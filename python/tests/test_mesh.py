@@ -118,6 +118,9 @@ def test_bad_meshes_raise_delta_error(vertices, triangles, message):
         ([["a", "b", "c"]] * 3, [[0, 1, 2]], "real numbers"),
         (np.zeros((3, 3), dtype=complex), [[0, 1, 2]], "real numbers"),
         ([[0, 0, 0], [1, 0, 0], [0, True, 0]], [[0, 1, 2]], "not booleans"),
+        ([[0, 0, 0], [1, 0], [0, 1, 0]], [[0, 1, 2]], r"ragged list \(rows of 3 and 2 items\)"),
+        ([[0, 0, 0], 1, [0, 1, 0]], [[0, 1, 2]], "ragged list .sequences and numbers mixed"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], ([0, 1, 2], [0, 1]), "ragged tuple .rows of 3 and 2"),
     ],
 )
 def test_meshes_of_what_is_not_numbers_raise_type_error(vertices, triangles, message):
