@@ -203,6 +203,17 @@ AdaptiveGrid::AdaptiveGrid(const QueryMesh& boundary, const GridOptions& options
   refine();
 }
 
+namespace {
+
+/// Poses that place every point alike: equal components (a zero's sign aside).
+bool samePose(const RigidTransform& a, const RigidTransform& b) noexcept {
+  return a.rotation.w == b.rotation.w && a.rotation.x == b.rotation.x &&
+         a.rotation.y == b.rotation.y && a.rotation.z == b.rotation.z &&
+         a.translation == b.translation;
+}
+
+}  // namespace
+
 const GridStatistics& AdaptiveGrid::moveBoundary(const RigidTransform& motion) {
   QueryMesh moved = boundary_;
   moved.transform(motion);
@@ -214,6 +225,13 @@ const GridStatistics& AdaptiveGrid::moveBoundaryTo(const RigidTransform& pose) {
   requireQueryableAt(boundary_, pose, domain_);  // before anything changes
   const QueryMesh before = boundary_;
   boundary_.setPose(pose);
+  if (samePose(boundary_.pose(), before.pose())) {
+    // Nothing moved: every distance and cell stands (a refine would ask the band again and get
+    // the same answers).
+    boundary_ = before;
+    statistics_ = {};
+    return statistics_;
+  }
   poses_.push_back(boundary_.pose());
   try {
     refine();

@@ -384,6 +384,23 @@ struct GridSnapshot {
   bool operator==(const GridSnapshot&) const = default;
 };
 
+TEST(AdaptiveGrid, AMoveThatLeavesThePoseAsItIsQueriesNothing) {
+  // It asked the band again (every vertex within the exact band: the same answers).
+  const QueryMesh sphere(primitives::icosphere(3, 0.4));
+  for (std::optional<double> band : {std::optional<double>{}, std::optional<double>{0.0}}) {
+    AdaptiveGrid grid(sphere, {.levels = 5, .exactBand = band});
+    grid.moveBoundary(RigidTransform::translationBy({1e-3, 0, 0}));
+    const GridSnapshot before(grid);
+    for (int how = 0; how < 2; ++how) {
+      const GridStatistics& statistics = how == 0 ? grid.moveBoundary(RigidTransform{})
+                                                  : grid.moveBoundaryTo(grid.boundary().pose());
+      EXPECT_EQ(statistics.queries, 0u) << how;
+      EXPECT_EQ(statistics.cellsCreated + statistics.cellsRemoved, 0u) << how;
+      EXPECT_TRUE(GridSnapshot(grid) == before) << how;
+    }
+  }
+}
+
 TEST(AdaptiveGrid, AMoveBeyondTheCoordinateRangeIsRefusedAndChangesNothing) {
   // A move that puts the boundary, or the domain's points in the boundary's frame, beyond ±2²⁰⁰
   // was found out by the distance queries half-way through it: the grid was left with no cells,

@@ -145,7 +145,8 @@ class AdaptiveGrid {
   /// beyond the coordinate range the distance queries answer (mesh/coordinate_range.h; within
   /// 2⁻⁴⁰ of it, for the rounding). Should anything else stop a move half-way (memory), the grid
   /// is made anew at the pose before it (a fresh build there) and the error passed on. The
-  /// statistics returned are those of statistics(), valid until the next move.
+  /// statistics returned are those of statistics(), valid until the next move. A motion that
+  /// leaves the pose as it is (the identity) changes nothing and queries nothing.
   const GridStatistics& moveBoundary(const RigidTransform& motion);
   /// Puts the boundary at `pose` (from the frame its QueryMesh was prepared in) and updates.
   /// Throws as moveBoundary.
