@@ -1811,8 +1811,14 @@ Overlap overlap(const QueryMesh& first, const QueryMesh& second, const OverlapOp
   OverlapOptions reverseOptions;
   reverseOptions.curves = false;
   OverlapCache none;
-  const Overlap reverse = OverlapCache::oneWay(second, first, reverseOptions, none);
-  result.oneSided = !averageDisplacements(result, reverse);
+  try {
+    const Overlap reverse = OverlapCache::oneWay(second, first, reverseOptions, none);
+    result.oneSided = !averageDisplacements(result, reverse);
+  } catch (const Error&) {
+    // Refused the other way round only (a coordinate at the range's edge in the other frame):
+    // +t's answer stands, and says so.
+    result.oneSided = true;
+  }
   return result;
 }
 

@@ -99,8 +99,9 @@ struct Overlap {
   /// The surface integrals (areaVector, areaVectorB, moment, of the regions and the total) are
   /// the one displacement's, +t, though coplanar faces met: OverlapOptions::symmetric was off, or
   /// the two displacements split the solid into regions that do not match (pieces meeting only at
-  /// an edge or a point, joined under one and not the other). False where they are the mean of
-  /// both, or where no coplanar faces met (both give the same).
+  /// an edge or a point, joined under one and not the other), or the query the other way round
+  /// was refused (a coordinate at the edge of the range in the other mesh's frame). False where
+  /// they are the mean of both, or where no coplanar faces met (both give the same).
   bool oneSided = false;
   bool any() const noexcept { return !regions.empty(); }
 };
