@@ -146,10 +146,10 @@ void printText(const cd::Overlap& found, const std::string& out, double loadSeco
     std::printf("%s%zu touching piece%s without volume", found.any() ? "\n  " : "; ",
                 found.touching, found.touching == 1 ? "" : "s");
   if (found.coplanar > 0 && found.any())
-    std::printf("\n  %zu coplanar triangle pair%s: area vectors and moments %s", found.coplanar,
-                found.coplanar == 1 ? "" : "s",
-                found.oneSided ? "one-sided (regions split differently either way)"
-                               : "the mean of both sides");
+    std::printf(
+        "\n  %zu coplanar triangle pair%s: area vectors and moments %s", found.coplanar,
+        found.coplanar == 1 ? "" : "s",
+        found.oneSided ? "one side's (the other side's query refused)" : "the mean of both sides");
   std::printf("\nload %.3f s, build %.3f s, query %.3f s%s\n", loadSeconds, buildSeconds,
               querySeconds, out.empty() ? "" : (", curves written to " + out).c_str());
 }

@@ -305,7 +305,7 @@ class Overlap:
     @property
     def one_sided(self) -> bool:
         """
-        True where coplanar faces met but the surface integrals are one side's alone (symmetric=False, or the two sides split the solid into different regions).
+        True where coplanar faces met but the surface integrals are one side's alone (symmetric=False).
         """
         ...
     @property

@@ -573,8 +573,7 @@ void bindOverlap(py::module_& module) {
                     "and are answered as the mean of both sides.")
       .def_readonly("one_sided", &cd::Overlap::oneSided,
                     "True where coplanar faces met but the surface integrals are one side's "
-                    "alone (symmetric=False, or the two sides split the solid into different "
-                    "regions).")
+                    "alone (symmetric=False).")
       .def("__bool__", &cd::Overlap::any, "The meshes share a volume (regions is not empty).")
       .def("__repr__", [](const cd::Overlap& o) {
         return "Overlap(volume=" + py::repr(py::float_(o.total.volume)).cast<std::string>() +

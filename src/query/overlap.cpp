@@ -1675,32 +1675,101 @@ void average(OverlapRegion& into, const OverlapRegion& other) {
   into.moment = (into.moment + moment) * 0.5;
 }
 
+/// The regions `regions[k]`, k in `which` (increasing), as one: volumes, area vectors, curve
+/// lengths and counts added, the centroid their volume-weighted mean, the moments carried to it.
+OverlapRegion joined(const std::vector<OverlapRegion>& regions,
+                     const std::vector<std::size_t>& which) {
+  OverlapRegion one;
+  Vec3 weighted;
+  for (const std::size_t k : which) {
+    one.volume += regions[k].volume;
+    weighted += regions[k].centroid * regions[k].volume;
+  }
+  one.centroid = weighted * (1.0 / one.volume);
+  for (const std::size_t k : which) {
+    const OverlapRegion& region = regions[k];
+    one.areaVector += region.areaVector;
+    one.areaVectorB += region.areaVectorB;
+    one.moment += region.moment + cross(region.centroid - one.centroid, region.areaVector);
+    one.curveLength += region.curveLength;
+    one.triangles += region.triangles;
+  }
+  return one;
+}
+
 /// Phase 7, where coplanar faces met: `result`'s integrals (B displaced by +t) averaged with
-/// `reverse`'s (overlap(second, first): B displaced by −t), region by region. The two partition
-/// the same solid, so each region is matched with the reverse's of the nearest centroid; false
-/// (nothing changed) where the displacements split it differently: other counts, or matched
-/// volumes more than 10⁻³ apart (pieces meeting only at an edge or a point, joined one way and
-/// not the other).
+/// `reverse`'s (overlap(second, first), its regions as the first mesh's parts: B displaced by
+/// −t), region by region. The two partition the same solid. Each region is matched with the
+/// unmatched one of the other of the nearest centroid, where their volumes agree to 10⁻³ and
+/// their centroids to 2⁻¹³ of the region's size (its curves' length and the cube root of its
+/// volume). Pieces meeting only at an edge or a point may be joined under one displacement and
+/// not the other (P1 + P2 and P3 one way, P1 and P2 + P3 the other: equal counts and volumes,
+/// other solids): the regions left unmatched on each side are joined into one, which is then
+/// the mean of both sides' joins, and the curves renumbered. False (nothing changed) where the
+/// joins' volumes disagree or one side has none.
 bool averageDisplacements(Overlap& result, const Overlap& reverse) {
+  std::vector<OverlapRegion> other;
+  for (const OverlapRegion& region : reverse.regions)
+    other.push_back(asFirstPart(region));
   const std::size_t count = result.regions.size();
-  if (reverse.regions.size() != count) return false;
-  std::vector<std::size_t> partner(count);
-  std::vector<bool> taken(count, false);
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> partner(count, kNone);
+  std::vector<bool> taken(other.size(), false);
   for (std::size_t i = 0; i < count; ++i) {
     const OverlapRegion& region = result.regions[i];
-    std::size_t best = count;
-    for (std::size_t j = 0; j < count; ++j)
-      if (!taken[j] &&
-          (best == count || distance(reverse.regions[j].centroid, region.centroid) <
-                                distance(reverse.regions[best].centroid, region.centroid)))
+    std::size_t best = kNone;
+    for (std::size_t j = 0; j < other.size(); ++j)
+      if (!taken[j] && (best == kNone || distance(other[j].centroid, region.centroid) <
+                                             distance(other[best].centroid, region.centroid)))
         best = j;
-    const double volume = reverse.regions[best].volume;
-    if (!(std::abs(volume - region.volume) <= 1e-3 * std::max(volume, region.volume))) return false;
-    partner[i] = best;
-    taken[best] = true;
+    if (best == kNone) continue;
+    const double volume = other[best].volume;
+    const double size = region.curveLength + std::cbrt(region.volume);
+    if (std::abs(volume - region.volume) <= 1e-3 * std::max(volume, region.volume) &&
+        distance(other[best].centroid, region.centroid) <= 0x1p-13 * size) {
+      partner[i] = best;
+      taken[best] = true;
+    }
   }
+  std::vector<std::size_t> leftA, leftB;
   for (std::size_t i = 0; i < count; ++i)
-    average(result.regions[i], asFirstPart(reverse.regions[partner[i]]));
+    if (partner[i] == kNone) leftA.push_back(i);
+  for (std::size_t j = 0; j < other.size(); ++j)
+    if (!taken[j]) leftB.push_back(j);
+  if (leftA.empty() != leftB.empty()) return false;
+  if (leftA.empty()) {
+    for (std::size_t i = 0; i < count; ++i)
+      average(result.regions[i], other[partner[i]]);
+  } else {
+    OverlapRegion one = joined(result.regions, leftA);
+    const OverlapRegion otherOne = joined(other, leftB);
+    if (!(std::abs(one.volume - otherOne.volume) <= 1e-3 * std::max(one.volume, otherOne.volume)))
+      return false;
+    average(one, otherOne);
+    // The matched regions, averaged, and the join, largest volume first (ties in the order
+    // they had, the join where its first region was); each old index's new one, for the curves.
+    std::vector<std::pair<OverlapRegion, std::size_t>> kept;
+    for (std::size_t i = 0; i < count; ++i)
+      if (partner[i] != kNone) {
+        average(result.regions[i], other[partner[i]]);
+        kept.emplace_back(result.regions[i], i);
+      }
+    kept.emplace_back(one, leftA.front());
+    std::stable_sort(kept.begin(), kept.end(), [](const auto& x, const auto& y) {
+      return x.first.volume > y.first.volume ||
+             (x.first.volume == y.first.volume && x.second < y.second);
+    });
+    std::vector<std::size_t> renumbered(count);
+    result.regions.clear();
+    for (const auto& [region, old] : kept) {
+      renumbered[old] = result.regions.size();
+      result.regions.push_back(region);
+    }
+    for (const std::size_t i : leftA)
+      renumbered[i] = renumbered[leftA.front()];
+    for (IntersectionCurve& curve : result.curves)
+      if (curve.region < count) curve.region = renumbered[curve.region];
+  }
   average(result.total, asFirstPart(reverse.total));
   return true;
 }
