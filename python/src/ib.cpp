@@ -94,12 +94,16 @@ py::dtype cellDtype() {
 
 std::optional<Aabb> domainFrom(const std::optional<ArrayLike>& given) {
   if (!given) return std::nullopt;
-  // Its own shape first: pointArray would ask for (n, 3).
+  // Its own shape asked for where pointArray would ask for (n, 3); pointArray's checks of the
+  // values (integers float64 would round) come before the count of rows.
+  const auto refuseShape = [](const std::string& shape) {
+    throw Error("domain must have shape (2, 3): lower, upper corner; not " + shape);
+  };
   if (const RealArray real = realArray(given->object);
-      real.problem.empty() &&
-      !(real.array.ndim() == 2 && real.array.shape(0) == 2 && real.array.shape(1) == 3))
-    throw Error("domain must have shape (2, 3): lower, upper corner; not " + shapeOf(real.array));
+      real.problem.empty() && !(real.array.ndim() == 2 && real.array.shape(1) == 3))
+    refuseShape(shapeOf(real.array));
   const DoubleArray corners = pointArray(*given, "domain", true);
+  if (corners.shape(0) != 2) refuseShape(shapeOf(corners));
   const std::span<const Vec3> box = asVec3(corners);
   return Aabb{box[0], box[1]};
 }
