@@ -2,13 +2,18 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/mesh/topology.h"
 
 #include "detail/scaled_frame.h"
+#include "detail/union_find.h"
 
 namespace delta {
 namespace {
@@ -32,17 +37,67 @@ constexpr AxisTerms axisTerms(double w0, double w1, double w2) noexcept {
   return terms;
 }
 
+/// The mesh's parts (its triangles joined through shared corners) and, per part, the centre of
+/// its box, scaled as `frame` scales (frame.scaled, not relative to the frame's origin: a unit
+/// tetrahedron beside a part 10⁵⁵ away lost its coordinates in that subtraction): each part's
+/// terms are summed about its own centre. A closed mesh's parts
+/// are closed, so the integrals of each do not depend on the point they are summed about; about
+/// one point for all, parts far apart compared with their size summed terms of R²·L (R their
+/// distance from it) into a volume of L³: two boxes 1×2×3 a 10¹² apart gave −67,108,860.
+struct Parts {
+  std::vector<std::uint32_t> ofTriangle;
+  std::vector<Vec3> centre;
+  double cubedDiagonals = 0.0;  ///< Σ (a part's box diagonal)³, scaled: their volumes' scale
+};
+
+Parts partsOf(const Mesh& mesh, const detail::ScaledFrame& frame) {
+  std::vector<std::uint32_t> parent;
+  detail::UnionFind<std::uint32_t> sets(parent);
+  sets.reset(mesh.vertexCount());
+  const std::span<const TriangleIndices> triangles = mesh.triangles();
+  for (const TriangleIndices& t : triangles) {
+    sets.join(t[0], t[1]);
+    sets.join(t[0], t[2]);
+  }
+  // Numbered in the order of their first triangles (not by roots, which depend on the joins).
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> partOfRoot(mesh.vertexCount(), kNone);
+  Parts parts;
+  parts.ofTriangle.resize(triangles.size());
+  std::vector<Aabb> boxes;
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    std::uint32_t& part = partOfRoot[sets.find(triangles[t][0])];
+    if (part == kNone) {
+      part = static_cast<std::uint32_t>(boxes.size());
+      boxes.emplace_back();
+    }
+    parts.ofTriangle[t] = part;
+    for (const std::uint32_t v : triangles[t])
+      boxes[part].extend(frame.scaled(mesh.vertices()[v]));
+  }
+  for (const Aabb& box : boxes) {
+    parts.centre.push_back(box.lower * 0.5 + box.upper * 0.5);
+    const double diagonal = box.diagonal();
+    parts.cubedDiagonals += diagonal * diagonal * diagonal;
+  }
+  return parts;
+}
+
 /// The integrals over the enclosed solid of 1, x, y, z, x², y², z², xy, yz, zx, in `frame`
 /// (D. Eberly, "Polyhedral Mass Properties (Revisited)", 2002: the divergence theorem turns each
-/// volume integral into a sum of closed-form triangle integrals).
-std::array<double, 10> volumeIntegrals(const Mesh& mesh,
-                                       const detail::ScaledFrame& frame) noexcept {
-  std::array<double, 10> integral{};
+/// volume integral into a sum of closed-form triangle integrals), each part's about its centre
+/// and then carried to the frame's origin (x = x' + c: ∫x = ∫x' + c·V, ∫xy = ∫x'y' + c_x∫y' +
+/// c_y∫x' + c_x·c_y·V).
+std::array<double, 10> volumeIntegrals(const Mesh& mesh, const detail::ScaledFrame& frame,
+                                       const Parts& parts) {
+  std::vector<std::array<double, 10>> ofPart(parts.centre.size(), std::array<double, 10>{});
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     const Triangle triangle = mesh.triangle(t);
-    const Vec3 p0 = frame(triangle.a);
-    const Vec3 p1 = frame(triangle.b);
-    const Vec3 p2 = frame(triangle.c);
+    std::array<double, 10>& integral = ofPart[parts.ofTriangle[t]];
+    const Vec3& centre = parts.centre[parts.ofTriangle[t]];
+    const Vec3 p0 = frame.scaled(triangle.a) - centre;
+    const Vec3 p1 = frame.scaled(triangle.b) - centre;
+    const Vec3 p2 = frame.scaled(triangle.c) - centre;
     const Vec3 n = cross(p1 - p0, p2 - p0);
     const AxisTerms x = axisTerms(p0.x, p1.x, p2.x);
     const AxisTerms y = axisTerms(p0.y, p1.y, p2.y);
@@ -60,9 +115,26 @@ std::array<double, 10> volumeIntegrals(const Mesh& mesh,
   }
   constexpr std::array<double, 10> kScale = {1.0 / 6,  1.0 / 24, 1.0 / 24,  1.0 / 24,  1.0 / 60,
                                              1.0 / 60, 1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 120};
-  for (std::size_t i = 0; i < integral.size(); ++i)
-    integral[i] *= kScale[i];
-  return integral;
+  std::array<double, 10> total{};
+  const Vec3 origin = frame.scaled(frame.origin);
+  for (std::size_t part = 0; part < ofPart.size(); ++part) {
+    std::array<double, 10>& i = ofPart[part];
+    for (std::size_t k = 0; k < i.size(); ++k)
+      i[k] *= kScale[k];
+    const Vec3 c = parts.centre[part] - origin;
+    const double v = i[0];
+    total[0] += v;
+    total[1] += i[1] + c.x * v;
+    total[2] += i[2] + c.y * v;
+    total[3] += i[3] + c.z * v;
+    total[4] += i[4] + 2.0 * c.x * i[1] + c.x * c.x * v;
+    total[5] += i[5] + 2.0 * c.y * i[2] + c.y * c.y * v;
+    total[6] += i[6] + 2.0 * c.z * i[3] + c.z * c.z * v;
+    total[7] += i[7] + c.x * i[2] + c.y * i[1] + c.x * c.y * v;
+    total[8] += i[8] + c.y * i[3] + c.z * i[2] + c.y * c.z * v;
+    total[9] += i[9] + c.z * i[1] + c.x * i[3] + c.z * c.x * v;
+  }
+  return total;
 }
 
 [[noreturn]] void fail(const std::string& what) {
@@ -82,14 +154,15 @@ MassProperties massProperties(const Mesh& mesh, double density) {
     fail("the mesh is not consistently oriented (" + std::to_string(topology.misorientedEdges) +
          " edges traversed the same way by both their triangles)");
 
-  const Aabb box = mesh.bounds();
+  const Aabb box = detail::referencedBounds(mesh);
   const detail::ScaledFrame frame = detail::scaledFrame(box);
-  const std::array<double, 10> integral = volumeIntegrals(mesh, frame);
+  const Parts parts = partsOf(mesh, frame);
+  const std::array<double, 10> integral = volumeIntegrals(mesh, frame, parts);
   const double volume = integral[0];
-  // Zero relative to the mesh's size: rounding alone makes a flat closed mesh's volume of order
-  // 1e-16 · diagonal³ (in the scaled frame, where the half extent is about 1).
-  const double diagonal = length(frame.scaled(box.upper * 0.5 - box.lower * 0.5) * 2.0);
-  const double zeroVolume = 1e-12 * diagonal * diagonal * diagonal;
+  // Zero relative to the parts' sizes: rounding alone makes a flat closed part's volume of order
+  // 1e-16 · its diagonal³ (in the scaled frame). Not the whole box's: two boxes 10¹² apart were
+  // refused as enclosing nothing.
+  const double zeroVolume = 1e-12 * parts.cubedDiagonals;
   if (volume < -zeroVolume)
     fail("the mesh is inside-out (signed volume " +
          toString(std::ldexp(volume, 3 * frame.exponent)) + "); reverse its triangles");
@@ -129,16 +202,23 @@ MassProperties massProperties(const Mesh& mesh, double density) {
 }
 
 double signedVolume(const Mesh& mesh) {
-  // Relative to the box centre: the tetrahedra to the origin then stay as small as the mesh,
-  // and so does the rounding of their sum; scaled to about 1 (detail::ScaledFrame), so that no
-  // product of degree 3 under- or overflows whatever the mesh's size.
-  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
-  double sixTimesVolume = 0.0;
+  // Each part relative to its box's centre (partsOf): the tetrahedra to it then stay as small as
+  // the part, and so does the rounding of their sum; scaled to about 1 (detail::ScaledFrame), so
+  // that no product of degree 3 under- or overflows whatever the mesh's size.
+  const detail::ScaledFrame frame = detail::scaledFrame(detail::referencedBounds(mesh));
+  const Parts parts = partsOf(mesh, frame);
+  std::vector<double> sixTimesVolume(parts.centre.size(), 0.0);
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     const Triangle triangle = mesh.triangle(t);
-    sixTimesVolume += dot(frame(triangle.a), cross(frame(triangle.b), frame(triangle.c)));
+    const Vec3& centre = parts.centre[parts.ofTriangle[t]];
+    sixTimesVolume[parts.ofTriangle[t]] +=
+        dot(frame.scaled(triangle.a) - centre,
+            cross(frame.scaled(triangle.b) - centre, frame.scaled(triangle.c) - centre));
   }
-  return detail::scaledBack(sixTimesVolume / 6.0, 3 * frame.exponent, "signedVolume", "volume");
+  double sum = 0.0;
+  for (const double part : sixTimesVolume)
+    sum += part;
+  return detail::scaledBack(sum / 6.0, 3 * frame.exponent, "signedVolume", "volume");
 }
 
 }  // namespace delta

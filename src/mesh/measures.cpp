@@ -15,6 +15,13 @@ namespace delta {
 bool isDegenerate(const Triangle& triangle) noexcept {
   Vec3 ab = triangle.b - triangle.a;
   Vec3 ac = triangle.c - triangle.a;
+  if (!std::isfinite(maxAbs(ab)) || !std::isfinite(maxAbs(ac))) {
+    // Edges longer than the largest double (corners at ±1e308): halved first, exactly for the
+    // normal coordinates (a right triangle of legs 2e308 was degenerate: ∞ − ∞ in its cross
+    // product).
+    ab = triangle.b * 0.5 - triangle.a * 0.5;
+    ac = triangle.c * 0.5 - triangle.a * 0.5;
+  }
   const double size = std::fmax(maxAbs(ab), maxAbs(ac));
   if (!(size > 0.0)) return true;  // the three vertices coincide
   // Rescale by a power of two near 1/size (exact) so that neither L² nor the cross product can
@@ -39,7 +46,7 @@ std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept {
 
 double surfaceArea(const Mesh& mesh) {
   // Scaled as signedVolume: the cross products (degree 2) overflow from 1e154 on.
-  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
+  const detail::ScaledFrame frame = detail::scaledFrame(detail::referencedBounds(mesh));
   double twiceArea = 0.0;
   for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
     // b·s − a·s is (b − a)·s exactly (when nothing overflows): the edges keep their accuracy.
@@ -54,7 +61,7 @@ EdgeLengths edgeLengths(const Mesh& mesh) {
   const std::vector<detail::DirectedEdge> edges = detail::sortedDirectedEdges(mesh);
   const std::span<const Vec3> vertices = mesh.vertices();
   // Measured scaled as surfaceArea (a length's square overflows from 1e154 on), then scaled back.
-  const detail::ScaledFrame frame = detail::scaledFrame(mesh.bounds());
+  const detail::ScaledFrame frame = detail::scaledFrame(detail::referencedBounds(mesh));
   EdgeLengths lengths;
   std::size_t distinct = 0;
   double sum = 0.0;

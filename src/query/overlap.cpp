@@ -19,10 +19,10 @@
 
 #include "../kernels/detail/exact_predicates.h"
 #include "../kernels/detail/robust_geometry.h"
+#include "../mesh/detail/union_find.h"
 #include "detail/dual_traversal.h"
 #include "detail/placement.h"
 #include "detail/query_mesh_data.h"
-#include "detail/union_find.h"
 
 namespace delta::contactdetection {
 namespace {

@@ -11,8 +11,8 @@
 #include "delta/core/parallel.h"
 
 #include "../kernels/detail/exact_predicates.h"
+#include "../mesh/detail/union_find.h"
 #include "detail/query_mesh_data.h"
-#include "detail/union_find.h"
 
 namespace delta {
 namespace {

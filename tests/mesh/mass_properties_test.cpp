@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <utility>
@@ -71,6 +72,64 @@ TEST(MassProperties, BoxFarFromTheOriginKeepsItsDigits) {
   expectNear(p.centroid, far, 1e-9);
   expectNear(p.inertia, boxInertia(size, 6.0), 1e-12);
   EXPECT_NEAR(signedVolume(primitives::box(size, far)), 6.0, 1e-12);
+}
+
+/// `a` and `b` as one mesh (b's vertices after a's).
+Mesh joined(const Mesh& a, const Mesh& b) {
+  std::vector<Vec3> vertices(a.vertices().begin(), a.vertices().end());
+  vertices.insert(vertices.end(), b.vertices().begin(), b.vertices().end());
+  std::vector<TriangleIndices> triangles(a.triangles().begin(), a.triangles().end());
+  const auto offset = static_cast<std::uint32_t>(a.vertexCount());
+  for (TriangleIndices t : b.triangles())
+    triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return Mesh(std::move(vertices), std::move(triangles));
+}
+
+TEST(MassProperties, PartsFarApartKeepTheirDigits) {
+  // Two 1×2×3 boxes d apart along x: summed about one point, each triangle's term was of d²
+  // into a volume of 6 (d = 10¹²: signedVolume −67,108,860), and massProperties refused the
+  // mesh as enclosing no volume (its threshold was relative to the whole box).
+  for (const double d : {1e4, 1e6, 1e8, 1e10, 1e12}) {
+    const Mesh two = joined(primitives::box({1, 2, 3}, {-d / 2, 0, 0}),
+                            primitives::box({1, 2, 3}, {d / 2, 0, 0}));
+    EXPECT_NEAR(signedVolume(two), 12.0, 12.0 * 1e-14) << d;
+    const MassProperties p = massProperties(two);
+    EXPECT_NEAR(p.volume, 12.0, 12.0 * 1e-14) << d;
+    expectNear(p.centroid, {0, 0, 0}, 1e-15 * d);
+    // Each box's own tensor plus 2·6·(d/2)² about y and z.
+    const Mat3 expected = boxInertia({1, 2, 3}, 12.0) + Mat3::diagonal({0, 3 * d * d, 3 * d * d});
+    EXPECT_NEAR(p.inertia(0, 0), expected(0, 0), 1e-12 * expected(0, 0)) << d;
+    EXPECT_NEAR(p.inertia(1, 1), expected(1, 1), 1e-12 * expected(1, 1)) << d;
+    EXPECT_NEAR(p.inertia(2, 2), expected(2, 2), 1e-12 * expected(2, 2)) << d;
+  }
+  // A unit tetrahedron beside one that rounding at 10⁵⁵ collapsed to a point: 0 for 1/6.
+  const Mesh collapsed(
+      {{0, 0, 0},
+       {1, 0, 0},
+       {0, 1, 0},
+       {0, 0, 1},
+       {1e55, 1e55, 0},
+       {1e55, 1e55, 0},
+       {1e55, 1e55, 0},
+       {1e55, 1e55, 0}},
+      {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 6, 5}, {4, 5, 7}, {4, 7, 6}, {5, 6, 7}});
+  EXPECT_NEAR(signedVolume(collapsed), 1.0 / 6.0, 1e-16);
+}
+
+TEST(MassProperties, VerticesNoTriangleUsesAreLeftOutOfTheScale) {
+  // A Mesh keeps unused vertices; one far away set the scale, and the tetrahedron's terms
+  // vanished (signedVolume 0 at 10⁷⁰; massProperties refused it as flat from 10¹⁰ on).
+  const Mesh tetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  for (const double far : {1e10, 1e70, 1e110, 1e300}) {
+    std::vector<Vec3> vertices(tetra.vertices().begin(), tetra.vertices().end());
+    vertices.push_back({far, 0, 0});
+    const Mesh withFar(vertices, {tetra.triangles().begin(), tetra.triangles().end()});
+    EXPECT_EQ(signedVolume(withFar), signedVolume(tetra)) << far;
+    const MassProperties p = massProperties(withFar), q = massProperties(tetra);
+    EXPECT_EQ(p.volume, q.volume) << far;
+    expectNear(p.centroid, q.centroid, 1e-16);
+  }
 }
 
 TEST(MassProperties, RotatedBoxTurnsTheTensor) {

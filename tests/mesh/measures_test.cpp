@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
@@ -42,6 +43,34 @@ TEST(Measures, DegenerateIsScaleInvariant) {
     EXPECT_FALSE(isDegenerate(scaled(right, factor))) << factor;
     EXPECT_TRUE(isDegenerate(scaled(Triangle{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, factor))) << factor;
   }
+}
+
+TEST(Measures, EdgesBeyondTheLargestDoubleAreMeasuredNotOverflowed) {
+  // Legs of 2e308: b − a overflowed to ∞ and the cross product to NaN, "degenerate".
+  const Triangle big{{-1e308, 0, 0}, {1e308, 0, 0}, {0, 1e308, 0}};
+  EXPECT_FALSE(isDegenerate(big));
+  EXPECT_FALSE(isDegenerate(scaled(big, 0.5)));
+  EXPECT_TRUE(isDegenerate({{-1e308, 0, 0}, {1e308, 0, 0}, {0, 0, 0}}));
+}
+
+TEST(Measures, VerticesNoTriangleUsesAreLeftOutOfTheScale) {
+  // One unused vertex far away set the scale: a unit tetrahedron's area came out 0 (1e110), a
+  // tetrahedron of 1e-10's edges 0 (1e200).
+  const Mesh tetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  for (const double far : {1e10, 1e110, 1e200, 1e300}) {
+    std::vector<Vec3> vertices(tetra.vertices().begin(), tetra.vertices().end());
+    vertices.push_back({far, 0, 0});
+    const Mesh withFar(vertices, {tetra.triangles().begin(), tetra.triangles().end()});
+    EXPECT_EQ(surfaceArea(withFar), surfaceArea(tetra)) << far;
+    const EdgeLengths with = edgeLengths(withFar), without = edgeLengths(tetra);
+    EXPECT_EQ(with.min, without.min) << far;
+    EXPECT_EQ(with.max, without.max) << far;
+  }
+  const Mesh tiny({{0, 0, 0}, {1e-10, 0, 0}, {0, 3e-10, 0}, {0, 0, 7e-11}, {1e200, 0, 0}},
+                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  EXPECT_NEAR(edgeLengths(tiny).min, 7e-11, 1e-26);
+  EXPECT_NEAR(surfaceArea(tiny), 4.7641351882307254e-20, 1e-34);
 }
 
 TEST(Measures, CoincidentAndCollinearVerticesAreDegenerate) {

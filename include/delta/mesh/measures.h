@@ -31,7 +31,8 @@ bool isDegenerate(const Triangle& triangle) noexcept;
 std::size_t degenerateTriangleCount(const Mesh& mesh) noexcept;
 
 /// The sum of the triangles' areas (degenerate ones add 0; overlapping triangles each count).
-/// Any finite mesh: the edges are scaled by a power of two to about the mesh's size 1 (exact)
+/// Any finite mesh: the edges are scaled by a power of two to about the mesh's size 1 (exact; the
+/// size of the vertices the triangles use: one unused at 1e110 made a unit tetrahedron's area 0)
 /// while the cross products are summed, then the sum is scaled back. Throws delta::Error when
 /// the area itself is beyond a double (a mesh of size 1e154 or more) or a nonzero area is below
 /// its smallest normal number.

@@ -35,8 +35,11 @@ std::string describeDefects(const Topology& topology);
 /// a zero-width fold whose two traversals pair with each other. That is what import makes of a
 /// sliver whose two coincident vertices it joins; its neighbours' shared edge stays manifold and
 /// the mesh stays closed. (a, a, a) has no edge at all. Topology only: a closed mesh may still
-/// intersect itself (nothing here compares positions), and two copies of a triangle over the
-/// same vertices, whatever their orientation, make its edges non-manifold or misoriented.
+/// intersect itself (nothing here compares positions). Two copies of a triangle over the same
+/// vertices make its edges non-manifold (where other triangles share them too) or misoriented
+/// (in the same orientation); back to back and alone they are closed and consistently oriented
+/// (a flat part: massProperties refuses it as enclosing no volume, partNesting reports it
+/// flat).
 ///
 /// Threading: reads the mesh only; safe to call concurrently.
 Topology analyzeTopology(const Mesh& mesh);

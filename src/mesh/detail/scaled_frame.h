@@ -1,12 +1,15 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <span>
 #include <string>
 
 #include "delta/core/aabb.h"
 #include "delta/core/error.h"
 #include "delta/core/format.h"
 #include "delta/core/vec3.h"
+#include "delta/mesh/mesh.h"
 
 namespace delta::detail {
 
@@ -28,6 +31,17 @@ struct ScaledFrame {
   /// where the coordinates span the whole double range.
   Vec3 operator()(const Vec3& p) const noexcept { return scaled(p) - scaled(origin); }
 };
+
+/// The box of the vertices the triangles use: the measures' frame (a vertex no triangle uses,
+/// which a Mesh keeps, at 1e110 scaled a unit tetrahedron's area to 0). Empty without triangles.
+inline Aabb referencedBounds(const Mesh& mesh) noexcept {
+  Aabb box;
+  const std::span<const Vec3> vertices = mesh.vertices();
+  for (const TriangleIndices& t : mesh.triangles())
+    for (const std::uint32_t v : t)
+      box.extend(vertices[v]);
+  return box;
+}
 
 inline ScaledFrame scaledFrame(const Aabb& box) noexcept {
   ScaledFrame frame;
