@@ -720,7 +720,7 @@ void restart(const DemOptions& given) {
   makeOutputFolder(options.out);
   const RunLock lock(options.out, "delta dem");  // held until the output is closed
   if (!lock.note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock.note().c_str());
-  prepareOutputFolder(options.out, earlierOutput(options));
+  prepareOutputFolder(options.out, earlierOutput(options), options.restart);
   DemOutput output(options.out, framesOf(options));
   writeRunMarker(options.out, plan.note.run);
   DemCheckpoints checkpoints(options.out, plan.checkpointEvery, plan.note);
@@ -758,7 +758,7 @@ void runDistributed(const DemOptions& given) {
         orAbort([&] {
           makeOutputFolder(options.out);
           lock = std::make_unique<RunLock>(options.out, "delta dem");
-          prepareOutputFolder(options.out, earlierOutput(options));
+          prepareOutputFolder(options.out, earlierOutput(options), options.restart);
           output = std::make_unique<DemOutput>(options.out, frames, 0, ranks);
         });
       MPI_Barrier(MPI_COMM_WORLD);
@@ -814,7 +814,7 @@ void run(const DemOptions& options) {
     makeOutputFolder(options.out);
     lock = std::make_unique<RunLock>(options.out, "delta dem");
     if (!lock->note().empty()) std::fprintf(stderr, "delta: note: %s\n", lock->note().c_str());
-    prepareOutputFolder(options.out, earlierOutput(options));
+    prepareOutputFolder(options.out, earlierOutput(options), options.restart);
     output = std::make_unique<DemOutput>(options.out, frames);
   }
   Prepared prepared = prepare(settings);
@@ -852,14 +852,15 @@ each key at most once; options given on the command line override it.
 (particles_state_NNNNNN.vtp: a point per particle with its id, shape, velocity,
 angular_velocity, orientation quaternion w,x,y,z and bounding_radius) and shape_K.vtp (each
 shape in its body frame, to glyph at those points); with --frames triangles or both,
-particles.pvd (particles_NNNNNN.vtp: every particle's triangles, particle id, velocity);
-contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, overlap),
-obstacles.vtp and log.csv (energies, contacts, step times and energy_change, one row per
-step). Every file is written whole or not at all, a frame before the .pvd that lists it, so
-the folder is valid at any instant, kill -9 included. A run holds DIR/.delta.lock while it
-writes: a second run into DIR is refused while the first is running, and a run into a folder
-that holds an earlier run's output is refused unless --overwrite (which removes only those
-files).
+particles.pvd (particles_NNNNNN.vtp: every particle's triangles, particle id, shape,
+velocity); contacts.pvd (contacts_NNNNNN.vtp: points with force, direction, depth, distance,
+overlap, converged, particle, other, with_obstacle, volume and couple, the last two the volume
+law's, 0 in the point law), obstacles.vtp and log.csv (energies, contacts, step times and
+energy_change, one row per step). Every file is written whole or not at all, a frame before
+the .pvd that lists it, so the folder is valid at any instant, kill -9 included. A run holds
+DIR/.delta.lock while it writes: a second run into DIR is refused while the first is running,
+and a run into a folder that holds an earlier run's output is refused unless --overwrite (which
+removes only those files).
 
 Guards: a time step above the stable one and particles that start overlapping are reported
 (stderr and the summary's warnings); a state that stops being finite, or a particle that

@@ -10,6 +10,7 @@
 #include <regex>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include "delta/core/error.h"
 
@@ -135,7 +136,8 @@ std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& d
   return filesNamed(directory, kNames);
 }
 
-void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier) {
+void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier,
+                         const std::filesystem::path& restarted) {
   if (earlier == EarlierOutput::Continue) {
     // The temporary files of the run's own names that a run killed while writing left
     // (AtomicFile's ".NAME.delta-" and 16 hex digits): no run of this folder writes them now
@@ -147,8 +149,13 @@ void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput e
     }
     return;
   }
-  clearEarlierOutput(directory, earlier, demOutputFiles(directory),
-                     "--overwrite replaces it, --restart continues it");
+  std::vector<std::filesystem::path> files = demOutputFiles(directory);
+  if (!restarted.empty())
+    std::erase_if(files, [&](const std::filesystem::path& file) {
+      std::error_code error;
+      return std::filesystem::equivalent(file, restarted, error);
+    });
+  clearEarlierOutput(directory, earlier, files, "--overwrite replaces it, --restart continues it");
 }
 
 std::vector<std::filesystem::path> ibOutputFiles(const std::filesystem::path& directory) {

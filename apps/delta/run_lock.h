@@ -61,8 +61,11 @@ std::vector<std::filesystem::path> demOutputFiles(const std::filesystem::path& d
 /// EarlierOutput::Refuse throws delta::Error "--out 'DIR' holds the output of an earlier run
 /// (NAME, …): --overwrite replaces it, --restart continues it", Overwrite removes those files
 /// (throwing naming a file it cannot remove), Continue leaves them (and removes the temporary
-/// files of those names that a killed run left).
-void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier);
+/// files of those names that a killed run left). `restarted`, the checkpoint a restart starts
+/// from (or empty), is not an earlier run's output: a checkpoint.delta alone in its folder was
+/// refused as one, where it starts a new series.
+void prepareOutputFolder(const std::filesystem::path& directory, EarlierOutput earlier,
+                         const std::filesystem::path& restarted = {});
 
 /// The files in `directory` that a `delta ib --out` run writes (grid.vtu, boundary.vtp, the
 /// grid and boundary series and their .pvd, and temporary files a run killed while writing

@@ -158,6 +158,16 @@ TEST(DemCheckpointCli, ARestartContinuesOnlyTheOutputOfItsOwnRun) {
   EXPECT_EQ(jsonString(fresh.out, "state_digest"), jsonString(whole.out, "state_digest"));
   expectSeriesComplete(alone / "particles_state.pvd");
   expectSeriesComplete(alone / "contacts.pvd");
+  // So does one under the name Δ gives it, which was refused as an earlier run's output (and
+  // the --overwrite that refusal offered is refused for the checkpoint's own folder).
+  const std::filesystem::path named = folder.path / "named";
+  std::filesystem::create_directories(named);
+  std::filesystem::copy_file(first / "checkpoint.delta", named / "checkpoint.delta");
+  const CliRun renamed = runDelta("dem --restart '" + (named / "checkpoint.delta").string() +
+                                  "' --steps 200 --json --quiet");
+  ASSERT_EQ(renamed.exitCode, 0) << renamed.err;
+  EXPECT_EQ(jsonString(renamed.out, "state_digest"), jsonString(whole.out, "state_digest"));
+  expectSeriesComplete(named / "particles_state.pvd");
   // The run's own folder is still continued, and the temporary files of its names that a run
   // killed while writing left are removed (others' stay).
   const std::filesystem::path stale = first / ".log.csv.delta-0123456789abcdef";
