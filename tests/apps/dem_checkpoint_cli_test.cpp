@@ -148,26 +148,20 @@ TEST(DemCheckpointCli, ARestartContinuesOnlyTheOutputOfItsOwnRun) {
   ASSERT_EQ(moved.exitCode, 0) << moved.err;
   EXPECT_EQ(jsonString(moved.out, "state_digest"), jsonString(whole.out, "state_digest"));
   expectSeriesComplete(folder.path / "third" / "particles_state.pvd");
-  // A checkpoint alone in a folder starts a new series there, listing only frames that exist.
-  const std::filesystem::path alone = folder.path / "alone";
-  std::filesystem::create_directories(alone);
-  std::filesystem::copy_file(first / "checkpoint.delta", alone / "kept.delta");
-  const CliRun fresh = runDelta("dem --restart '" + (alone / "kept.delta").string() +
-                                "' --steps 200 --json --quiet");
-  ASSERT_EQ(fresh.exitCode, 0) << fresh.err;
-  EXPECT_EQ(jsonString(fresh.out, "state_digest"), jsonString(whole.out, "state_digest"));
-  expectSeriesComplete(alone / "particles_state.pvd");
-  expectSeriesComplete(alone / "contacts.pvd");
-  // So does one under the name Δ gives it, which was refused as an earlier run's output (and
-  // the --overwrite that refusal offered is refused for the checkpoint's own folder).
-  const std::filesystem::path named = folder.path / "named";
-  std::filesystem::create_directories(named);
-  std::filesystem::copy_file(first / "checkpoint.delta", named / "checkpoint.delta");
-  const CliRun renamed = runDelta("dem --restart '" + (named / "checkpoint.delta").string() +
-                                  "' --steps 200 --json --quiet");
-  ASSERT_EQ(renamed.exitCode, 0) << renamed.err;
-  EXPECT_EQ(jsonString(renamed.out, "state_digest"), jsonString(whole.out, "state_digest"));
-  expectSeriesComplete(named / "particles_state.pvd");
+  // A checkpoint alone in a folder starts a new series there, listing only frames that exist;
+  // under the name Δ gives it too (it was refused as an earlier run's output, and the
+  // --overwrite that refusal offered is refused for the checkpoint's own folder).
+  for (const std::string name : {"kept.delta", "checkpoint.delta"}) {
+    const std::filesystem::path alone = folder.path / ("alone_" + name);
+    std::filesystem::create_directories(alone);
+    std::filesystem::copy_file(first / "checkpoint.delta", alone / name);
+    const CliRun fresh =
+        runDelta("dem --restart '" + (alone / name).string() + "' --steps 200 --json --quiet");
+    ASSERT_EQ(fresh.exitCode, 0) << name << ": " << fresh.err;
+    EXPECT_EQ(jsonString(fresh.out, "state_digest"), jsonString(whole.out, "state_digest"));
+    expectSeriesComplete(alone / "particles_state.pvd");
+    expectSeriesComplete(alone / "contacts.pvd");
+  }
   // The run's own folder is still continued, and the temporary files of its names that a run
   // killed while writing left are removed (others' stay).
   const std::filesystem::path stale = first / ".log.csv.delta-0123456789abcdef";

@@ -14,6 +14,8 @@
 #include "delta/core/rotation.h"
 #include "delta/mesh/primitives.h"
 
+#include "mesh/test_meshes.h"
+
 namespace delta {
 namespace {
 
@@ -103,28 +105,19 @@ TEST(MassProperties, PartsFarApartKeepTheirDigits) {
     EXPECT_NEAR(p.inertia(2, 2), expected(2, 2), 1e-12 * expected(2, 2)) << d;
   }
   // A unit tetrahedron beside one that rounding at 10⁵⁵ collapsed to a point: 0 for 1/6.
-  const Mesh collapsed(
-      {{0, 0, 0},
-       {1, 0, 0},
-       {0, 1, 0},
-       {0, 0, 1},
-       {1e55, 1e55, 0},
-       {1e55, 1e55, 0},
-       {1e55, 1e55, 0},
-       {1e55, 1e55, 0}},
-      {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 6, 5}, {4, 5, 7}, {4, 7, 6}, {5, 6, 7}});
+  const Mesh tetra = test::unitTetrahedron();
+  const Mesh point(std::vector<Vec3>(4, Vec3{1e55, 1e55, 0}),
+                   {tetra.triangles().begin(), tetra.triangles().end()});
+  const Mesh collapsed = joined(tetra, point);
   EXPECT_NEAR(signedVolume(collapsed), 1.0 / 6.0, 1e-16);
 }
 
 TEST(MassProperties, VerticesNoTriangleUsesAreLeftOutOfTheScale) {
   // A Mesh keeps unused vertices; one far away set the scale, and the tetrahedron's terms
   // vanished (signedVolume 0 at 10⁷⁰; massProperties refused it as flat from 10¹⁰ on).
-  const Mesh tetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const Mesh tetra = test::unitTetrahedron();
   for (const double far : {1e10, 1e70, 1e110, 1e300}) {
-    std::vector<Vec3> vertices(tetra.vertices().begin(), tetra.vertices().end());
-    vertices.push_back({far, 0, 0});
-    const Mesh withFar(vertices, {tetra.triangles().begin(), tetra.triangles().end()});
+    const Mesh withFar = test::withUnusedVertex(tetra, {far, 0, 0});
     EXPECT_EQ(signedVolume(withFar), signedVolume(tetra)) << far;
     const MassProperties p = massProperties(withFar), q = massProperties(tetra);
     EXPECT_EQ(p.volume, q.volume) << far;

@@ -10,6 +10,8 @@
 #include "delta/core/error.h"
 #include "delta/mesh/primitives.h"
 
+#include "mesh/test_meshes.h"
+
 namespace delta {
 namespace {
 
@@ -56,19 +58,18 @@ TEST(Measures, EdgesBeyondTheLargestDoubleAreMeasuredNotOverflowed) {
 TEST(Measures, VerticesNoTriangleUsesAreLeftOutOfTheScale) {
   // One unused vertex far away set the scale: a unit tetrahedron's area came out 0 (1e110), a
   // tetrahedron of 1e-10's edges 0 (1e200).
-  const Mesh tetra({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-                   {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const Mesh tetra = test::unitTetrahedron();
   for (const double far : {1e10, 1e110, 1e200, 1e300}) {
-    std::vector<Vec3> vertices(tetra.vertices().begin(), tetra.vertices().end());
-    vertices.push_back({far, 0, 0});
-    const Mesh withFar(vertices, {tetra.triangles().begin(), tetra.triangles().end()});
+    const Mesh withFar = test::withUnusedVertex(tetra, {far, 0, 0});
     EXPECT_EQ(surfaceArea(withFar), surfaceArea(tetra)) << far;
     const EdgeLengths with = edgeLengths(withFar), without = edgeLengths(tetra);
     EXPECT_EQ(with.min, without.min) << far;
     EXPECT_EQ(with.max, without.max) << far;
   }
-  const Mesh tiny({{0, 0, 0}, {1e-10, 0, 0}, {0, 3e-10, 0}, {0, 0, 7e-11}, {1e200, 0, 0}},
-                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const Mesh tiny =
+      test::withUnusedVertex(Mesh({{0, 0, 0}, {1e-10, 0, 0}, {0, 3e-10, 0}, {0, 0, 7e-11}},
+                                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}),
+                             {1e200, 0, 0});
   EXPECT_NEAR(edgeLengths(tiny).min, 7e-11, 1e-26);
   EXPECT_NEAR(surfaceArea(tiny), 4.7641351882307254e-20, 1e-34);
 }
