@@ -40,10 +40,11 @@ constexpr AxisTerms axisTerms(double w0, double w1, double w2) noexcept {
 /// The mesh's parts (its triangles joined through shared corners) and, per part, the centre of
 /// its box, scaled as `frame` scales (frame.scaled, not relative to the frame's origin: a unit
 /// tetrahedron beside a part 10⁵⁵ away lost its coordinates in that subtraction): each part's
-/// terms are summed about its own centre. A closed mesh's parts
-/// are closed, so the integrals of each do not depend on the point they are summed about; about
-/// one point for all, parts far apart compared with their size summed terms of R²·L (R their
-/// distance from it) into a volume of L³: two boxes 1×2×3 a 10¹² apart gave −67,108,860.
+/// terms are summed about its own centre. A closed mesh's parts are closed, so the integrals of
+/// each do not depend on the point they are summed about; about one point for all, parts far
+/// apart compared with their size summed terms of R²·L (R their distance from it) into a volume
+/// of L³: two boxes 1×2×3 10¹² apart gave −67,108,860. For a mesh of one part the centre is the
+/// frame's origin, and every operation is the one a sum about it takes.
 struct Parts {
   std::vector<std::uint32_t> ofTriangle;
   std::vector<Vec3> centre;
