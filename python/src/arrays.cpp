@@ -81,10 +81,12 @@ RealArray realArray(py::handle given) {
   if (isBoolean(given) || holdsBoolean(given, 0))
     return refuse("must be real numbers, not booleans");
   py::array array = py::array::ensure(given);  // clears NumPy's error when it cannot
-  if (!array && !raggedness(given).empty())
-    return refuse("must be a rectangular array of real numbers, not a ragged " +
-                  py::str(py::type::handle_of(given).attr("__name__")).cast<std::string>() + " (" +
-                  raggedness(given) + ")");
+  if (!array) {
+    if (const std::string ragged = raggedness(given); !ragged.empty())
+      return refuse("must be a rectangular array of real numbers, not a ragged " +
+                    py::str(py::type::handle_of(given).attr("__name__")).cast<std::string>() +
+                    " (" + ragged + ")");
+  }
   if (!array)
     return refuse("must be real numbers, not " +
                   py::str(py::type::handle_of(given).attr("__name__")).cast<std::string>() +

@@ -3,7 +3,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -13,7 +12,7 @@
 #include "delta/mesh/topology.h"
 
 #include "detail/scaled_frame.h"
-#include "detail/union_find.h"
+#include "detail/vertex_parts.h"
 
 namespace delta {
 namespace {
@@ -52,26 +51,13 @@ struct Parts {
 };
 
 Parts partsOf(const Mesh& mesh, const detail::ScaledFrame& frame) {
-  std::vector<std::uint32_t> parent;
-  detail::UnionFind<std::uint32_t> sets(parent);
-  sets.reset(mesh.vertexCount());
   const std::span<const TriangleIndices> triangles = mesh.triangles();
-  for (const TriangleIndices& t : triangles) {
-    sets.join(t[0], t[1]);
-    sets.join(t[0], t[2]);
-  }
-  // Numbered in the order of their first triangles (not by roots, which depend on the joins).
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> partOfRoot(mesh.vertexCount(), kNone);
+  const detail::VertexParts joined = detail::vertexParts(mesh.vertexCount(), triangles);
   Parts parts;
   parts.ofTriangle.resize(triangles.size());
-  std::vector<Aabb> boxes;
+  std::vector<Aabb> boxes(joined.count);
   for (std::size_t t = 0; t < triangles.size(); ++t) {
-    std::uint32_t& part = partOfRoot[sets.find(triangles[t][0])];
-    if (part == kNone) {
-      part = static_cast<std::uint32_t>(boxes.size());
-      boxes.emplace_back();
-    }
+    const std::uint32_t part = joined.ofVertex[triangles[t][0]];
     parts.ofTriangle[t] = part;
     for (const std::uint32_t v : triangles[t])
       boxes[part].extend(frame.scaled(mesh.vertices()[v]));

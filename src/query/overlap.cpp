@@ -20,6 +20,7 @@
 #include "../kernels/detail/exact_predicates.h"
 #include "../kernels/detail/robust_geometry.h"
 #include "../mesh/detail/union_find.h"
+#include "../mesh/detail/vertex_parts.h"
 #include "detail/dual_traversal.h"
 #include "detail/placement.h"
 #include "detail/query_mesh_data.h"
@@ -1426,25 +1427,17 @@ namespace delta::detail {
 const MeshComponents& QueryMeshData::components() const {
   std::call_once(componentsOnce_, [this] {
     MeshComponents& made = components_;
-    // The vertices joined along the triangles' edges.
-    std::vector<std::uint32_t> parent;
-    UnionFind<std::uint32_t> sets(parent);
-    sets.reset(vertices.size());
-    for (const TriangleIndices& c : corners)
-      for (std::size_t i = 1; i < 3; ++i)
-        sets.join(c[i], c[0]);
-    std::vector<std::uint32_t> index(vertices.size(), std::numeric_limits<std::uint32_t>::max());
-    made.ofVertex.assign(vertices.size(), 0);
+    VertexParts parts = vertexParts(vertices.size(), corners);
+    made.ofVertex = std::move(parts.ofVertex);
+    // Each part's first vertex met and the box of its vertices.
+    made.representative.assign(parts.count, std::numeric_limits<std::uint32_t>::max());
+    made.boxes.assign(parts.count, Aabb{});
     for (const TriangleIndices& c : corners)
       for (const std::uint32_t v : c) {
-        const std::uint32_t root = sets.find(v);
-        if (index[root] == std::numeric_limits<std::uint32_t>::max()) {
-          index[root] = static_cast<std::uint32_t>(made.representative.size());
-          made.representative.push_back(v);
-          made.boxes.emplace_back();
-        }
-        made.ofVertex[v] = index[root];
-        made.boxes[index[root]].extend(vertices[v]);
+        const std::uint32_t part = made.ofVertex[v];
+        if (made.representative[part] == std::numeric_limits<std::uint32_t>::max())
+          made.representative[part] = v;
+        made.boxes[part].extend(vertices[v]);
       }
     made.offsets.assign(made.representative.size() + 1, 0);
     for (const TriangleIndices& c : corners)
